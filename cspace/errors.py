@@ -1,0 +1,66 @@
+"""The exception hierarchy of cspace: one base, one name per kind of failure.
+
+Each error also subclasses the builtin it stands for, so ``except ValueError``
+keeps working for callers that do not know cspace's names.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "CspaceError",
+    "InvalidMeshError",
+    "EmptyMeshError",
+    "NonFiniteError",
+    "OpenMeshError",
+    "NonManifoldError",
+    "DegenerateError",
+    "DuplicateFaceError",
+    "NotConvexError",
+    "GridRangeError",
+    "ExactnessError",
+]
+
+
+class CspaceError(Exception):
+    """Base class of every error raised by cspace."""
+
+
+class InvalidMeshError(CspaceError, ValueError):
+    """A mesh or point set is not valid input for the operation asked."""
+
+
+class EmptyMeshError(InvalidMeshError):
+    """A mesh or point set has no vertices or no faces."""
+
+
+class NonFiniteError(InvalidMeshError):
+    """A coordinate is NaN or infinite."""
+
+
+class OpenMeshError(InvalidMeshError):
+    """A mesh that must be closed has boundary edges (edges used by one face)."""
+
+
+class NonManifoldError(InvalidMeshError):
+    """An edge is shared by more than two faces, or by two faces in the same direction,
+    or a vertex's faces do not form a single fan."""
+
+
+class DegenerateError(InvalidMeshError):
+    """A face has zero area, or a polytope has zero volume (its points are coplanar)."""
+
+
+class DuplicateFaceError(InvalidMeshError):
+    """Two faces use the same vertices."""
+
+
+class NotConvexError(InvalidMeshError):
+    """A mesh passed as convex is not the boundary of its convex hull."""
+
+
+class GridRangeError(CspaceError, ValueError):
+    """A coordinate does not fit the integer range of the snapping grid."""
+
+
+class ExactnessError(CspaceError, RuntimeError):
+    """An internal exact certificate failed: the result would not be exact, so none is given."""
