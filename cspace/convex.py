@@ -1,0 +1,774 @@
+"""Convex polytopes with polygon facets on an integer grid, and their exact Minkowski sum (CVMS).
+
+A :class:`ConvexPolytope` stores grid-integer vertices (int64) and strictly convex polygon
+facets, counter-clockwise seen from outside, each with its primitive integer outward normal.
+Every decision (which points are on the hull, which facets are coplanar, which vertex of B
+supports a facet of A, whether two Gauss arcs cross) is exact: see :mod:`cspace.exact`.
+
+:func:`convex_minkowski_sum` follows the convex paper (Barki, Denis, Dupont, FIMS/CVMS):
+the facets of A ⊕ B are the *translated* facets (a facet of A moved by its contributing
+vertex of B), the *corner* facets (a facet of B placed at its contributing vertex of A) and
+the *edge* facets (parallelograms of an edge of A and an edge of B whose Gauss arcs cross).
+Degenerate directions (a facet of A parallel to a facet or an edge of B, ...) are not assumed
+away: for each distinct outward normal ``n`` of the sum, its facet is the planar sum of the
+support faces ``A(n) ⊕ B(n)``, computed exactly, so a square facet stays one square facet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from . import exact
+from .errors import DegenerateError, EmptyMeshError, ExactnessError, NotConvexError
+from .exact import Grid
+
+__all__ = [
+    "ConvexPolytope",
+    "MinkowskiSum",
+    "convex_minkowski_sum",
+    "hull_minkowski_sum",
+    "FACET_KINDS",
+]
+
+#: Names of the facet kinds of a Minkowski sum, indexed by ``MinkowskiSum.kind``.
+FACET_KINDS = ("translated", "corner", "edge")
+TRANSLATED, CORNER, EDGE = 0, 1, 2
+
+
+# --------------------------------------------------------------------------------------
+# exact 2D hull of a small point set, used for facet polygons
+
+
+def _hull2d(xy: list[tuple[int, int]]) -> list[int]:
+    """Strictly convex hull of 2D integer points, counter-clockwise, as indices into ``xy``.
+
+    Collinear and duplicate points are dropped (only corners are kept). Pure Python ints:
+    exact, and faster than numpy on the handful of points a facet has.
+    """
+    order = sorted(range(len(xy)), key=lambda i: xy[i])
+    # Drop exact duplicates, keep the first index of each position.
+    uniq = [order[0]]
+    for i in order[1:]:
+        if xy[i] != xy[uniq[-1]]:
+            uniq.append(i)
+    if len(uniq) < 3:
+        return uniq
+
+    def turn(o, a, b):
+        (ox, oy), (ax, ay), (bx, by) = xy[o], xy[a], xy[b]
+        return (ax - ox) * (by - oy) - (ay - oy) * (bx - ox)
+
+    lower: list[int] = []
+    for i in uniq:
+        while len(lower) >= 2 and turn(lower[-2], lower[-1], i) <= 0:
+            lower.pop()
+        lower.append(i)
+    upper: list[int] = []
+    for i in reversed(uniq):
+        while len(upper) >= 2 and turn(upper[-2], upper[-1], i) <= 0:
+            upper.pop()
+        upper.append(i)
+    return lower[:-1] + upper[:-1]
+
+
+def _facet_polygon(ints: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> np.ndarray:
+    """Corners of the convex polygon spanned by coplanar grid points, CCW about ``normal``."""
+    k = int(np.argmax(np.abs(normal)))
+    ax1, ax2 = (k + 1) % 3, (k + 2) % 3
+    pts = ints[idx]
+    xy = list(zip(pts[:, ax1].tolist(), pts[:, ax2].tolist()))
+    ring = _hull2d(xy)
+    # The projection along axis k keeps orientation iff normal[k] > 0.
+    if normal[k] < 0:
+        ring = ring[::-1]
+    return np.asarray(idx)[ring]
+
+
+# --------------------------------------------------------------------------------------
+# the polytope type
+
+
+@dataclass(frozen=True, eq=False)
+class ConvexPolytope:
+    """A convex polytope with polygon facets, on an integer grid.
+
+    Build with :meth:`from_points` or :meth:`from_mesh`; do not call the constructor.
+
+    Attributes
+    ----------
+    grid : Grid
+        The snapping grid; ``vertices == grid.to_float(ints)``.
+    ints : (n, 3) int64
+        Vertex coordinates in grid units. Every vertex is a corner of the polytope.
+    facet_offsets : (f + 1,) int64
+        Facet ``i`` is ``facet_indices[facet_offsets[i]:facet_offsets[i + 1]]``.
+    facet_indices : (sum of facet degrees,) int64
+        Vertex indices of all facets, each counter-clockwise seen from outside.
+    normals : (f, 3) int64
+        Primitive integer outward normal of each facet (a canonical key of its direction).
+    edges : (e, 2) int64
+        Each edge once, as ``(u, v)`` with ``u -> v`` counter-clockwise in facet
+        ``edge_facets[:, 0]`` and ``v -> u`` in facet ``edge_facets[:, 1]``.
+    edge_facets : (e, 2) int64
+        Left and right facet of each edge.
+    """
+
+    grid: Grid
+    ints: np.ndarray
+    facet_offsets: np.ndarray
+    facet_indices: np.ndarray
+    normals: np.ndarray
+    edges: np.ndarray
+    edge_facets: np.ndarray
+    name: str = "polytope"
+    _cache: dict = field(default_factory=dict, repr=False)
+
+    # ---- construction ---------------------------------------------------------------
+
+    @classmethod
+    def from_points(
+        cls, points, *, grid: Grid | None = None, name: str = "polytope", method: str = "auto"
+    ) -> "ConvexPolytope":
+        """Exact convex hull of points, with coplanar triangles merged into polygon facets.
+
+        Parameters
+        ----------
+        points : (n, 3) float64
+            Points in scene units; snapped onto ``grid`` first.
+        grid : Grid, optional
+            Snapping grid; default ``Grid.for_points(points)``.
+        name : str
+            Used in error messages.
+        method : {'auto', 'qhull', 'wrap'}, default 'auto'
+            'qhull' takes Qhull's triangles as candidate facet planes and certifies them
+            exactly (raising ExactnessError if the certificate fails); 'wrap' is exact gift
+            wrapping over facets, O(n h); 'auto' tries 'qhull' and falls back to 'wrap'.
+
+        Raises
+        ------
+        EmptyMeshError, NonFiniteError
+            No points, or a NaN/inf coordinate.
+        DegenerateError
+            All points are collinear or coplanar (the hull has no volume).
+        """
+        points = _as_points(points, name)
+        grid = grid or Grid.for_points(points)
+        try:
+            return cls.from_ints(grid.snap(points), grid=grid, name=name, method=method)
+        except DegenerateError as e:
+            raise DegenerateError(f"{e} after snapping to a grid of step {grid.step:.3g}") from None
+
+    @classmethod
+    def from_ints(
+        cls, ints, *, grid: Grid, name: str = "polytope", method: str = "auto"
+    ) -> "ConvexPolytope":
+        """Exact convex hull of grid-integer points (see :meth:`from_points`)."""
+        if method not in ("auto", "qhull", "wrap"):
+            raise ValueError(f"'{method}' is not a valid method, must be one of 'auto', 'qhull', 'wrap'")
+        ints = np.unique(np.asarray(ints, dtype=np.int64).reshape(-1, 3), axis=0)
+        if len(ints) == 0:
+            raise EmptyMeshError(f"{name}: no points")
+        tetra = _find_tetrahedron(ints, name)
+        if method in ("auto", "qhull"):
+            planes = _qhull_planes(ints, tetra)
+            try:
+                if planes is not None:
+                    return cls._from_planes(ints, planes, grid=grid, name=name)
+            except ExactnessError:
+                # A certified set of facet planes that does not close up misses a facet.
+                pass
+            if method == "qhull":
+                raise ExactnessError(f"{name}: Qhull's hull failed the exact certificate")
+        return cls._from_planes(ints, _wrap_planes(ints, tetra), grid=grid, name=name)
+
+    @classmethod
+    def _from_planes(cls, ints, planes, *, grid, name) -> "ConvexPolytope":
+        """Polytope from its certified facet planes: each facet is conv(points on its plane)."""
+        normals, on_plane = planes
+        polys = [_facet_polygon(ints, np.nonzero(on_plane[:, j])[0], normals[j]) for j in range(len(normals))]
+        return cls._from_polygons(ints, polys, normals, grid=grid, name=name)
+
+    @classmethod
+    def _from_polygons(cls, ints, polys, normals, *, grid, name) -> "ConvexPolytope":
+        """Assemble from facet polygons (indices into ``ints``); drops unused points, checks closedness."""
+        used = np.unique(np.concatenate(polys))
+        remap = np.full(len(ints), -1, dtype=np.int64)
+        remap[used] = np.arange(len(used))
+        sizes = np.array([len(p) for p in polys], dtype=np.int64)
+        offsets = np.zeros(len(polys) + 1, dtype=np.int64)
+        np.cumsum(sizes, out=offsets[1:])
+        flat = remap[np.concatenate(polys)]
+        return cls._from_csr(ints[used], offsets, flat, normals, grid=grid, name=name)
+
+    @classmethod
+    def _from_csr(cls, ints, offsets, flat, normals, *, grid, name) -> "ConvexPolytope":
+        """Assemble from CSR facet polygons using every point; checks closedness."""
+        edges, edge_facets = _edges_of(flat, offsets, len(ints), name)
+        return cls(
+            grid=grid, ints=ints, facet_offsets=offsets, facet_indices=flat,
+            normals=np.asarray(normals, dtype=np.int64), edges=edges, edge_facets=edge_facets, name=name,
+        )
+
+    @classmethod
+    def from_mesh(cls, mesh: Any, *, grid: Grid | None = None, name: str | None = None) -> "ConvexPolytope":
+        """Convex polytope from a closed mesh said to be convex; raises if it is not.
+
+        Parameters
+        ----------
+        mesh : ClosedMesh, trimesh.Trimesh, (vertices, faces) or path
+            Validated as a closed oriented 2-manifold first (:func:`cspace.mesh.as_mesh`).
+
+        Raises
+        ------
+        NotConvexError
+            If a face of the mesh does not lie on a facet of its convex hull with the same
+            outward orientation, or the mesh's volume differs from its hull's (decided
+            exactly); the message names the first offending face.
+        """
+        from .mesh import as_mesh
+
+        m = as_mesh(mesh, grid=grid, name=name)
+        hull = cls.from_ints(m.ints, grid=m.grid, name=m.name)
+        tri = m.ints[m.faces]
+        tri_n = exact.primitive(exact.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
+        # A face is on the hull iff its normal is a hull facet's and its vertices are on that plane.
+        key = {tuple(n): j for j, n in enumerate(hull.normals.tolist())}
+        facet_of = np.array([key.get(tuple(n), -1) for n in tri_n.tolist()], dtype=np.int64)
+        bad = np.nonzero(facet_of < 0)[0]
+        if not bad.size:
+            q = hull.ints[hull.facet_indices[hull.facet_offsets[facet_of]]]
+            side = exact.dot_sign(tri[:, 0] - q, hull.normals[facet_of])
+            bad = np.nonzero(side != 0)[0]
+        if bad.size:
+            raise NotConvexError(
+                f"mesh '{m.name}' is not convex: {bad.size} of {len(m.faces)} faces are not on its "
+                f"convex hull (reflex or interior), first face {int(bad[0])} with vertices "
+                f"{tuple(int(i) for i in m.faces[bad[0]])}"
+            )
+        if m.volume6() != hull.volume6():
+            raise NotConvexError(
+                f"mesh '{m.name}' is not convex: its faces lie on its hull but its volume differs "
+                "(faces cover the hull more than once)"
+            )
+        return cls(**{**hull.__dict__, "name": m.name, "_cache": {}})
+
+    # ---- derived data ---------------------------------------------------------------
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64 vertex coordinates in scene units (exact grid values)."""
+        return self.grid.to_float(self.ints)
+
+    @property
+    def n_facets(self) -> int:
+        return len(self.normals)
+
+    @property
+    def facets(self) -> list[np.ndarray]:
+        """Facet polygons as a list of int64 index arrays, counter-clockwise from outside."""
+        o, f = self.facet_offsets, self.facet_indices
+        return [f[o[i] : o[i + 1]] for i in range(len(o) - 1)]
+
+    @property
+    def facet_degrees(self) -> np.ndarray:
+        """(f,) int64 number of vertices of each facet."""
+        return np.diff(self.facet_offsets)
+
+    def triangles(self) -> tuple[np.ndarray, np.ndarray]:
+        """Fan triangulation of the facets.
+
+        Returns
+        -------
+        faces : (m, 3) int64
+            Counter-clockwise from outside.
+        facet : (m,) int64
+            The facet each triangle comes from.
+        """
+        if "tri" not in self._cache:
+            o, f = self.facet_offsets, self.facet_indices
+            deg = np.diff(o)
+            facet = np.repeat(np.arange(len(deg)), deg - 2)
+            # Triangle t of facet i is (f[o_i], f[o_i + k], f[o_i + k + 1]) for k = 1 .. deg-2.
+            k = np.arange(len(facet)) - np.repeat(np.cumsum(deg - 2) - (deg - 2), deg - 2) + 1
+            start = o[facet]
+            faces = np.stack([f[start], f[start + k], f[start + k + 1]], axis=1)
+            self._cache["tri"] = (faces.astype(np.int64), facet.astype(np.int64))
+        return self._cache["tri"]
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(m, 3) int64 triangle faces (fan triangulation of the facets)."""
+        return self.triangles()[0]
+
+    def volume6(self) -> int:
+        """Exact six times the volume, in grid units cubed (a Python int)."""
+        faces = self.faces
+        t = self.ints[faces].astype(object)
+        det = (
+            t[:, 0, 0] * (t[:, 1, 1] * t[:, 2, 2] - t[:, 1, 2] * t[:, 2, 1])
+            + t[:, 0, 1] * (t[:, 1, 2] * t[:, 2, 0] - t[:, 1, 0] * t[:, 2, 2])
+            + t[:, 0, 2] * (t[:, 1, 0] * t[:, 2, 1] - t[:, 1, 1] * t[:, 2, 0])
+        )
+        return int(sum(det))
+
+    @property
+    def volume(self) -> float:
+        """Volume in scene units cubed (the exact value, rounded once)."""
+        return float(self.volume6()) / 6.0 * self.grid.step**3
+
+    def planes(self) -> set[tuple[int, int, int, int]]:
+        """The exact facet planes ``(nx, ny, nz, d)``, ``n . x = d`` in grid units, n primitive."""
+        q = self.ints[self.facet_indices[self.facet_offsets[:-1]]]
+        return {
+            (int(n[0]), int(n[1]), int(n[2]), int(n[0]) * int(p[0]) + int(n[1]) * int(p[1]) + int(n[2]) * int(p[2]))
+            for n, p in zip(self.normals.tolist(), q.tolist())
+        }
+
+    # ---- operations -----------------------------------------------------------------
+
+    def reflected(self, reference_point=(0.0, 0.0, 0.0)) -> "ConvexPolytope":
+        """``-(R - c)``: the points ``c - r``, i.e. R reflected through its reference point ``c``
+        and expressed with ``c`` at the origin.
+
+        With ``R`` a robot and ``c`` its reference point, ``O ⊕ R.reflected(c)`` is the
+        C-obstacle: the set of positions of ``c`` at which the robot meets ``O``.
+        ``reference_point`` is snapped onto the polytope's grid (exact if already on it).
+        """
+        c = self.grid.snap(np.asarray(reference_point, dtype=np.float64).reshape(3))
+        ints = c[None, :] - self.ints
+        # Point reflection reverses orientation: reverse each facet's vertex order.
+        o, f = self.facet_offsets, self.facet_indices
+        flat = np.concatenate([f[o[i] : o[i + 1]][::-1] for i in range(len(o) - 1)])
+        edges, edge_facets = _edges_of(flat, o, len(ints), self.name)
+        return ConvexPolytope(
+            grid=self.grid,
+            ints=ints,
+            facet_offsets=o.copy(),
+            facet_indices=flat,
+            normals=-self.normals,
+            edges=edges,
+            edge_facets=edge_facets,
+            name=f"-{self.name}",
+        )
+
+    def on_grid(self, grid: Grid) -> "ConvexPolytope":
+        """The same polytope snapped onto another grid (the hull is recomputed if snapping moves points)."""
+        if grid == self.grid:
+            return self
+        return ConvexPolytope.from_points(self.vertices, grid=grid, name=self.name)
+
+    def to_trimesh(self):
+        """A ``trimesh.Trimesh`` of the fan-triangulated facets (float64, not re-processed)."""
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+
+def _as_points(points, name: str) -> np.ndarray:
+    if hasattr(points, "vertices"):
+        points = np.asarray(points.vertices)
+    points = np.asarray(points, dtype=np.float64)
+    if points.size == 0:
+        raise EmptyMeshError(f"{name}: no points")
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise ValueError(f"{name}: points must be (n, 3), got {points.shape}")
+    return points
+
+
+def _edges_of(flat: np.ndarray, offsets: np.ndarray, n_vertices: int, name: str):
+    """Edges of a closed polygon mesh with their left/right facets; raises if not closed."""
+    deg = np.diff(offsets)
+    facet = np.repeat(np.arange(len(deg)), deg)
+    nxt = np.arange(len(flat)) + 1
+    ends = offsets[1:] - 1
+    nxt[ends] = offsets[:-1]
+    u, v = flat, flat[nxt]
+    key = u * n_vertices + v
+    rkey = v * n_vertices + u
+    order = np.argsort(key)
+    pos = np.searchsorted(key[order], rkey)
+    pos = np.minimum(pos, len(key) - 1)
+    matched = key[order][pos] == rkey
+    dup = np.unique(key).size != key.size
+    if not matched.all() or dup:
+        raise ExactnessError(
+            f"{name}: facet polygons do not form a closed 2-manifold "
+            f"({int((~matched).sum())} unmatched directed edges)"
+        )
+    twin = order[pos]
+    keep = u < v
+    edges = np.stack([u[keep], v[keep]], axis=1).astype(np.int64)
+    edge_facets = np.stack([facet[keep], facet[twin[keep]]], axis=1).astype(np.int64)
+    return edges, edge_facets
+
+
+# --------------------------------------------------------------------------------------
+# exact hull: a non-degenerate tetrahedron, candidate planes, certificate
+
+
+def _find_tetrahedron(ints: np.ndarray, name: str) -> np.ndarray:
+    """Indices of four affinely independent points, or DegenerateError saying why none exist."""
+    if len(ints) < 4:
+        raise DegenerateError(f"{name}: {len(ints)} distinct points cannot bound a volume")
+    i0 = 0
+    d = ints - ints[i0]
+    i1 = int(np.argmax(np.abs(d).sum(axis=1)))
+    c = exact.cross(ints[i1] - ints[i0], d)
+    nz = np.nonzero(np.any(c != 0, axis=1))[0]
+    if not nz.size:
+        raise DegenerateError(f"{name}: all {len(ints)} points are collinear on the grid (no volume)")
+    i2 = int(nz[0])
+    s = exact.orient3d(ints[i0], ints[i1], ints[i2], ints)
+    nz = np.nonzero(s != 0)[0]
+    if not nz.size:
+        raise DegenerateError(f"{name}: all {len(ints)} points are coplanar on the grid (no volume)")
+    return np.array([i0, i1, i2, int(nz[0])], dtype=np.int64)
+
+
+def _orient_outward(ints, tri_pts, normals, tetra):
+    """Flip integer normals so that the tetrahedron (inside the hull) is not on their positive side."""
+    side = exact.plane_side_matrix(ints[tetra], tri_pts, normals)  # (4, m)
+    # A supporting plane has the whole tetrahedron on one side; use its most populated sign.
+    flip = (side > 0).sum(axis=0) > 0
+    normals = normals.copy()
+    normals[flip] *= -1
+    return normals
+
+
+def _certify(ints, plane_pts, normals):
+    """Exact certificate for candidate outward facet planes.
+
+    Returns ``(normals, on_plane)`` with duplicates removed when every point is on or below
+    every plane and each plane holds three non-collinear points; otherwise None.
+    """
+    normals = exact.primitive(normals)
+    _, first = np.unique(normals, axis=0, return_index=True)
+    first = np.sort(first)
+    normals, plane_pts = normals[first], plane_pts[first]
+    side = exact.plane_side_matrix(ints, plane_pts, normals)
+    if (side > 0).any():
+        return None
+    on_plane = side == 0
+    if (on_plane.sum(axis=0) < 3).any():
+        return None
+    return normals, on_plane
+
+
+def _qhull_planes(ints: np.ndarray, tetra: np.ndarray):
+    """Qhull's triangles as candidate facet planes, certified exactly; None if not certified."""
+    from scipy.spatial import ConvexHull
+    from scipy.spatial import QhullError
+
+    try:
+        hull = ConvexHull(ints.astype(np.float64))
+    except QhullError:
+        return None
+    tri = ints[hull.simplices]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    keep = np.any(n != 0, axis=1)
+    tri, n = tri[keep], n[keep]
+    if not len(n):
+        return None
+    n = _orient_outward(ints, tri[:, 0], n, tetra)
+    return _certify(ints, tri[:, 0], n)
+
+
+def _wrap_planes(ints: np.ndarray, tetra: np.ndarray):
+    """Exact gift wrapping over facets: each facet found by rotating a supporting plane about
+    a known hull edge until no point is beyond it. O(n h) vectorised exact predicates."""
+    n_pts = len(ints)
+
+    def rotate(u: np.ndarray, v: np.ndarray, p: int) -> int:
+        # Rotate the plane (v, u, p) about line uv until no point lies on its positive side.
+        while True:
+            s = exact.orient3d(v, u, ints[p], ints)
+            beyond = np.nonzero(s > 0)[0]
+            if not beyond.size:
+                return p
+            nrm = np.cross(u - v, ints[p] - v).astype(np.float64)
+            height = (ints[beyond] - v).astype(np.float64) @ nrm
+            p = int(beyond[np.argmax(height)])
+
+    # First facet: wrap about the line through the lexicographically smallest point along +y,
+    # starting from the supporting plane x = min x, then about the edge found.
+    a = int(np.lexsort(ints.T[::-1])[0])
+    pa = ints[a]
+    virtual = pa + np.array([0, 1, 0])
+    off_line = np.nonzero(np.any(exact.cross(virtual - pa, ints - pa) != 0, axis=1))[0]
+    b = rotate(virtual, pa, int(off_line[0]))
+    # Now plane (pa, virtual, b) supports the set; wrap about edge (a, b) to a true facet.
+    start = [i for i in range(n_pts) if np.any(exact.cross(ints[b] - pa, ints[i] - pa) != 0)]
+    c = rotate(ints[b], pa, start[0])
+    normals, on_planes, done = [], [], set()
+    first_n = exact.primitive(exact.cross(ints[b] - pa, ints[c] - pa))
+    # Orientation: outward normal has every point on its non-positive side.
+    if (exact.dot_sign(ints - pa, first_n) > 0).any():
+        first_n = -first_n
+    todo = [(first_n, a)]
+    while todo:
+        nrm, anchor = todo.pop()
+        key = tuple(nrm.tolist())
+        if key in done:
+            continue
+        done.add(key)
+        side = exact.dot_sign(ints - ints[anchor], nrm)
+        if (side > 0).any():
+            raise ExactnessError("gift wrapping produced a non-supporting plane")
+        idx = np.nonzero(side == 0)[0]
+        normals.append(nrm)
+        on_planes.append(side == 0)
+        ring = _facet_polygon(ints, idx, nrm)
+        for k in range(len(ring)):
+            u, v = ints[ring[k]], ints[ring[(k + 1) % len(ring)]]
+            # Neighbour facet across u -> v contains v -> u: start from a point of this facet.
+            w = ring[(k + 2) % len(ring)]
+            p = rotate(u, v, int(w))
+            nn = exact.primitive(exact.cross(u - v, ints[p] - v))
+            if tuple(nn.tolist()) not in done:
+                todo.append((nn, int(ring[k])))
+    return np.asarray(normals, dtype=np.int64), np.stack(on_planes, axis=1)
+
+
+# --------------------------------------------------------------------------------------
+# Minkowski sums
+
+
+@dataclass(frozen=True, eq=False)
+class MinkowskiSum:
+    """Result of a convex ⊕ convex Minkowski sum, with provenance.
+
+    Attributes
+    ----------
+    polytope : ConvexPolytope
+        The sum, with polygon facets (degrees preserved) and exact grid vertices.
+    labels : (n, 2) int64
+        For each vertex of the sum, the vertex of A and the vertex of B it is the sum of.
+    kind : (f,) int8
+        Facet kind, an index into :data:`FACET_KINDS` (translated, corner, edge).
+    source_a, source_b : (f, 2) int64
+        The feature of A (resp. B) a facet comes from, as ``(dimension, index)``: dimension
+        0 is a vertex index, 1 an edge index (into ``A.edges``), 2 a facet index.
+    """
+
+    polytope: ConvexPolytope
+    labels: np.ndarray
+    kind: np.ndarray
+    source_a: np.ndarray
+    source_b: np.ndarray
+
+    @property
+    def grid(self) -> Grid:
+        return self.polytope.grid
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64 vertices in scene units."""
+        return self.polytope.vertices
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(m, 3) int64 triangles (fan triangulation of the polygon facets)."""
+        return self.polytope.faces
+
+    @property
+    def facets(self) -> list[np.ndarray]:
+        return self.polytope.facets
+
+    @property
+    def volume(self) -> float:
+        return self.polytope.volume
+
+    @property
+    def error_bound(self) -> float:
+        """Largest distance between an input vertex and its snapped grid position.
+
+        The sum of the snapped operands is exact; it differs from the sum of the unsnapped
+        operands by at most twice this bound (Hausdorff distance).
+        """
+        return self.grid.point_error_bound
+
+
+def _common_grid(A, B) -> tuple[ConvexPolytope, ConvexPolytope]:
+    A = A if isinstance(A, ConvexPolytope) else ConvexPolytope.from_points(A, name="A")
+    B = B if isinstance(B, ConvexPolytope) else ConvexPolytope.from_points(B, name="B")
+    if A.grid == B.grid:
+        return A, B
+    # Re-snap both onto one grid that holds both (and their sums) exactly.
+    grid = Grid.for_points(A.vertices, B.vertices, bits=min(A.grid.bits, B.grid.bits))
+    return A.on_grid(grid), B.on_grid(grid)
+
+
+def _feature(P: ConvexPolytope, support: np.ndarray) -> tuple[int, int]:
+    """(dimension, index) of the face of P spanned by the vertex set ``support`` (a bool mask)."""
+    idx = np.nonzero(support)[0]
+    if len(idx) == 1:
+        return 0, int(idx[0])
+    if len(idx) == 2:
+        lo, hi = int(idx.min()), int(idx.max())
+        e = P._cache.get("edge_index")
+        if e is None:
+            e = {(int(min(a, b)), int(max(a, b))): i for i, (a, b) in enumerate(P.edges.tolist())}
+            P._cache["edge_index"] = e
+        return 1, e[(lo, hi)]
+    # Three or more support vertices span a facet: find it by its vertex set.
+    f = P._cache.get("facet_index")
+    if f is None:
+        f = {frozenset(fa.tolist()): i for i, fa in enumerate(P.facets)}
+        P._cache["facet_index"] = f
+    return 2, f[frozenset(idx.tolist())]
+
+
+def convex_minkowski_sum(A, B) -> MinkowskiSum:
+    """Exact Minkowski sum of two convex polytopes (CVMS), facet degrees preserved.
+
+    Parameters
+    ----------
+    A, B : ConvexPolytope or (n, 3) float64 points
+        Operands; points are hulled first. Both are put on one grid.
+
+    Returns
+    -------
+    MinkowskiSum
+        Polygon facets with their kind and provenance, exact grid vertices labelled by the
+        pair of vertices they are the sum of.
+
+    Notes
+    -----
+    Cost: the support of every facet normal of A among B's vertices and vice versa
+    (``O(f_A v_B + f_B v_A)``, one BLAS product each), and the Gauss-arc crossing test on
+    the pairs of edges whose two facets have different contributing vertices. All decisions
+    go through float filters with exact fallbacks (:mod:`cspace.exact`).
+    """
+    A, B = _common_grid(A, B)
+    nA, nB = A.normals, B.normals
+    SB = exact.support_mask(B.ints, nA)  # (fA, vB): contributing vertices of A's facets
+    SA = exact.support_mask(A.ints, nB)  # (fB, vA): contributing vertices of B's facets
+    single_b = SB.sum(axis=1) == 1
+    single_a = SA.sum(axis=1) == 1
+    b_of = SB.argmax(axis=1)  # the contributing vertex where it is unique
+    a_of = SA.argmax(axis=1)
+
+    # Facet normals shared by A and B (parallel facets) make one planar-sum facet.
+    cand = np.concatenate([nA, nB])
+    key, inv = np.unique(cand, axis=0, return_inverse=True)
+    inv = inv.reshape(-1)
+    owner_a = np.full(len(key), -1, dtype=np.int64)
+    owner_b = np.full(len(key), -1, dtype=np.int64)
+    owner_a[inv[: len(nA)]] = np.arange(len(nA))
+    owner_b[inv[len(nA) :]] = np.arange(len(nB))
+    shared = (owner_a >= 0) & (owner_b >= 0)
+    a_alone = owner_a[(owner_a >= 0) & ~shared]
+    b_alone = owner_b[(owner_b >= 0) & ~shared]
+
+    groups = []  # (flat A labels, flat B labels, sizes, normals, source_a, source_b)
+
+    # Translated facets: a facet of A moved by its unique contributing vertex of B.
+    fa = a_alone[single_b[a_alone]]
+    la, sz = _gather(A.facet_offsets, A.facet_indices, fa)
+    groups.append((la, np.repeat(b_of[fa], sz), sz, nA[fa], _src(2, fa), _src(0, b_of[fa])))
+    # Corner facets: a facet of B placed at its unique contributing vertex of A.
+    fb = b_alone[single_a[b_alone]]
+    lb, sz = _gather(B.facet_offsets, B.facet_indices, fb)
+    groups.append((np.repeat(a_of[fb], sz), lb, sz, nB[fb], _src(0, a_of[fb]), _src(2, fb)))
+
+    # Planar sums: a facet of one operand parallel to a facet or an edge of the other. Rare
+    # (degenerate directions), so a loop over them is fine.
+    planar = np.concatenate([
+        np.nonzero(shared)[0],
+        inv[a_alone[~single_b[a_alone]]],
+        inv[len(nA) + b_alone[~single_a[b_alone]]],
+    ])
+    A_facets, B_facets = A.facets, B.facets
+    rings_a, rings_b, src_a, src_b = [], [], [], []
+    for k in planar:
+        fa_k, fb_k = owner_a[k], owner_b[k]
+        supp_a = SA[fb_k] if fb_k >= 0 else np.isin(np.arange(len(A.ints)), A_facets[fa_k])
+        supp_b = SB[fa_k] if fa_k >= 0 else np.isin(np.arange(len(B.ints)), B_facets[fb_k])
+        ia_, ib_ = np.nonzero(supp_a)[0], np.nonzero(supp_b)[0]
+        pa, pb = np.repeat(ia_, len(ib_)), np.tile(ib_, len(ia_))
+        ring = _facet_polygon(A.ints[pa] + B.ints[pb], np.arange(len(pa)), key[k])
+        rings_a.append(pa[ring])
+        rings_b.append(pb[ring])
+        src_a.append(_feature(A, supp_a))
+        src_b.append(_feature(B, supp_b))
+    if len(planar):
+        groups.append((
+            np.concatenate(rings_a), np.concatenate(rings_b),
+            np.array([len(r) for r in rings_a], dtype=np.int64), key[planar],
+            np.asarray(src_a, dtype=np.int64), np.asarray(src_b, dtype=np.int64),
+        ))
+
+    # Edge facets: pairs of edges whose Gauss arcs cross at an interior point of both.
+    # An arc lying inside one vertex's normal cone crosses no arc of the other polytope.
+    efA, efB = A.edge_facets, B.edge_facets
+    live_a = ~(single_b[efA[:, 0]] & single_b[efA[:, 1]] & (b_of[efA[:, 0]] == b_of[efA[:, 1]]))
+    live_b = ~(single_a[efB[:, 0]] & single_a[efB[:, 1]] & (a_of[efB[:, 0]] == a_of[efB[:, 1]]))
+    ia, ib = np.nonzero(live_a)[0], np.nonzero(live_b)[0]
+    a_vec = A.ints[A.edges[ia, 1]] - A.ints[A.edges[ia, 0]]  # parallel to n1 x n2 (left x right)
+    b_vec = B.ints[B.edges[ib, 1]] - B.ints[B.edges[ib, 0]]
+    # With p = a x b, the point s*p is inside both arcs iff (design notes section 1, simplified
+    # with a.n1 = a.n2 = b.m1 = b.m2 = 0):
+    #   sign(a.m1) = -s, sign(a.m2) = s, sign(b.n1) = s, sign(b.n2) = -s, all non-zero.
+    # First the B edges on the horizon of each A edge direction (one sign per B facet), then
+    # the two remaining signs on those few candidate pairs only.
+    T = exact.dot_sign_matrix(a_vec, nB)  # (live A edges, B facets)
+    t1, t2 = T[:, efB[ib, 0]], T[:, efB[ib, 1]]
+    i, j = np.nonzero((t1 != 0) & (t1 == -t2))
+    s = t2[i, j]
+    ok = exact.dot_sign(b_vec[j], nA[efA[ia[i], 0]]) == s
+    ok &= exact.dot_sign(b_vec[j], nA[efA[ia[i], 1]]) == -s
+    i, j, s = i[ok], j[ok], s[ok].astype(np.int64)
+    ua, va = A.edges[ia[i], 0], A.edges[ia[i], 1]
+    ub, vb = B.edges[ib[j], 0], B.edges[ib[j], 1]
+    # (ua+ub) -> (va+ub) -> (va+vb) -> (ua+vb) turns about a x b; reverse where s < 0.
+    ring_a = np.stack([ua, va, va, ua], axis=1)
+    ring_b = np.stack([ub, ub, vb, vb], axis=1)
+    rev = s < 0
+    ring_a[rev] = ring_a[rev, ::-1]
+    ring_b[rev] = ring_b[rev, ::-1]
+    groups.append((
+        ring_a.reshape(-1), ring_b.reshape(-1), np.full(len(i), 4, dtype=np.int64),
+        exact.primitive(exact.cross(a_vec[i], b_vec[j]) * s[:, None]),
+        _src(1, ia[i]), _src(1, ib[j]),
+    ))
+
+    flat_a, flat_b, sizes, normals, source_a, source_b = (
+        np.concatenate([g[c] for g in groups]) for c in range(6)
+    )
+    # One sum vertex per (A vertex, B vertex) label used.
+    code = flat_a * len(B.ints) + flat_b
+    uniq, flat = np.unique(code, return_inverse=True)
+    labels = np.stack([uniq // len(B.ints), uniq % len(B.ints)], axis=1)
+    ints = A.ints[labels[:, 0]] + B.ints[labels[:, 1]]
+    offsets = np.zeros(len(sizes) + 1, dtype=np.int64)
+    np.cumsum(sizes, out=offsets[1:])
+    poly = ConvexPolytope._from_csr(ints, offsets, flat.reshape(-1), normals, grid=A.grid, name=f"{A.name}+{B.name}")
+    kind = np.where(source_a[:, 0] == 2, TRANSLATED, np.where(source_b[:, 0] == 2, CORNER, EDGE)).astype(np.int8)
+    return MinkowskiSum(polytope=poly, labels=labels, kind=kind, source_a=source_a, source_b=source_b)
+
+
+def _gather(offsets: np.ndarray, indices: np.ndarray, sel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Concatenated index lists of the selected CSR rows, and their sizes."""
+    sizes = (offsets[sel + 1] - offsets[sel]).astype(np.int64)
+    within = np.arange(sizes.sum()) - np.repeat(np.cumsum(sizes) - sizes, sizes)
+    return indices[np.repeat(offsets[sel], sizes) + within], sizes
+
+
+def _src(dim: int, index: np.ndarray) -> np.ndarray:
+    """Provenance rows ``(dim, index)``."""
+    index = np.asarray(index, dtype=np.int64)
+    return np.stack([np.full(len(index), dim, dtype=np.int64), index], axis=1)
+
+
+def hull_minkowski_sum(A, B, *, method: str = "auto") -> ConvexPolytope:
+    """Baseline: the exact convex hull of all pairwise vertex sums ``a + b``.
+
+    Independent of :func:`convex_minkowski_sum` (shares only the exact kernel and the hull),
+    O(v_A v_B) points; used to check CVMS and as the benchmark's reference method.
+    """
+    A, B = _common_grid(A, B)
+    pts = (A.ints[:, None, :] + B.ints[None, :, :]).reshape(-1, 3)
+    return ConvexPolytope.from_ints(pts, grid=A.grid, name=f"hull({A.name}+{B.name})", method=method)
