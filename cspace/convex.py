@@ -147,6 +147,11 @@ class ConvexPolytope:
             exactly (raising ExactnessError if the certificate fails); 'wrap' is exact gift
             wrapping over facets, O(n h); 'auto' tries 'qhull' and falls back to 'wrap'.
 
+        Returns
+        -------
+        ConvexPolytope
+            Only the hull's corners are kept as vertices; facets are strictly convex polygons.
+
         Raises
         ------
         EmptyMeshError, NonFiniteError

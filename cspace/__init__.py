@@ -1,0 +1,56 @@
+"""cspace: exact translational configuration-space obstacles for motion planning.
+
+A robot R (a convex polytope translating at a fixed orientation) meets an obstacle O exactly
+when its reference point lies in the C-obstacle ``O ⊕ (-R)``. cspace computes these
+Minkowski sums exactly: inputs are snapped to a stated dyadic grid and every decision is an
+exact predicate (:mod:`cspace.exact`).
+
+Public API
+----------
+- :class:`Grid` — the snapping grid and its error bound.
+- :class:`ClosedMesh`, :func:`as_mesh` — validated closed meshes (obstacles).
+- :class:`ConvexPolytope` — convex polytopes (robots), exact hull, ``reflected(c)`` = −R.
+- :func:`convex_minkowski_sum` → :class:`MinkowskiSum` — CVMS, convex ⊕ convex.
+- the errors of :mod:`cspace.errors`.
+"""
+
+from .convex import FACET_KINDS, ConvexPolytope, MinkowskiSum, convex_minkowski_sum
+from .errors import (
+    CspaceError,
+    DegenerateError,
+    DuplicateFaceError,
+    EmptyMeshError,
+    ExactnessError,
+    GridRangeError,
+    InvalidMeshError,
+    NonFiniteError,
+    NonManifoldError,
+    NotConvexError,
+    OpenMeshError,
+)
+from .exact import Grid
+from .mesh import ClosedMesh, as_mesh
+
+__version__ = "0.1.0"
+
+__all__ = [
+    "__version__",
+    "Grid",
+    "ClosedMesh",
+    "as_mesh",
+    "ConvexPolytope",
+    "MinkowskiSum",
+    "FACET_KINDS",
+    "convex_minkowski_sum",
+    "CspaceError",
+    "InvalidMeshError",
+    "EmptyMeshError",
+    "NonFiniteError",
+    "OpenMeshError",
+    "NonManifoldError",
+    "DegenerateError",
+    "DuplicateFaceError",
+    "NotConvexError",
+    "GridRangeError",
+    "ExactnessError",
+]

@@ -1,0 +1,38 @@
+"""The public API is small, pinned, and documented."""
+
+from __future__ import annotations
+
+import inspect
+
+import cspace
+
+PUBLIC = {
+    "__version__", "Grid", "ClosedMesh", "as_mesh", "ConvexPolytope", "MinkowskiSum",
+    "FACET_KINDS", "convex_minkowski_sum", "CspaceError", "InvalidMeshError", "EmptyMeshError",
+    "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
+    "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError",
+}
+
+
+def test_all_is_pinned():
+    assert set(cspace.__all__) == PUBLIC
+    for name in cspace.__all__:
+        assert hasattr(cspace, name), name
+
+
+def test_public_callables_are_documented():
+    for name in cspace.__all__:
+        obj = getattr(cspace, name)
+        if inspect.isclass(obj) or inspect.isfunction(obj):
+            assert inspect.getdoc(obj), f"{name} has no docstring"
+    for fn in (cspace.convex_minkowski_sum, cspace.ConvexPolytope.from_points, cspace.Grid.snap):
+        doc = inspect.getdoc(fn)
+        assert "Parameters" in doc and "Returns" in doc, fn.__qualname__
+
+
+def test_errors_subclass_the_builtin_they_stand_for():
+    for name in ("InvalidMeshError", "EmptyMeshError", "NonFiniteError", "OpenMeshError",
+                 "NonManifoldError", "DegenerateError", "DuplicateFaceError", "NotConvexError",
+                 "GridRangeError"):
+        err = getattr(cspace, name)
+        assert issubclass(err, cspace.CspaceError) and issubclass(err, ValueError), name
