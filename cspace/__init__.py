@@ -15,19 +15,8 @@ Public API
 """
 
 from .convex import FACET_KINDS, ConvexPolytope, MinkowskiSum, convex_minkowski_sum
-from .errors import (
-    CspaceError,
-    DegenerateError,
-    DuplicateFaceError,
-    EmptyMeshError,
-    ExactnessError,
-    GridRangeError,
-    InvalidMeshError,
-    NonFiniteError,
-    NonManifoldError,
-    NotConvexError,
-    OpenMeshError,
-)
+from . import errors
+from .errors import *  # noqa: F403 (the error classes are public)
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
 
@@ -42,15 +31,4 @@ __all__ = [
     "MinkowskiSum",
     "FACET_KINDS",
     "convex_minkowski_sum",
-    "CspaceError",
-    "InvalidMeshError",
-    "EmptyMeshError",
-    "NonFiniteError",
-    "OpenMeshError",
-    "NonManifoldError",
-    "DegenerateError",
-    "DuplicateFaceError",
-    "NotConvexError",
-    "GridRangeError",
-    "ExactnessError",
-]
+] + list(errors.__all__)

@@ -36,6 +36,7 @@ __all__ = [
     "plane_side_matrix",
     "cross",
     "primitive",
+    "Perturbation",
 ]
 
 # Unit roundoff of float64 (round to nearest).
@@ -426,3 +427,120 @@ def primitive(v) -> np.ndarray:
     g = np.gcd.reduce(v, axis=-1, keepdims=True)
     g[g == 0] = 1
     return v // g
+
+
+def _cross_obj(u, v):
+    """Cross product on object (Python int) arrays, ``(..., 3)``; never rounds."""
+    return np.stack(
+        [
+            u[..., 1] * v[..., 2] - u[..., 2] * v[..., 1],
+            u[..., 2] * v[..., 0] - u[..., 0] * v[..., 2],
+            u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0],
+        ],
+        axis=-1,
+    )
+
+
+# Candidate rotation axes for the symbolic perturbation: small, primitive, not on any
+# coordinate plane or diagonal, so that axis-aligned and symmetric inputs never hit them.
+_AXES = ((3, 7, 19), (5, -11, 23), (-13, 17, 29), (31, 2, -37), (41, -43, 6), (47, 53, -59))
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """One consistent symbolic perturbation: an infinitesimal rotation of the second operand.
+
+    ``R_eps = exp(eps K)`` with ``K x = w x x`` for an integer axis ``w``. A predicate
+    ``sign(x . R_eps y)`` (``x`` fixed, ``y`` rotating) is the sign of the first non-zero
+    term of ``x.y, x.(w x y), x.(w x (w x y))`` (positive factors 1, eps, eps^2/2 dropped):
+    it is never zero when ``x != 0``, ``y != 0`` and ``w`` is not parallel to ``y``.
+
+    Used so that every tie between directions of two polytopes (parallel facets, an edge
+    parallel to a facet, Gauss arcs through each other's vertices) is broken the same way by
+    every predicate: the result is the exact limit of the generic configuration.
+    """
+
+    axis: tuple[int, int, int]
+
+    @classmethod
+    def avoiding(cls, *directions: np.ndarray) -> "Perturbation":
+        """A perturbation whose axis is parallel to none of the given integer directions."""
+        prims = [primitive(np.asarray(d, dtype=np.int64).reshape(-1, 3)) for d in directions]
+        for w in _AXES:
+            wv = np.array(w, dtype=np.int64)
+            if not any(((p == wv).all(axis=1) | (p == -wv).all(axis=1)).any() for p in prims):
+                return cls(axis=w)
+        raise GridRangeError("no perturbation axis avoids every input direction")  # pragma: no cover
+
+    def parallel_to(self, y) -> bool:
+        """Whether the (Python int) vector ``y`` is parallel to the axis (exact)."""
+        w = self.axis
+        c = (w[1] * y[2] - w[2] * y[1], w[2] * y[0] - w[0] * y[2], w[0] * y[1] - w[1] * y[0])
+        return c == (0, 0, 0)
+
+    def _resolve(self, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """Perturbed signs for rows whose plain dot product is zero (object arithmetic)."""
+        xo, yo = x.astype(object), y.astype(object)
+        wo = np.broadcast_to(np.array(self.axis, dtype=object), yo.shape)
+        wy = _cross_obj(wo, yo)
+        s = _sign_of(np.asarray(_dot(xo, wy), dtype=object)).astype(np.int8)
+        z = s == 0
+        if z.any():
+            wwy = _cross_obj(wo[z], wy[z])
+            s[z] = _sign_of(np.asarray(_dot(xo[z], wwy), dtype=object)).astype(np.int8)
+        if (s == 0).any():
+            raise GridRangeError("perturbation failed: a zero vector or a direction parallel to its axis")
+        return s
+
+    def dot_sign(self, x, y) -> np.ndarray:
+        """``sign(x . R_eps y)`` for ``(k, 3)`` integer rows (broadcast); never zero."""
+        x, y = _ints(x), _ints(y)
+        shape = np.broadcast_shapes(x.shape, y.shape)
+        x, y = np.broadcast_to(x, shape).reshape(-1, 3), np.broadcast_to(y, shape).reshape(-1, 3)
+        s = dot_sign(x, y).reshape(-1)
+        z = s == 0
+        if z.any():
+            s[z] = self._resolve(x[z], y[z])
+        return s.reshape(shape[:-1])
+
+    def dot_sign_matrix(self, X, Y) -> np.ndarray:
+        """``sign(X[i] . R_eps Y[j])`` as an ``(n, m)`` int8 matrix; never zero."""
+        X, Y = _ints(X), _ints(Y)
+        s = dot_sign_matrix(X, Y)
+        i, j = np.nonzero(s == 0)
+        if i.size:
+            s[i, j] = self._resolve(X[i], Y[j])
+        return s
+
+    def dot_sign_big(self, x: np.ndarray, y) -> np.ndarray:
+        """``sign(x[i] . R_eps y)`` for one vector ``y`` of arbitrary size (Python ints)."""
+        x = _ints(x)
+        yo = np.array([int(c) for c in y], dtype=object)
+        s = _sign_of(np.asarray(_dot(x.astype(object), yo), dtype=object)).astype(np.int8)
+        z = s == 0
+        if z.any():
+            s[z] = self._resolve(x[z], np.broadcast_to(yo, (int(z.sum()), 3)))
+        return s
+
+    def argmax(self, points, directions, mask: np.ndarray) -> np.ndarray:
+        """For each direction, the point maximising ``<R_eps p, d>`` among ``mask``'s exact ties.
+
+        ``mask`` is :func:`support_mask` ``(points, directions)``; rows with a single True
+        are returned as is, tied rows are broken by the perturbation's second and third terms.
+        """
+        P, D = _ints(points), _ints(directions)
+        best = mask.argmax(axis=1)
+        tied = np.nonzero(mask.sum(axis=1) > 1)[0]
+        if tied.size:
+            rows, cand = np.nonzero(mask[tied])
+            Do, Po = D[tied[rows]].astype(object), P[cand].astype(object)
+            w = np.broadcast_to(np.array(self.axis, dtype=object), Po.shape)
+            wp = _cross_obj(w, Po)
+            k1 = _dot(Do, wp)
+            k2 = _dot(Do, _cross_obj(w, wp))
+            order = sorted(range(len(rows)), key=lambda t: (rows[t], k1[t], k2[t]))
+            # The last candidate of each row in (row, k1, k2) order is its maximiser.
+            last = {rows[t]: cand[t] for t in order}
+            for r, c in last.items():
+                best[tied[r]] = c
+        return best
