@@ -150,3 +150,158 @@ def test_the_perturbation_axis_avoids_every_input_direction():
     w = np.array(S.perturbation.axis)
     for d in (B.normals, np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1]])):
         assert (exact.cross(exact.primitive(d), w) != 0).any(axis=1).all()
+
+
+# ---- membership: winding number of the superset against FCL ---------------------------
+
+import zoo  # noqa: E402  (tests/ is on sys.path under pytest's rootdir conftest)
+from oracles import FclSolid, membership_disagreements, voxel_intersection_euler, winding_number  # noqa: E402
+
+N_POINTS = 10_000
+
+
+def sample_translations(S, rng, n):
+    """Half uniform in the superset's padded box, half near its vertices (where errors live)."""
+    V = S.vertices
+    lo, hi = V.min(0), V.max(0)
+    pad = 0.1 * (hi - lo)
+    uniform = rng.uniform(lo - pad, hi + pad, size=(n // 2, 3))
+    near = V[rng.integers(0, len(V), n - n // 2)] + rng.normal(scale=0.02 * (hi - lo).max(), size=(n - n // 2, 3))
+    return np.vstack([uniform, near])
+
+
+def assert_membership_matches_fcl(A, R, seed=0, n=N_POINTS):
+    """winding(superset of A ⊕ (−R), q) > 0 exactly when R + q meets A (solid), off a 1e-9 band."""
+    S = minkowski_superset(A, R.reflected((0.0, 0.0, 0.0)))
+    assert S.is_closed()
+    q = sample_translations(S, np.random.default_rng(seed), n)
+    faces, _, weight = S.triangles()
+    w = winding_number(S.vertices, faces, q, weights=weight)
+    # The superset's winding number is an integer (to float rounding) and never negative.
+    assert np.abs(w - np.round(w)).max() < 1e-6
+    assert np.round(w).min() >= 0
+    cls = FclSolid(A.vertices, A.faces).classify(R.vertices, R.faces, q, band=1e-9)
+    report = membership_disagreements(np.round(w) > 0, cls.inside, cls.clearance, band=1e-9)
+    assert report["n_disagree"] == 0, report
+    assert 0 < cls.inside.sum() < n  # both outcomes were exercised
+    return S
+
+
+MEMBERSHIP_CASES = {
+    # name: (mesh builder, robot points). Robots small enough against the features that
+    # A ∩ (R + q) is never a ring or shell: there the winding number is positive exactly on
+    # A ⊕ (−R) (see test_winding_number_is_the_euler_characteristic for why not always).
+    "torus+hull20": (zoo.torus, zoo.hull20(0, scale=(0.2, 0.15, 0.1))),
+    "genus3+box": (zoo.genus3, zoo.box_points(0.5, 0.25, 0.75)),
+    "star+icosphere": (zoo.star, zoo.icosphere_points(1, radius=0.3)),
+    "l_shape+rotated_cube": (zoo.l_shape, zoo.cube_rotated(0.4, size=0.5)),
+    "comb+box": (zoo.comb, zoo.box_points(0.5, 0.5, 0.5)),
+    "grate+box": (lambda: zoo.grate(2), zoo.box_points(0.5, 0.5, 0.5)),
+    "stairs+hull20": (zoo.stairs, zoo.hull20(1, scale=(0.6, 0.4, 0.3))),
+    # An axis-aligned box meeting the three walls of a pit pairwise contains the pit's
+    # corner: no ring, so the cup (which has pits) qualifies with a box robot only.
+    "cup+box": (zoo.cup, zoo.box_points(0.5, 0.4, 0.3)),
+    "twisted_prism+box": (zoo.twisted_prism, zoo.box_points(0.2, 0.1, 0.3)),
+    "hollow_box+small_box": (zoo.hollow_box, zoo.box_points(0.25, 0.25, 0.25)),
+}
+
+
+@pytest.mark.parametrize("name", list(MEMBERSHIP_CASES))
+def test_superset_membership_matches_fcl(name):
+    build, robot = MEMBERSHIP_CASES[name]
+    v, f = build()
+    A, R = operands(v, f, robot, name)
+    assert_membership_matches_fcl(A, R)
+
+
+def winding_and_fcl(A, R, q):
+    """Superset winding numbers (rounded) and FCL's solid classification at translations q."""
+    S = minkowski_superset(A, R.reflected((0.0, 0.0, 0.0)))
+    assert S.is_closed()
+    faces, _, weight = S.triangles()
+    w = winding_number(S.vertices, faces, q, weights=weight)
+    assert np.abs(w - np.round(w)).max() < 1e-6
+    cls = FclSolid(A.vertices, A.faces).classify(R.vertices, R.faces, q, band=1e-9)
+    return S, np.round(w).astype(int), cls
+
+
+def assert_sound_against_fcl(w, cls):
+    """What holds for every input: outside the sum the winding is 0; non-zero winding is inside.
+
+    Returns the indices of points inside the sum (off the 1e-9 band) whose winding is 0:
+    there A ∩ (R + q) has Euler characteristic 0 (a ring, ...), see the test below.
+    """
+    off_band = cls.clearance >= 1e-9
+    outside = off_band & ~cls.inside
+    assert (w[outside] == 0).all(), f"{int((w[outside] != 0).sum())} outside points with non-zero winding"
+    assert (cls.inside | ~off_band)[w != 0].all(), "non-zero winding outside the sum"
+    return np.nonzero(off_band & cls.inside & (w == 0))[0]
+
+
+PIT_CASES = {
+    # Voxel solids with a pit (an inner corner where three reflex edges meet), and robots
+    # big enough to span it without reaching the corner.
+    "notch+icosphere": zoo.icosphere_points(1, radius=0.4),
+    "notch+hull20": zoo.hull20(0, scale=(0.4, 0.3, 0.2)),
+    "cup+icosphere": zoo.icosphere_points(1, radius=0.4),
+}
+
+
+def pit_occupancy(name):
+    if name.startswith("cup"):
+        occ = np.ones((3, 3, 3), dtype=bool)
+        occ[1, 1, 1:] = False
+    else:
+        occ = np.ones((2, 2, 2), dtype=bool)
+        occ[1, 1, 1] = False
+    return occ
+
+
+@pytest.mark.parametrize("name", list(PIT_CASES))
+def test_winding_number_is_the_euler_characteristic(name):
+    """The convolution's winding number at q is χ(A ∩ (q − B)), not an indicator of A ⊕ B.
+
+    Near a pit a robot can meet the three walls pairwise without reaching the corner: the
+    intersection is a ring (χ = 0) although the robot collides. The superset must (and does)
+    give winding 0 there; χ is computed independently from the voxels by the nerve theorem.
+    """
+    occ = pit_occupancy(name)
+    A, R = operands(*zoo.voxel_solid(occ), PIT_CASES[name], name)
+    S = minkowski_superset(A, R.reflected((0.0, 0.0, 0.0)))
+    q = sample_translations(S, np.random.default_rng(0), N_POINTS)
+    S, w, cls = winding_and_fcl(A, R, q)
+    ring = assert_sound_against_fcl(w, cls)
+    assert len(ring) > 0  # colliding placements with winding 0 exist on these inputs
+    # Every one of them is a χ = 0 intersection, and on a random sample w equals χ too.
+    chi = np.array([voxel_intersection_euler(occ, R.vertices, q[k]) for k in ring])
+    assert (chi == 0).all()
+    rng = np.random.default_rng(1)
+    sample = rng.choice(np.nonzero(cls.clearance >= 1e-9)[0], 150, replace=False)
+    chi = np.array([voxel_intersection_euler(occ, R.vertices, q[k]) for k in sample])
+    assert (w[sample] == chi).all()
+    assert len(set(chi.tolist())) >= 3  # the sample sees several values (0, 1, 2, ...)
+SHARED_ROBOTS = {
+    "bunny-128": zoo.hull20(2, scale=(0.01, 0.008, 0.006)),
+    "bumpy-528": zoo.box_points(0.05, 0.05, 0.05),
+    "yoda-658": zoo.icosphere_points(2, radius=0.02),
+    "Centaur-1000": zoo.hull20(3, scale=(0.03, 0.02, 0.02)),
+    "alphaobstacle": zoo.box_points(1.0, 1.5, 0.5),
+    "trap": zoo.icosphere_points(2, radius=0.5),
+}
+
+
+@pytest.mark.parametrize("name", list(SHARED_ROBOTS))
+def test_shared_meshes_superset_closed_and_membership(shared_data, name):
+    path = zoo.shared_closed_meshes(shared_data)[name]
+    mesh = ClosedMesh.load(path)
+    # Scale the robot to the mesh so the sum has structure at every scale of the model.
+    extent = float(np.ptp(mesh.vertices, axis=0).max())
+    robot = SHARED_ROBOTS[name] / np.abs(SHARED_ROBOTS[name]).max() * 0.08 * extent
+    A, R = operands(mesh.vertices, mesh.faces, robot, name)
+    S = minkowski_superset(A, R.reflected((0.0, 0.0, 0.0)))
+    q = sample_translations(S, np.random.default_rng(0), N_POINTS)
+    S, w, cls = winding_and_fcl(A, R, q)
+    # Inside points with winding 0 (χ = 0 intersections: the robot spans a concave feature
+    # without reaching its apex) are allowed here; the benchmark report counts them.
+    assert_sound_against_fcl(w, cls)
+    assert 0 < cls.inside.sum() < len(q)
