@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import GridRangeError, NonFiniteError
+from .errors import ExactnessError, GridRangeError, NonFiniteError
 
 __all__ = [
     "Grid",
@@ -60,7 +60,8 @@ class Grid:
     """A dyadic snapping grid: coordinates become integer multiples of ``step = 2**exponent``.
 
     A grid made by :meth:`for_extent` from a scene's largest absolute coordinate ``L`` has
-    ``step = 2**(ceil(log2 L) - bits)``, so every snapped coordinate ``k`` satisfies
+    ``step = 2**(floor(log2 L) + 1 - bits)`` (the smallest power of two above ``L``, over
+    ``2**bits``), so every snapped coordinate ``k`` satisfies
     ``|k| <= 2**bits``. With the default ``bits=26`` the sum of two snapped points and every
     predicate on such sums is exact (orient3d needs about 87 bits, done in the exact path).
 
@@ -86,6 +87,8 @@ class Grid:
         extent = float(extent)
         if not math.isfinite(extent):
             raise NonFiniteError(f"grid extent is not finite: {extent}")
+        if extent < 0.0:
+            raise ValueError(f"grid extent must be >= 0, got {extent}")
         if extent <= 0.0:
             return cls(exponent=-bits, bits=bits)
         # frexp: extent = m * 2**e with 0.5 <= m < 1, hence extent < 2**e.
@@ -157,7 +160,8 @@ class Grid:
         points = np.asarray(points, dtype=np.float64)
         _check_finite(points, "points")
         # Division by a power of two is exact (no subnormals: see for_extent), rint is exact.
-        k = np.rint(np.ldexp(points, -self.exponent))
+        with np.errstate(over="ignore"):  # overflow to inf is reported just below
+            k = np.rint(np.ldexp(points, -self.exponent))
         if k.size and np.abs(k).max() > self.limit:
             flat = np.abs(k).reshape(-1, k.shape[-1]) if k.ndim > 1 else np.abs(k)[None]
             row = int(np.nonzero(flat.max(axis=-1) > self.limit)[0][0])
@@ -453,7 +457,9 @@ class Perturbation:
     ``R_eps = exp(eps K)`` with ``K x = w x x`` for an integer axis ``w``. A predicate
     ``sign(x . R_eps y)`` (``x`` fixed, ``y`` rotating) is the sign of the first non-zero
     term of ``x.y, x.(w x y), x.(w x (w x y))`` (positive factors 1, eps, eps^2/2 dropped):
-    it is never zero when ``x != 0``, ``y != 0`` and ``w`` is not parallel to ``y``.
+    it is never zero when neither ``x`` nor ``y`` is zero or parallel to ``w`` (the three
+    vectors ``y, w x y, w x (w x y)`` then span space, and ``x`` is not orthogonal to all).
+    Build it with :meth:`avoiding` over every fixed and every rotating direction used.
 
     Used so that every tie between directions of two polytopes (parallel facets, an edge
     parallel to a facet, Gauss arcs through each other's vertices) is broken the same way by
@@ -489,7 +495,7 @@ class Perturbation:
             wwy = _cross_obj(wo[z], wy[z])
             s[z] = _sign_of(np.asarray(_dot(xo[z], wwy), dtype=object)).astype(np.int8)
         if (s == 0).any():
-            raise GridRangeError("perturbation failed: a zero vector or a direction parallel to its axis")
+            raise ExactnessError("perturbation failed: a zero vector or a direction parallel to its axis")
         return s
 
     def dot_sign(self, x, y) -> np.ndarray:

@@ -237,7 +237,9 @@ def minkowski_superset(A, B) -> Superset:
     arc = sigma[:, None].astype(np.int64) * (V[edges[:, 1]] - V[edges[:, 0]])
 
     bnd = B.ints[B.edges[:, 1]] - B.ints[B.edges[:, 0]]
-    pert = Perturbation.avoiding(nA, B.normals, bnd)
+    # The axis must avoid every direction a predicate holds fixed (A's normals and edge
+    # vectors) or rotates (B's normals and edges): see Perturbation.
+    pert = Perturbation.avoiding(nA, d, B.normals, bnd)
     t_prep = time.perf_counter()
 
     # ---- translated facets: contributing vertex of every face of A ---------------------
