@@ -11,6 +11,8 @@ Public API
 - :class:`ClosedMesh`, :func:`as_mesh` — validated closed meshes (obstacles).
 - :class:`ConvexPolytope` — convex polytopes (robots), exact hull, ``reflected(c)`` = −R.
 - :func:`convex_minkowski_sum` → :class:`MinkowskiSum` — CVMS, convex ⊕ convex.
+- :func:`minkowski_superset` → :class:`Superset` — NCC-CVMS step 1: the convolution of a
+  closed mesh and a convex polytope, an oriented 2-cycle with signed corner multiplicities.
 - the errors of :mod:`cspace.errors`.
 """
 
@@ -19,6 +21,7 @@ from . import errors
 from .errors import *  # noqa: F403 (the error classes are public)
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
+from .superset import SUPERSET_KINDS, Superset, minkowski_superset
 
 __version__ = "0.1.0"
 
@@ -31,4 +34,7 @@ __all__ = [
     "MinkowskiSum",
     "FACET_KINDS",
     "convex_minkowski_sum",
+    "Superset",
+    "SUPERSET_KINDS",
+    "minkowski_superset",
 ] + list(errors.__all__)

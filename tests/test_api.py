@@ -8,7 +8,7 @@ import cspace
 
 PUBLIC = {
     "__version__", "Grid", "ClosedMesh", "as_mesh", "ConvexPolytope", "MinkowskiSum",
-    "FACET_KINDS", "convex_minkowski_sum", "CspaceError", "InvalidMeshError", "EmptyMeshError",
+    "FACET_KINDS", "convex_minkowski_sum", "Superset", "SUPERSET_KINDS", "minkowski_superset", "CspaceError", "InvalidMeshError", "EmptyMeshError",
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError",
 }
@@ -25,7 +25,8 @@ def test_public_callables_are_documented():
         obj = getattr(cspace, name)
         if inspect.isclass(obj) or inspect.isfunction(obj):
             assert inspect.getdoc(obj), f"{name} has no docstring"
-    for fn in (cspace.convex_minkowski_sum, cspace.ConvexPolytope.from_points, cspace.Grid.snap):
+    for fn in (cspace.convex_minkowski_sum, cspace.ConvexPolytope.from_points, cspace.Grid.snap,
+               cspace.minkowski_superset):
         doc = inspect.getdoc(fn)
         assert "Parameters" in doc and "Returns" in doc, fn.__qualname__
 
