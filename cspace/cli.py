@@ -2,6 +2,8 @@
 
 - ``cspace convex-sum A B`` — :func:`cspace.convex_minkowski_sum` of two convex shapes
   (mesh files, hulled), optionally as a C-obstacle ``A ⊕ (−(B − c))`` with ``--reflect-b``.
+- ``cspace superset A B`` — :func:`cspace.minkowski_superset` of a closed mesh A and a convex
+  shape B (hulled), with the same ``--reflect-b``.
 """
 
 from __future__ import annotations
@@ -45,6 +47,39 @@ def _convex_sum(args: argparse.Namespace) -> int:
     return 0
 
 
+def _superset(args: argparse.Namespace) -> int:
+    import numpy as np
+    import trimesh
+
+    from .convex import ConvexPolytope
+    from .exact import Grid
+    from .mesh import ClosedMesh
+    from .superset import SUPERSET_KINDS, minkowski_superset
+
+    A0 = ClosedMesh.load(args.a)
+    b = np.asarray(trimesh.load(args.b, force="mesh", process=False).vertices, dtype=np.float64)
+    grid = Grid.for_points(A0.vertices, b, bits=args.grid_bits)
+    A = A0.on_grid(grid)
+    B = ConvexPolytope.from_points(b, grid=grid, name=args.b)
+    if args.reflect_b is not None:
+        B = B.reflected(args.reflect_b)
+    t = time.perf_counter()
+    S = minkowski_superset(A, B)
+    dt = time.perf_counter() - t
+    kinds = ", ".join(f"{int((S.kind == k).sum())} {name}" for k, name in enumerate(SUPERSET_KINDS))
+    corner = S.multiplicity[S.kind == SUPERSET_KINDS.index("corner")]
+    print(f"A: {len(A.faces)} triangles ({args.a}); B: {B.n_facets} facets ({args.b})")
+    print(f"superset: {S.n_facets} facets ({kinds}), {len(S.triangles()[0])} triangles, closed: {S.is_closed()}")
+    if corner.size:
+        print(f"corner multiplicities from {int(corner.min())} to {int(corner.max())}")
+    print(f"grid step {grid.step:.3g}; time {dt * 1e3:.1f} ms")
+    if args.output:
+        faces, _, _ = S.triangles()
+        trimesh.Trimesh(S.vertices, faces, process=False).export(args.output)
+        print(f"wrote {args.output} (triangle soup; multiplicities are not stored)")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
     parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
@@ -59,6 +94,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
     p.set_defaults(func=_convex_sum)
+    p = sub.add_parser("superset", help="NCC-CVMS superset (convolution) of a closed mesh and a convex shape")
+    p.add_argument("a", help="closed mesh file of A (validated)")
+    p.add_argument("b", help="mesh file of B (its convex hull is used)")
+    p.add_argument("-o", "--output", help="write the superset's triangles as a mesh file")
+    p.add_argument("--reflect-b", nargs=3, type=float, metavar=("X", "Y", "Z"),
+                   help="use -(B - c): the superset of the C-obstacle of robot B around A")
+    p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
+    p.set_defaults(func=_superset)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -33,3 +33,22 @@ def test_convex_sum_reports_flat_input(tmp_path, capsys):
 def test_console_script_help_runs():
     out = subprocess.run([sys.executable, "-m", "cspace", "--help"], capture_output=True, text=True, check=True)
     assert "convex-sum" in out.stdout
+
+
+def test_superset_of_a_torus(tmp_path, capsys):
+    a, b = tmp_path / "torus.stl", tmp_path / "box.stl"
+    trimesh.creation.torus(1.0, 0.3, major_sections=16, minor_sections=8).export(a)
+    trimesh.creation.box((0.2, 0.2, 0.2)).export(b)
+    assert main(["superset", str(a), str(b), "--reflect-b", "0", "0", "0", "-o", str(tmp_path / "s.ply")]) == 0
+    out = capsys.readouterr().out
+    assert "closed: True" in out and "corner multiplicities from -1 to 1" in out
+    assert (tmp_path / "s.ply").exists()
+
+
+def test_superset_reports_an_open_mesh(tmp_path, capsys):
+    box = trimesh.creation.box()
+    open_box = trimesh.Trimesh(box.vertices, box.faces[:-1], process=False)
+    a = tmp_path / "open.ply"
+    open_box.export(a)
+    assert main(["superset", str(a), str(a)]) == 2
+    assert "boundary edges" in capsys.readouterr().err
