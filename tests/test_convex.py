@@ -22,7 +22,14 @@ from cspace.convex import (
     convex_minkowski_sum,
     hull_minkowski_sum,
 )
-from cspace.errors import DegenerateError, EmptyMeshError, NonFiniteError, NotConvexError
+from cspace.errors import (
+    DegenerateError,
+    EmptyMeshError,
+    NonFiniteError,
+    NonManifoldError,
+    NotConvexError,
+    OpenMeshError,
+)
 from cspace.exact import Grid
 
 CUBE = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
@@ -303,3 +310,26 @@ def test_from_mesh_rejects_an_l_shape():
     assert trimesh.Trimesh(v, f, process=False).volume == pytest.approx(3.0)
     with pytest.raises(NotConvexError, match="not convex"):
         ConvexPolytope.from_mesh((v, f))
+
+
+def _bad_meshes():
+    box = trimesh.creation.box()
+    v, f = box.vertices.copy(), box.faces.copy()
+    nan = v.copy()
+    nan[3, 2] = np.nan
+    # Two boxes sharing one edge: that edge has four faces.
+    v2 = np.vstack([v, v + [1.0, 1.0, 0.0]])
+    f2 = np.vstack([f, f + len(v)])
+    return {
+        "open": ((v, f[:-1]), OpenMeshError, "boundary edges"),
+        "non-manifold edge": ((v2, f2), NonManifoldError, "more than 2 faces|non-manifold"),
+        "nan": ((nan, f), NonFiniteError, "non-finite"),
+        "empty": ((np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)), EmptyMeshError, "no vertices|no faces|empty"),
+    }
+
+
+@pytest.mark.parametrize("name", list(_bad_meshes()))
+def test_from_mesh_names_the_problem(name):
+    mesh, error, match = _bad_meshes()[name]
+    with pytest.raises(error, match=match):
+        ConvexPolytope.from_mesh(mesh)
