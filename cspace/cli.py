@@ -14,27 +14,39 @@ import time
 from collections.abc import Sequence
 
 
+def _operands(args: argparse.Namespace, a_points):
+    """The grid, and B (hulled, optionally reflected), for the subcommands taking A and B files."""
+    import numpy as np
+    import trimesh
+
+    from .convex import ConvexPolytope
+    from .exact import Grid
+
+    b = np.asarray(trimesh.load(args.b, force="mesh", process=False).vertices, dtype=np.float64)
+    grid = Grid.for_points(a_points, b, bits=args.grid_bits)
+    B = ConvexPolytope.from_points(b, grid=grid, name=args.b)
+    if args.reflect_b is not None:
+        B = B.reflected(args.reflect_b)
+    return grid, B
+
+
+def _timed(fn, *operands):
+    t = time.perf_counter()
+    out = fn(*operands)
+    return out, time.perf_counter() - t
+
+
 def _convex_sum(args: argparse.Namespace) -> int:
     # Heavy imports here so that `cspace --help` stays fast.
     import numpy as np
     import trimesh
 
     from .convex import FACET_KINDS, ConvexPolytope, convex_minkowski_sum
-    from .exact import Grid
 
-    def load_points(path: str) -> np.ndarray:
-        mesh = trimesh.load(path, force="mesh", process=False)
-        return np.asarray(mesh.vertices, dtype=np.float64)
-
-    a, b = load_points(args.a), load_points(args.b)
-    grid = Grid.for_points(a, b, bits=args.grid_bits)
+    a = np.asarray(trimesh.load(args.a, force="mesh", process=False).vertices, dtype=np.float64)
+    grid, B = _operands(args, a)
     A = ConvexPolytope.from_points(a, grid=grid, name=args.a)
-    B = ConvexPolytope.from_points(b, grid=grid, name=args.b)
-    if args.reflect_b is not None:
-        B = B.reflected(args.reflect_b)
-    t = time.perf_counter()
-    S = convex_minkowski_sum(A, B)
-    dt = time.perf_counter() - t
+    S, dt = _timed(convex_minkowski_sum, A, B)
     kinds = ", ".join(f"{int((S.kind == k).sum())} {name}" for k, name in enumerate(FACET_KINDS))
     print(f"A: {A.n_facets} facets, {len(A.ints)} vertices ({args.a})")
     print(f"B: {B.n_facets} facets, {len(B.ints)} vertices ({args.b}){' reflected' if args.reflect_b is not None else ''}")
@@ -48,24 +60,15 @@ def _convex_sum(args: argparse.Namespace) -> int:
 
 
 def _superset(args: argparse.Namespace) -> int:
-    import numpy as np
     import trimesh
 
-    from .convex import ConvexPolytope
-    from .exact import Grid
     from .mesh import ClosedMesh
     from .superset import SUPERSET_KINDS, minkowski_superset
 
     A0 = ClosedMesh.load(args.a)
-    b = np.asarray(trimesh.load(args.b, force="mesh", process=False).vertices, dtype=np.float64)
-    grid = Grid.for_points(A0.vertices, b, bits=args.grid_bits)
+    grid, B = _operands(args, A0.vertices)
     A = A0.on_grid(grid)
-    B = ConvexPolytope.from_points(b, grid=grid, name=args.b)
-    if args.reflect_b is not None:
-        B = B.reflected(args.reflect_b)
-    t = time.perf_counter()
-    S = minkowski_superset(A, B)
-    dt = time.perf_counter() - t
+    S, dt = _timed(minkowski_superset, A, B)
     kinds = ", ".join(f"{int((S.kind == k).sum())} {name}" for k, name in enumerate(SUPERSET_KINDS))
     corner = S.multiplicity[S.kind == SUPERSET_KINDS.index("corner")]
     print(f"A: {len(A.faces)} triangles ({args.a}); B: {B.n_facets} facets ({args.b})")

@@ -87,6 +87,20 @@ def _facet_polygon(ints: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> np.
     return np.asarray(idx)[ring]
 
 
+def fan_triangles(offsets: np.ndarray, indices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Fan triangulation of CSR polygons (exact for convex ones, orientation kept).
+
+    Returns ``(faces (m, 3) int64, polygon (m,) int64)``: triangle ``k`` of polygon ``i`` is
+    ``(p[0], p[k], p[k + 1])`` for ``k = 1 .. degree - 2``.
+    """
+    deg = np.diff(offsets)
+    polygon = np.repeat(np.arange(len(deg)), deg - 2)
+    k = np.arange(len(polygon)) - np.repeat(np.cumsum(deg - 2) - (deg - 2), deg - 2) + 1
+    start = offsets[polygon]
+    faces = np.stack([indices[start], indices[start + k], indices[start + k + 1]], axis=1)
+    return faces.astype(np.int64), polygon.astype(np.int64)
+
+
 # --------------------------------------------------------------------------------------
 # the polytope type
 
@@ -293,14 +307,7 @@ class ConvexPolytope:
             The facet each triangle comes from.
         """
         if "tri" not in self._cache:
-            o, f = self.facet_offsets, self.facet_indices
-            deg = np.diff(o)
-            facet = np.repeat(np.arange(len(deg)), deg - 2)
-            # Triangle t of facet i is (f[o_i], f[o_i + k], f[o_i + k + 1]) for k = 1 .. deg-2.
-            k = np.arange(len(facet)) - np.repeat(np.cumsum(deg - 2) - (deg - 2), deg - 2) + 1
-            start = o[facet]
-            faces = np.stack([f[start], f[start + k], f[start + k + 1]], axis=1)
-            self._cache["tri"] = (faces.astype(np.int64), facet.astype(np.int64))
+            self._cache["tri"] = fan_triangles(self.facet_offsets, self.facet_indices)
         return self._cache["tri"]
 
     @property

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import exact
-from .convex import ConvexPolytope, _gather, _src
+from .convex import ConvexPolytope, _gather, _src, fan_triangles
 from .errors import DegenerateError, ExactnessError
 from .exact import Grid, Perturbation
 from .mesh import ClosedMesh, as_mesh
@@ -117,12 +117,7 @@ class Superset:
         weight : (t,) int64
             ``|multiplicity|`` of that facet: the cycle counts the triangle this many times.
         """
-        o, f = self.facet_offsets, self.facet_indices
-        deg = np.diff(o)
-        facet = np.repeat(np.arange(len(deg)), deg - 2)
-        k = np.arange(len(facet)) - np.repeat(np.cumsum(deg - 2) - (deg - 2), deg - 2) + 1
-        start = o[facet]
-        faces = np.stack([f[start], f[start + k], f[start + k + 1]], axis=1)
+        faces, facet = fan_triangles(self.facet_offsets, self.facet_indices)
         neg = self.multiplicity[facet] < 0
         faces[neg] = faces[neg][:, ::-1]
         return faces.astype(np.int64), facet.astype(np.int64), np.abs(self.multiplicity[facet])
@@ -362,6 +357,7 @@ def _corner_constant(A, B, pert, delta, edges, arc, n1, n2, flat) -> np.ndarray:
         np.add.at(changes, p, (hq != hr).astype(np.int64))
     index = 1 - changes // 2
     # Crossings of v's Gauss polygon with the arc from -x to the B normal most opposite to x.
+    # Any facet g1 != g0 gives the same exact answer; a float argmax only keeps the arc short.
     g1 = int(np.argmax(-(B.normals.astype(np.float64) @ x.astype(np.float64))))
     p1, p2 = -x, B.normals[g1]
     cross_count = np.zeros(nV, dtype=np.int64)
