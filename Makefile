@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench clean
+.PHONY: demo test test-slow bench screenshot clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -17,6 +17,11 @@ $(STAMP): pyproject.toml | $(PY)
 
 demo: $(STAMP)
 	$(PY) examples/convex_sum.py
+	$(PY) examples/view_convex.py --out out/convex_demo.html
+
+# Needs Chromium (Debian: apt-get install -y chromium); rewrites the README picture.
+screenshot: $(STAMP)
+	$(PY) examples/view_convex.py --out out/convex_demo.html --screenshot docs/convex_demo.png
 
 test: $(STAMP)
 	$(PY) -m pytest
@@ -26,6 +31,7 @@ test-slow: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_cvms.py
+	$(PY) benchmarks/bench_superset.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

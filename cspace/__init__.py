@@ -14,6 +14,9 @@ Public API
 - :func:`minkowski_superset` → :class:`Superset` — NCC-CVMS step 1: the convolution of a
   closed mesh and a convex polytope, an oriented 2-cycle with signed corner multiplicities.
 - the errors of :mod:`cspace.errors`.
+
+Drawing lives in :mod:`cspace.viz` (meshcat ``SceneView``, offline HTML, screenshots); it
+imports meshcat only when used.
 """
 
 from .convex import FACET_KINDS, ConvexPolytope, MinkowskiSum, convex_minkowski_sum
