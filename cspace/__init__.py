@@ -13,6 +13,8 @@ Public API
 - :func:`convex_minkowski_sum` → :class:`MinkowskiSum` — CVMS, convex ⊕ convex.
 - :func:`minkowski_superset` → :class:`Superset` — NCC-CVMS step 1: the convolution of a
   closed mesh and a convex polytope, an oriented 2-cycle with signed corner multiplicities.
+- :func:`load_scene` → :class:`Scene` — scene files: our TOML, OMPL.app ``.cfg``, Parasol
+  ``.env``/``.query``.
 - the errors of :mod:`cspace.errors`.
 
 Drawing lives in :mod:`cspace.viz` (meshcat ``SceneView``, offline HTML, screenshots); it
@@ -24,6 +26,7 @@ from . import errors
 from .errors import *  # noqa: F403 (the error classes are public)
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
+from .scene import Body, Scene, load_scene
 from .superset import SUPERSET_KINDS, Superset, minkowski_superset
 
 __version__ = "0.1.0"
@@ -40,4 +43,7 @@ __all__ = [
     "Superset",
     "SUPERSET_KINDS",
     "minkowski_superset",
+    "Body",
+    "Scene",
+    "load_scene",
 ] + list(errors.__all__)

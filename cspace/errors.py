@@ -18,6 +18,7 @@ __all__ = [
     "NotConvexError",
     "GridRangeError",
     "ExactnessError",
+    "SceneError",
 ]
 
 
@@ -64,3 +65,7 @@ class GridRangeError(CspaceError, ValueError):
 
 class ExactnessError(CspaceError, RuntimeError):
     """An internal exact certificate failed: the result would not be exact, so none is given."""
+
+
+class SceneError(CspaceError, ValueError):
+    """A scene file is malformed or describes an impossible problem; the message says where."""

@@ -8,7 +8,8 @@ import cspace
 
 PUBLIC = {
     "__version__", "Grid", "ClosedMesh", "as_mesh", "ConvexPolytope", "MinkowskiSum",
-    "FACET_KINDS", "convex_minkowski_sum", "Superset", "SUPERSET_KINDS", "minkowski_superset", "CspaceError", "InvalidMeshError", "EmptyMeshError",
+    "FACET_KINDS", "convex_minkowski_sum", "Superset", "SUPERSET_KINDS", "minkowski_superset",
+    "Body", "Scene", "load_scene", "SceneError", "CspaceError", "InvalidMeshError", "EmptyMeshError",
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError",
 }
@@ -34,6 +35,6 @@ def test_public_callables_are_documented():
 def test_errors_subclass_the_builtin_they_stand_for():
     for name in ("InvalidMeshError", "EmptyMeshError", "NonFiniteError", "OpenMeshError",
                  "NonManifoldError", "DegenerateError", "DuplicateFaceError", "NotConvexError",
-                 "GridRangeError"):
+                 "GridRangeError", "SceneError"):
         err = getattr(cspace, name)
         assert issubclass(err, cspace.CspaceError) and issubclass(err, ValueError), name
