@@ -18,6 +18,7 @@ $(STAMP): pyproject.toml | $(PY)
 demo: $(STAMP)
 	$(PY) examples/convex_sum.py
 	$(PY) examples/view_convex.py --out out/convex_demo.html
+	$(VENV)/bin/cspace view scenes/window.toml -o out/window.html
 
 # Needs Chromium (Debian: apt-get install -y chromium); rewrites the README picture.
 screenshot: $(STAMP)

@@ -4,6 +4,8 @@
   (mesh files, hulled), optionally as a C-obstacle ``A ⊕ (−(B − c))`` with ``--reflect-b``.
 - ``cspace superset A B`` — :func:`cspace.minkowski_superset` of a closed mesh A and a convex
   shape B (hulled), with the same ``--reflect-b``.
+- ``cspace view SCENE`` — :func:`cspace.viz.draw_scene`: an offline HTML page of a scene
+  (default ``<scene>.html``), or a live meshcat server with ``--live``.
 """
 
 from __future__ import annotations
@@ -83,6 +85,40 @@ def _superset(args: argparse.Namespace) -> int:
     return 0
 
 
+def _view(args: argparse.Namespace) -> int:
+    from pathlib import Path
+
+    import numpy as np
+
+    from .scene import load_scene
+    from .viz import SceneView, draw_scene, screenshot
+
+    scene = load_scene(args.scene)
+    path = None
+    if args.path:
+        p = Path(args.path)
+        path = np.load(p) if p.suffix == ".npy" else np.loadtxt(p, delimiter="," if p.suffix == ".csv" else None)
+        path = np.asarray(path, dtype=np.float64).reshape(-1, 3)
+    view = SceneView(live=args.live)
+    report = draw_scene(view, scene, path=path, superset=args.superset)
+    for name, what in report.items():
+        print(f"{name}: {what}")
+    if args.live:
+        print(f"meshcat is serving the scene at {view.url}; press Enter (or Ctrl-C) to stop")
+        try:
+            input()
+        except (EOFError, KeyboardInterrupt, OSError):  # no terminal: stop at once
+            pass
+        finally:
+            view.close()
+        return 0
+    out = Path(args.output or f"{Path(args.scene).stem}.html")
+    print(f"wrote {view.save(out)} (self-contained; open it in a browser)")
+    if args.screenshot:
+        print(f"wrote {screenshot(out, args.screenshot)}")
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
     parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
@@ -105,6 +141,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="use -(B - c): the superset of the C-obstacle of robot B around A")
     p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
     p.set_defaults(func=_superset)
+    p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)")
+    p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
+    p.add_argument("-o", "--output", help="HTML file to write (default: <scene name>.html)")
+    p.add_argument("--live", action="store_true", help="serve the scene with a live meshcat server instead")
+    p.add_argument("--path", help="a path of reference-point positions: .npy or text with 3 columns")
+    p.add_argument("--superset", action="store_true", help="draw the superset of non-convex bodies")
+    p.add_argument("--screenshot", metavar="PNG", help="also render the HTML with headless Chromium")
+    p.set_defaults(func=_view)
     args = parser.parse_args(argv)
     try:
         return args.func(args)

@@ -74,6 +74,7 @@ from .errors import EmptyMeshError, InvalidMeshError, NonFiniteError
 
 __all__ = [
     "SceneView",
+    "draw_scene",
     "screenshot",
     "find_chromium",
     "BACKGROUND_COLOR",
@@ -788,6 +789,83 @@ class SceneView:
 
 # --------------------------------------------------------------------------------------
 # screenshots with headless Chromium
+
+
+def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
+               superset: bool = False, animate: bool = True) -> dict[str, str]:
+    """Draw a :class:`cspace.scene.Scene`: obstacles, the robot at start and goal, C-obstacles, a path.
+
+    C-obstacles are exact: ``O ⊕ (−(R − c))`` by CVMS for every convex obstacle body, on one
+    grid for the whole scene. Non-convex bodies get their C-obstacle once trimming lands
+    (NCC-CVMS steps 2–18); until then ``superset=True`` draws their untrimmed superset,
+    coloured by facet kind, and the returned report says which body got what.
+
+    Parameters
+    ----------
+    view : SceneView
+    scene : Scene
+    path : (k, 3) float64, optional
+        Reference-point positions of a path; drawn as a polyline, and the robot is animated
+        along it when ``animate``.
+    cobstacles, superset : bool
+        Whether to compute and draw C-obstacles (convex bodies) / supersets (other bodies).
+
+    Returns
+    -------
+    report : dict[str, str]
+        For each obstacle body, what was drawn for it.
+    """
+    import warnings
+
+    from .convex import ConvexPolytope, convex_minkowski_sum
+    from .errors import InvalidMeshError
+    from .exact import Grid
+    from .superset import minkowski_superset
+
+    grid = Grid.for_extent(scene.extent())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the scene already warned when it was loaded
+        robot = scene.robot_polytope(grid)
+    minus_r = robot.reflected(scene.reference_point)
+    report: dict[str, str] = {}
+    for body in scene.obstacles:
+        view.add_obstacle(body.name, body.vertices, body.faces)
+        report[body.name] = "obstacle"
+        if not (cobstacles or superset):
+            continue
+        try:
+            O = ConvexPolytope.from_mesh((body.vertices, body.faces), grid=grid, name=body.name)
+        except InvalidMeshError as e:
+            O, why = None, str(e)
+        if O is not None and cobstacles:
+            co = convex_minkowski_sum(O, minus_r)
+            view.add_cobstacle(body.name, co.vertices, co.faces)
+            report[body.name] = f"C-obstacle (CVMS, {co.polytope.n_facets} facets)"
+        elif O is None and superset:
+            try:
+                S = minkowski_superset((body.vertices, body.faces), minus_r)
+            except InvalidMeshError as e:
+                report[body.name] = f"obstacle only: {e}"
+                continue
+            view.add_superset(body.name, S)
+            report[body.name] = f"superset ({S.n_facets} facets; trimming not available yet)"
+        elif O is None:
+            report[body.name] = f"obstacle only (not convex: {why.split(': ', 1)[-1]})"
+    view.add_robot("start", scene.robot.vertices, scene.robot.faces, scene.start,
+                   reference=scene.reference_point)
+    view.add_robot("goal", scene.robot.vertices, scene.robot.faces, scene.goal,
+                   reference=scene.reference_point)
+    if path is not None:
+        # Waypoints a little larger than the default: a scene's path is its subject.
+        view.add_path("path", path, radius=0.015 * float(np.ptp(scene.bounds, axis=0).max()))
+        if animate:
+            view.animate_robot("start", path)
+    # Look across the start -> goal direction (from above) so a passage is seen edge-on.
+    travel = np.asarray(scene.goal, float) - np.asarray(scene.start, float)
+    side = np.cross(travel, [0.0, 0.0, 1.0])
+    if np.linalg.norm(side) > 0:
+        view.frame(direction=side / np.linalg.norm(side) + [0.0, 0.0, 0.6])
+    return report
 
 
 def find_chromium() -> str | None:

@@ -52,3 +52,35 @@ def test_superset_reports_an_open_mesh(tmp_path, capsys):
     open_box.export(a)
     assert main(["superset", str(a), str(a)]) == 2
     assert "boundary edges" in capsys.readouterr().err
+
+
+SCENES = __import__("pathlib").Path(__file__).resolve().parents[1] / "scenes"
+
+
+def test_view_writes_offline_html_of_a_shipped_scene(tmp_path, capsys):
+    path = tmp_path / "path.txt"
+    np.savetxt(path, [[-1.5, 0.7, 1.1], [-0.8, 0.0, 1.5], [0.8, 0.0, 1.5], [1.5, -0.7, 1.9]])
+    out = tmp_path / "window.html"
+    assert main(["view", str(SCENES / "window.toml"), "-o", str(out), "--path", str(path)]) == 0
+    text = capsys.readouterr().out
+    assert text.count("C-obstacle (CVMS") == 4 and "wrote" in text
+    from test_viz import scene_commands
+
+    html = out.read_text()
+    paths = [str(c.get("path", "")) for c in scene_commands(html)]
+    assert sum("cobstacles" in p for p in paths) >= 4 and any("/path/" in p for p in paths)
+    # Offline: nothing fetched (the one URL in the page is an XML namespace).
+    assert set(__import__("re").findall(r"https?://[^\s\"'<>)]+", html)) <= {"http://www.w3.org/1999/xhtml"}
+
+
+def test_view_live_serves_and_stops_without_a_terminal(capsys):
+    assert main(["view", str(SCENES / "comb.toml"), "--live"]) == 0
+    assert "meshcat is serving the scene at http://127.0.0.1:" in capsys.readouterr().out
+
+
+def test_view_reports_a_bad_scene(tmp_path, capsys):
+    bad = tmp_path / "bad.toml"
+    text = (SCENES / "window.toml").read_text().replace("[robot]", '[robot]\ncolour = "red"')
+    bad.write_text(text.replace('mesh = "meshes/', f'mesh = "{SCENES}/meshes/'))
+    assert main(["view", str(bad)]) == 2
+    assert "colour" in capsys.readouterr().err

@@ -18,6 +18,8 @@ import subprocess
 import time
 from concurrent.futures import ThreadPoolExecutor
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -89,6 +91,21 @@ def superset_view() -> viz.SceneView:
     return view
 
 
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+
+
+def shipped_scene_view() -> viz.SceneView:
+    """The shipped window scene with its exact C-obstacles and a path through the window."""
+    from cspace.scene import load_scene
+
+    scene = load_scene(SCENES / "window.toml")
+    path = np.array([scene.start, (-0.8, 0.0, 1.5), (0.8, 0.0, 1.5), scene.goal])
+    view = viz.SceneView(axes=False)
+    report = viz.draw_scene(view, scene, path=path, animate=False)
+    assert all(v.startswith("C-obstacle") for v in report.values()), report
+    return view
+
+
 def scene_commands(html: str) -> list[dict]:
     """The meshcat commands embedded in a static HTML page, decoded."""
     blobs = re.findall(r'fetch\("data:application/octet-binary;base64,([A-Za-z0-9+/=]+)"\)', html)
@@ -142,7 +159,8 @@ def render(view: viz.SceneView, tmp_path, name: str) -> np.ndarray:
 def shots(chromium, tmp_path_factory) -> dict[str, np.ndarray]:
     """The demo scene, the superset scene and the empty control, rendered once (in parallel)."""
     tmp = tmp_path_factory.mktemp("viz_shots")
-    views = {"demo": demo_view(), "superset": superset_view(), "empty": viz.SceneView(axes=False)}
+    views = {"demo": demo_view(), "superset": superset_view(), "scene": shipped_scene_view(),
+             "empty": viz.SceneView(axes=False)}
     with ThreadPoolExecutor(max_workers=len(views)) as pool:
         futures = {k: pool.submit(render, v, tmp, k) for k, v in views.items()}
         return {k: f.result() for k, f in futures.items()}
@@ -210,6 +228,16 @@ def test_demo_scene_shows_obstacle_cobstacle_path_and_robot(shots):
         seen = int(hue_mask(img, lo, hi).sum())
         assert seen >= N, f"{what}: {seen} pixels with hue in [{lo:.0f}, {hi:.0f}) deg, want >= {N}"
         assert int(hue_mask(empty, lo, hi).sum()) == 0, f"{what}: shows in the empty control"
+
+
+def test_shipped_scene_shows_obstacles_cobstacles_path_and_robots(shots):
+    img, empty = shots["scene"], shots["empty"]
+    # The path runs through the window, mostly behind the translucent C-obstacles: only its
+    # waypoints outside them show pure dark green, hence the lower bar for it.
+    need = {**{k: N for k in DEMO_COLOURS}, "path (dark green)": 150}
+    for what, (lo, hi) in DEMO_COLOURS.items():
+        assert hue_mask(img, lo, hi).sum() >= need[what], what
+        assert hue_mask(empty, lo, hi).sum() == 0, what
 
 
 def test_cobstacle_is_translucent_over_white(shots):
