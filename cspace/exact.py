@@ -226,9 +226,12 @@ def _filtered(poly, perm, args: tuple[np.ndarray, ...]) -> np.ndarray:
     args = tuple(np.broadcast_to(a, shape + a.shape[-1:]) for a in args)
     fargs = tuple(a.astype(np.float64) for a in args)
     value = poly(*fargs)
-    bound = _FILTER * perm(*fargs)
+    permanent = perm(*fargs)
+    bound = _FILTER * permanent
     sign = _sign_of(value)
-    unsure = ~(np.abs(value) > bound)
+    # A zero permanent means every term is zero: the value is exactly 0, no fallback needed.
+    unsure = ~(np.abs(value) > bound) & (permanent > 0)
+    sign[permanent == 0] = 0
     if unsure.any():
         exact = poly(*(a[unsure].astype(object) for a in args))
         sign[unsure] = _sign_of(np.asarray(exact, dtype=object)).astype(np.int8)
@@ -416,8 +419,9 @@ def cross(u, v) -> np.ndarray:
     u, v = _ints(u), _ints(v)
     if u.size and v.size:
         bound = 2.0 * float(np.abs(u).max()) * float(np.abs(v).max())
-        if bound >= 2.0**62:
-            raise GridRangeError("cross product of these integer vectors could overflow int64")
+        # Results must stay valid inputs of the predicates (|k| < 2**61).
+        if bound >= float(_MAX_INT):
+            raise GridRangeError("cross product of these integer vectors could exceed 2**61")
     return np.cross(u, v)
 
 
