@@ -13,6 +13,9 @@ Public API
 - :func:`convex_minkowski_sum` → :class:`MinkowskiSum` — CVMS, convex ⊕ convex.
 - :func:`minkowski_superset` → :class:`Superset` — NCC-CVMS step 1: the convolution of a
   closed mesh and a convex polytope, an oriented 2-cycle with signed corner multiplicities.
+- :class:`CSpaceObstacle`, :class:`CSpace` — C-obstacles and exact queries over translations
+  (``contains``, ``signed_distance``, ``segment_free``, ``first_contact``); convex bodies
+  today, non-convex ones once trimming lands. FCL cross-checks: :mod:`cspace.fcl_check`.
 - :func:`load_scene` → :class:`Scene` — scene files: our TOML, OMPL.app ``.cfg``, Parasol
   ``.env``/``.query``.
 - the errors of :mod:`cspace.errors`.
@@ -26,6 +29,7 @@ from . import errors
 from .errors import *  # noqa: F403 (the error classes are public)
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
+from .obstacle import CSpace, CSpaceObstacle
 from .scene import Body, Scene, load_scene
 from .superset import SUPERSET_KINDS, Superset, minkowski_superset
 
@@ -46,4 +50,6 @@ __all__ = [
     "Body",
     "Scene",
     "load_scene",
+    "CSpaceObstacle",
+    "CSpace",
 ] + list(errors.__all__)

@@ -4,6 +4,8 @@
   (mesh files, hulled), optionally as a C-obstacle ``A ⊕ (−(B − c))`` with ``--reflect-b``.
 - ``cspace superset A B`` — :func:`cspace.minkowski_superset` of a closed mesh A and a convex
   shape B (hulled), with the same ``--reflect-b``.
+- ``cspace check SCENE`` — :func:`cspace.fcl_check.cross_check` of the scene's C-obstacles
+  against FCL (membership and distance on random translations).
 - ``cspace view SCENE`` — :func:`cspace.viz.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``.
 """
@@ -85,6 +87,26 @@ def _superset(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check(args: argparse.Namespace) -> int:
+    from .fcl_check import cross_check
+    from .obstacle import CSpace
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    cs = CSpace.from_scene(scene)
+    r = cross_check(cs, n=args.n, seed=args.seed, band=args.band)
+    print(f"{scene.name}: {r['n']} translations, {r['n_inside']} in collision (FCL: {r['n_inside_fcl']})")
+    print(f"membership disagreements beyond {args.band:g} of the surface: {r['n_disagree']} "
+          f"({r['n_in_band']} within the band ignored)")
+    print(f"max |distance - FCL distance| outside: {r['max_distance_error']:.3g} "
+          f"(scene size {r['scene_size']:.3g})")
+    print(f"time per query: ours {r['seconds_per_query_ours'] * 1e6:.2f} us, "
+          f"FCL {r['seconds_per_query_fcl'] * 1e6:.2f} us")
+    for q in r["disagreements"][:10]:
+        print(f"  disagreement at {q.tolist()}")
+    return 0 if r["ok"] else 1
+
+
 def _view(args: argparse.Namespace) -> int:
     from pathlib import Path
 
@@ -141,6 +163,12 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="use -(B - c): the superset of the C-obstacle of robot B around A")
     p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
     p.set_defaults(func=_superset)
+    p = sub.add_parser("check", help="cross-check a scene's C-obstacles against FCL")
+    p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
+    p.add_argument("-n", type=int, default=10000, help="number of random translations")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--band", type=float, default=1e-9, help="ignore points this close to the surface")
+    p.set_defaults(func=_check)
     p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)")
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="HTML file to write (default: <scene name>.html)")

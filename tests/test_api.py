@@ -9,7 +9,7 @@ import cspace
 PUBLIC = {
     "__version__", "Grid", "ClosedMesh", "as_mesh", "ConvexPolytope", "MinkowskiSum",
     "FACET_KINDS", "convex_minkowski_sum", "Superset", "SUPERSET_KINDS", "minkowski_superset",
-    "Body", "Scene", "load_scene", "SceneError", "CspaceError", "InvalidMeshError", "EmptyMeshError",
+    "Body", "Scene", "load_scene", "SceneError", "CSpaceObstacle", "CSpace", "CspaceError", "InvalidMeshError", "EmptyMeshError",
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError",
 }

@@ -84,3 +84,10 @@ def test_view_reports_a_bad_scene(tmp_path, capsys):
     bad.write_text(text.replace('mesh = "meshes/', f'mesh = "{SCENES}/meshes/'))
     assert main(["view", str(bad)]) == 2
     assert "colour" in capsys.readouterr().err
+
+
+def test_check_cross_checks_a_shipped_scene_with_fcl(capsys):
+    assert main(["check", str(SCENES / "comb.toml"), "-n", "2000"]) == 0
+    out = capsys.readouterr().out
+    assert "membership disagreements beyond 1e-09 of the surface: 0" in out
+    assert "time per query" in out

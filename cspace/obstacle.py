@@ -1,0 +1,729 @@
+"""Translational C-space obstacles ``CO = O ⊕ (-R)``: build once, query many.
+
+Queries take translations of the robot's reference point as ``(k, 3)`` float64 arrays
+(``(3,)`` also accepted), in scene units, world frame.
+
+A :class:`CSpaceObstacle` holds one C-obstacle. This module implements the *convex path*:
+obstacle and robot convex, CO their exact Minkowski sum (:func:`cspace.convex_minkowski_sum`)
+stored as its exact facet planes ``n . k <= d`` (``n`` primitive int64, ``d`` a Python int,
+``k`` in grid units, ``x = step * k`` in scene units). Non-convex C-obstacles (issue #4,
+``cspace.minkowski_sum``) will plug in as another representation behind the same four queries
+(see :class:`CSpaceObstacle`).
+
+Exactness
+---------
+The queries are exact for the *stored* C-obstacle and arbitrary float64 translations (no
+snapping of the queries): a float64 ``q`` is a dyadic rational, so ``n . q - d * step`` has
+an exact sign. It is evaluated by a float filter (one matrix product with a rigorous error
+bound, semi-static: ``16 eps`` times the same sum on absolute values) and, where the filter
+cannot decide, with Python integers (every float is an integer times a power of two). No
+tolerance decides anything. The stored C-obstacle is exact for the *snapped* inputs: it
+differs from the unsnapped ``O ⊕ (c - R)`` by at most ``3 * grid.point_error_bound``
+(Hausdorff; obstacle, robot and reference point are each snapped once).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from fractions import Fraction
+from typing import Iterable
+
+import numpy as np
+
+from .convex import ConvexPolytope, convex_minkowski_sum
+from .errors import InvalidMeshError, NonFiniteError, NotConvexError
+from .exact import Grid
+
+__all__ = ["CSpaceObstacle", "CSpace"]
+
+_EPS = 2.0**-53
+# Filter factor: a dot product of 4 terms (3 coordinates and the offset) from rounded
+# inputs needs about 6 eps times the permanent; 16 leaves room for rounding the bound.
+_FILTER = 16.0 * _EPS
+# Absolute slack covering underflow of the scaled queries (ldexp to subnormals).
+_TINY = 2.0**-1000
+# Rows x facets evaluated at once (memory and cache).
+_CHUNK = 1 << 17
+
+
+# --------------------------------------------------------------------------------------
+# input checks
+
+
+def _translations(q, what: str = "q") -> tuple[np.ndarray, bool]:
+    """``(k, 3)`` float64 translations and whether a single ``(3,)`` row was given."""
+    a = np.asarray(q, dtype=np.float64)
+    single = a.ndim == 1
+    if single:
+        a = a[None, :]
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"{what} must be (3,) or (k, 3), got shape {np.shape(q)}")
+    finite = np.isfinite(a)
+    if not finite.all():
+        row = int(np.nonzero(~finite.all(axis=1))[0][0])
+        raise NonFiniteError(f"{what}: row {row} is not finite: {a[row].tolist()}")
+    return a, single
+
+
+def _dyadic(values: Iterable[float]) -> tuple[list[int], int]:
+    """Floats as integers times one common power of two: ``v_i = ints[i] * 2**exp``."""
+    ints, exps = [], []
+    for v in values:
+        m, x = math.frexp(float(v))
+        ints.append(int(m * 9007199254740992.0))  # m * 2**53 is an exact integer
+        exps.append(x - 53)
+    lo = min(exps)
+    return [i << (x - lo) for i, x in zip(ints, exps)], lo
+
+
+# --------------------------------------------------------------------------------------
+# one convex C-obstacle
+
+
+class _ConvexCO:
+    """Exact queries on one convex polytope given by its facet planes (internal).
+
+    The interface a C-obstacle representation provides to :class:`CSpaceObstacle`, on
+    validated ``(k, 3)`` float64 arrays: ``contains(q) -> (k,) bool``,
+    ``signed_distance(q) -> (k,) float64``, ``segments(q0, q1, want_t) -> (hit, t)``. A
+    non-convex representation (issue #4: the trimmed boundary mesh of
+    ``cspace.minkowski_sum``, or a union of convex pieces) implements the same three.
+    """
+
+    def __init__(self, poly: ConvexPolytope):
+        self.poly = poly
+        self.exponent = poly.grid.exponent
+        N = poly.normals.astype(np.int64)
+        first = poly.ints[poly.facet_indices[poly.facet_offsets[:-1]]]
+        self.n_int = [tuple(int(c) for c in n) for n in N.tolist()]
+        self.d_int = [sum(a * b for a, b in zip(n, p)) for n, p in zip(self.n_int, first.tolist())]
+        Nf = N.astype(np.float64)
+        df = np.array([float(d) for d in self.d_int])
+        # value = [qs, 1] @ A = n . qs - d   (qs = q / step, exact scaling)
+        self.A = np.ascontiguousarray(np.vstack([Nf.T, -df[None, :]]))
+        self.absA = np.abs(self.A)
+        self.l1max = float(np.abs(Nf).sum(axis=1).max())
+        self.dmax = float(np.abs(df).max())
+        # Float geometry for distances, centred on the polytope (smaller magnitudes).
+        V = poly.vertices
+        self.centre = (V.min(axis=0) + V.max(axis=0)) / 2.0
+        Vc = V - self.centre
+        self.V = Vc
+        nh = Nf / np.linalg.norm(Nf, axis=1, keepdims=True)
+        self.nh = nh
+        o, idx = poly.facet_offsets, poly.facet_indices
+        fv = Vc[idx]
+        self.dh = np.einsum("ij,ij->i", nh, Vc[idx[o[:-1]]])
+        # Half-edges u -> v of each facet (CSR order), inward edge normals m = n x (v - u).
+        facet_of = np.repeat(np.arange(len(N)), np.diff(o))
+        pos = np.arange(len(idx))
+        nxt = np.where(pos + 1 == o[facet_of + 1], o[facet_of], pos + 1)
+        M = np.cross(nh[facet_of], Vc[idx[nxt]] - fv)
+        self.M = M
+        self.mc = np.einsum("ij,ij->i", M, fv)
+        self.he_starts = o[:-1].copy()
+        E = poly.edges
+        self.ea = Vc[E[:, 0]]
+        self.ev = Vc[E[:, 1]] - Vc[E[:, 0]]
+        self.ell = np.einsum("ij,ij->i", self.ev, self.ev)
+        self.radius = float(np.linalg.norm(Vc, axis=1).max())
+
+    # ---- exact plane signs --------------------------------------------------------------
+
+    def _scaled(self, q: np.ndarray) -> np.ndarray:
+        """Rows ``[q / step, 1]`` (exact scaling by a power of two, barring under/overflow)."""
+        Q = np.ones((len(q), 4))
+        with np.errstate(over="ignore", under="ignore"):
+            np.ldexp(q, -self.exponent, out=Q[:, :3])
+        return Q
+
+    def _values(self, Q: np.ndarray):
+        """``n . qs - d`` per (row, facet) and a rigorous bound on its rounding error."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            val = Q @ self.A
+            err = _FILTER * (np.abs(Q) @ self.absA) + _TINY
+        return val, err
+
+    def _exact_sign(self, q: np.ndarray, j: int) -> int:
+        """Exact sign of ``n_j . q - d_j * step`` for one float64 row ``q``."""
+        X, lo = _dyadic(q.tolist())
+        e = self.exponent
+        s = min(lo, e)
+        n = self.n_int[j]
+        lhs = (n[0] * X[0] + n[1] * X[1] + n[2] * X[2]) << (lo - s)
+        rhs = self.d_int[j] << (e - s)
+        return (lhs > rhs) - (lhs < rhs)
+
+    def plane_signs(self, q: np.ndarray) -> np.ndarray:
+        """Exact ``(k, f)`` int8 signs of ``n . q - d * step`` (positive: outside that plane)."""
+        Q = self._scaled(q)
+        val, err = self._values(Q)
+        finite = np.isfinite(val) & np.isfinite(err)
+        pos, neg = (val > err) & finite, (val < -err) & finite
+        sign = pos.astype(np.int8) - neg.astype(np.int8)
+        i, j = np.nonzero(~(pos | neg))
+        for a, b in zip(i.tolist(), j.tolist()):
+            sign[a, b] = self._exact_sign(q[a], b)
+        return sign
+
+    # ---- queries ------------------------------------------------------------------------
+
+    def contains(self, q: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(q), dtype=bool)
+        f = self.A.shape[1]
+        step = max(1, _CHUNK // f)
+        for lo in range(0, len(q), step):
+            qc = q[lo : lo + step]
+            Q = self._scaled(qc)
+            with np.errstate(over="ignore", invalid="ignore"):
+                mx = (Q @ self.A).max(axis=1)
+                # Uniform per-row bound: >= the per-entry bound of every facet.
+                B = _FILTER * (np.abs(Q[:, :3]).max(axis=1) * self.l1max + self.dmax) + _TINY
+            inside = mx < -B
+            # Non-finite values (overflow of huge queries) go to the exact path.
+            unsure = ~(inside | (mx > B)) | ~np.isfinite(mx) | ~np.isfinite(B)
+            if unsure.any():
+                rows = np.nonzero(unsure)[0]
+                inside[rows] = self._contains_slow(qc[rows])
+            out[lo : lo + step] = inside
+        return out
+
+    def _contains_slow(self, q: np.ndarray) -> np.ndarray:
+        Q = self._scaled(q)
+        val, err = self._values(Q)
+        finite = np.isfinite(val) & np.isfinite(err)
+        pos, neg = (val > err) & finite, (val < -err) & finite
+        out_sure = pos.any(axis=1)
+        in_sure = neg.all(axis=1)
+        res = in_sure.copy()
+        for r in np.nonzero(~(out_sure | in_sure))[0].tolist():
+            cols = np.nonzero(~neg[r])[0].tolist()
+            res[r] = all(self._exact_sign(q[r], j) <= 0 for j in cols)
+        return res
+
+    def signed_distance(self, q: np.ndarray) -> np.ndarray:
+        inside = self.contains(q)
+        out = np.zeros(len(q))
+        if inside.any():
+            out[inside] = -np.maximum(self.depth(q[inside]), 0.0)
+        if (~inside).any():
+            out[~inside] = self.distance_outside(q[~inside])
+        return out
+
+    def depth(self, q: np.ndarray) -> np.ndarray:
+        """``min_j (d_j - n_j . q) / |n_j|`` in float (>= 0 inside)."""
+        p = q - self.centre
+        return (self.dh[None, :] - p @ self.nh.T).min(axis=1)
+
+    def distance_outside(self, q: np.ndarray) -> np.ndarray:
+        """Euclidean distance from each (outside) point to the polytope, float."""
+        out = np.zeros(len(q))
+        f, H, E = len(self.nh), len(self.M), len(self.ea)
+        step = max(1, _CHUNK // (f + H + 3 * E))
+        for lo in range(0, len(q), step):
+            p = q[lo : lo + step] - self.centre
+            plane = p @ self.nh.T - self.dh[None, :]  # (k, f) signed plane distances
+            side = p @ self.M.T - self.mc[None, :]  # (k, H) >= 0: inside the facet's edge
+            in_facet = np.minimum.reduceat(side, self.he_starts, axis=1) >= 0
+            # A facet whose polygon holds the projection of p gives the distance |plane| when
+            # p is on its outer side; rounding can put p a few ulps behind the plane, then p is
+            # within that rounding of the facet (distance ~0), so a slack of the error bound.
+            slack = 64.0 * _EPS * (self.radius + np.abs(p).sum(axis=1))
+            ok = in_facet & (plane >= -slack[:, None])
+            best = np.where(ok, np.maximum(plane, 0.0), np.inf).min(axis=1)
+            # Edges (and so vertices): distance to each closed segment.
+            w = p[:, None, :] - self.ea[None, :, :]  # (k, E, 3)
+            t = np.clip(np.einsum("kej,ej->ke", w, self.ev) / self.ell[None, :], 0.0, 1.0)
+            r = w - t[:, :, None] * self.ev[None, :, :]
+            edge = np.sqrt(np.einsum("kej,kej->ke", r, r)).min(axis=1)
+            out[lo : lo + step] = np.minimum(best, edge)
+        return out
+
+    def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
+        """Exact hit test for the closed segments; entry parameters where asked.
+
+        Returns ``(hit (k,) bool, t (k,) float)``; ``t`` is NaN where not hit or not asked.
+        """
+        n_rows = len(q0)
+        hit = np.zeros(n_rows, dtype=bool)
+        tout = np.full(n_rows, np.nan)
+        step = max(1, _CHUNK // (4 * self.A.shape[1]))
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            for lo in range(0, n_rows, step):
+                a, b = q0[lo : lo + step], q1[lo : lo + step]
+                h, tt = self._segments_chunk(a, b, want_t)
+                hit[lo : lo + step] = h
+                tout[lo : lo + step] = tt
+        return hit, tout
+
+    def _segments_chunk(self, a: np.ndarray, b: np.ndarray, want_t: bool):
+        m = len(a)
+        val, err = self._values(self._scaled(np.vstack([a, b])))
+        fin = np.isfinite(val) & np.isfinite(err)
+        pos, neg = (val > err) & fin, (val < -err) & fin
+        v0, v1, e0, e1 = val[:m], val[m:], err[:m], err[m:]
+        pos0, pos1, neg0, neg1 = pos[:m], pos[m:], neg[:m], neg[m:]
+        tt = np.full(m, np.nan)
+        # Both ends beyond one facet plane: free (the common case, decided first).
+        free = (pos0 & pos1).any(axis=1)
+        if free.all():
+            return np.zeros(m, dtype=bool), tt
+        unknown = (~(pos0 | neg0) | ~(pos1 | neg1)).any(axis=1)
+        # Facet j holds on [0, t_j] (leaving) or [t_j, 1] (entering), t_j = |v0| / (|v0| + |v1|)
+        # with both signs certain; terr bounds |t_j - exact| (rounding of v0, v1 and of t_j).
+        A0, A1 = np.abs(v0), np.abs(v1)
+        ssum = A0 + A1
+        t = A0 / ssum
+        terr = 2.0 * (e0 * A1 + e1 * A0) / (ssum * (ssum - e0 - e1)) + 8 * _EPS * t
+        enter = pos0 & neg1
+        leave = neg0 & pos1
+        lo_up = np.maximum(0.0, np.where(enter, t + terr, -np.inf).max(axis=1))
+        lo_dn = np.maximum(0.0, np.where(enter, t - terr, -np.inf).max(axis=1))
+        hi_dn = np.minimum(1.0, np.where(leave, t - terr, np.inf).min(axis=1))
+        hi_up = np.minimum(1.0, np.where(leave, t + terr, np.inf).min(axis=1))
+        free |= lo_dn > hi_up
+        sure_hit = ~free & ~unknown & (lo_up <= hi_dn)
+        h = sure_hit.copy()
+        todo = np.nonzero(~free & ~sure_hit)[0].tolist()
+        if want_t and sure_hit.any():
+            # The entry is the largest entering parameter. Where the filter's intervals
+            # single out one entering facet, only its ratio is evaluated exactly; ties
+            # (entry through an edge or a vertex) take the full exact path.
+            rows = np.nonzero(sure_hit)[0]
+            te = np.where(enter[rows], t[rows], -np.inf)
+            j = te.argmax(axis=1)
+            ar = np.arange(len(rows))
+            inside0 = ~enter[rows].any(axis=1)  # no facet entered: q0 is strictly inside
+            tt[rows[inside0]] = 0.0
+            up = np.where(enter[rows], t[rows] + terr[rows], -np.inf)
+            up[ar, j] = -np.inf
+            unique = ~inside0 & ((t[rows, j] - terr[rows, j]) > up.max(axis=1))
+            for r, jj in zip(rows[unique].tolist(), j[unique].tolist()):
+                tt[r] = float(self._exact_entry(a[r], b[r], jj))
+            todo = sorted(set(todo) | set(rows[~inside0 & ~unique].tolist()))
+        for r in todo:
+            entry = self._exact_segment(a[r], b[r])
+            h[r] = entry is not None
+            if entry is not None and want_t:
+                tt[r] = float(entry)
+        return h, tt
+
+    def _exact_entry(self, a: np.ndarray, b: np.ndarray, j: int) -> Fraction:
+        """Exact parameter where the segment a -> b crosses facet plane ``j``."""
+        X, lo = _dyadic(a.tolist() + b.tolist())
+        e = self.exponent
+        s = min(lo, e)
+        n, D = self.n_int[j], self.d_int[j] << (e - s)
+        w0 = ((n[0] * X[0] + n[1] * X[1] + n[2] * X[2]) << (lo - s)) - D
+        w1 = ((n[0] * X[3] + n[1] * X[4] + n[2] * X[5]) << (lo - s)) - D
+        return Fraction(w0, w0 - w1)
+
+    def _exact_segment(self, a: np.ndarray, b: np.ndarray):
+        """Entry parameter (Fraction) of the closed segment a -> b into the polytope, or None."""
+        X, lo = _dyadic(a.tolist() + b.tolist())
+        e = self.exponent
+        s = min(lo, e)
+        X0, X1 = X[:3], X[3:]
+        lo_t, hi_t = Fraction(0), Fraction(1)
+        for n, d in zip(self.n_int, self.d_int):
+            D = d << (e - s)
+            w0 = ((n[0] * X0[0] + n[1] * X0[1] + n[2] * X0[2]) << (lo - s)) - D
+            w1 = ((n[0] * X1[0] + n[1] * X1[1] + n[2] * X1[2]) << (lo - s)) - D
+            if w0 > 0 and w1 > 0:
+                return None
+            if w0 > 0:  # entering: (1 - t) w0 + t w1 <= 0 iff t >= w0 / (w0 - w1)
+                lo_t = max(lo_t, Fraction(w0, w0 - w1))
+            elif w1 > 0:  # leaving: t <= w0 / (w0 - w1) = -w0 / (w1 - w0)
+                hi_t = min(hi_t, Fraction(-w0, w1 - w0))
+            if lo_t > hi_t:
+                return None
+        return lo_t
+
+
+# --------------------------------------------------------------------------------------
+# public classes
+
+
+def _is_mesh(obj) -> bool:
+    """A mesh-like operand: an object with faces, a (vertices, faces) pair, or a path."""
+    if hasattr(obj, "faces"):
+        return True
+    if isinstance(obj, (str, os.PathLike)):
+        return True
+    return (
+        isinstance(obj, tuple) and len(obj) == 2
+        and np.ndim(obj[0]) == 2 and np.ndim(obj[1]) == 2
+    )
+
+
+def _as_convex(obj, grid: Grid, name: str) -> ConvexPolytope:
+    """ConvexPolytope on ``grid`` from a polytope, an (n, 3) point array or a closed convex mesh."""
+    if isinstance(obj, ConvexPolytope):
+        return obj.on_grid(grid)
+    if _is_mesh(obj):
+        return ConvexPolytope.from_mesh(obj, grid=grid, name=name)
+    return ConvexPolytope.from_points(np.asarray(obj, dtype=np.float64), grid=grid, name=name)
+
+
+def _vertices_of(obj) -> np.ndarray:
+    """(n, 3) float64 coordinates of an operand, to size the grid."""
+    if isinstance(obj, ConvexPolytope) or hasattr(obj, "vertices"):
+        return np.asarray(obj.vertices, dtype=np.float64)
+    if isinstance(obj, (str, os.PathLike)):
+        from .mesh import as_mesh
+
+        return as_mesh(obj).vertices
+    if _is_mesh(obj):
+        return np.asarray(obj[0], dtype=np.float64)
+    a = np.asarray(obj, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise InvalidMeshError(
+            f"expected a ConvexPolytope, (n, 3) points or a closed convex mesh, got shape {a.shape}"
+        )
+    return a
+
+
+class CSpaceObstacle:
+    """One translational C-obstacle ``CO = O ⊕ (-R)``, exact, with vectorised queries.
+
+    Build with :meth:`build`. The robot with its reference point at ``q`` meets the obstacle
+    (touching counts) exactly when ``q`` is in the closed set CO.
+
+    Attributes
+    ----------
+    polytope : ConvexPolytope
+        The C-obstacle (convex path), exact grid vertices and primitive integer normals.
+    obstacle, robot : ConvexPolytope
+        The snapped operands (robot in its own frame, reference point not subtracted).
+    reference_point : (3,) float64
+        The robot's reference point, snapped to the grid.
+    grid : Grid
+    kind : {'convex'}
+        The representation; non-convex C-obstacles (issue #4) will add another kind behind
+        the same queries.
+
+    Notes
+    -----
+    Every query validates its input once: ``(3,)`` or ``(k, 3)`` float64, and raises
+    :class:`~cspace.errors.NonFiniteError` naming the first row with a NaN or inf.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> cube = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    >>> co = CSpaceObstacle.build(cube, 0.5 * cube, reference_point=(0.25, 0.25, 0.25))
+    >>> co.bounds.tolist()
+    [[-0.25, -0.25, -0.25], [1.25, 1.25, 1.25]]
+    >>> co.contains([1.25, 0.5, 0.5]), co.contains([np.nextafter(1.25, 2), 0.5, 0.5])
+    (True, False)
+    >>> co.segment_free([-1, 1.25, 0.5], [2, 1.25, 0.5])  # slides along a facet: touches
+    False
+    >>> co.first_contact([-1, 0.5, 0.5], [2, 0.5, 0.5]), co.signed_distance([2, 0.5, 0.5])
+    (0.25, 0.75)
+
+    Measured here (numpy, one core, a 103-facet CO, batches of 10^5 to 10^6): ``contains``
+    about 6e6 queries/s (7.7e4/s when every query is exactly on the boundary, all exact
+    fallback); ``signed_distance`` 1.5e5/s; ``segment_free`` 5.5e5 segments/s, about 40 us
+    for one segment per call (numpy call overhead; 30 us on a box CO); ``first_contact``
+    3.7e5/s; one ``contains`` per call about 20 us.
+    """
+
+    def __init__(
+        self, polytope: ConvexPolytope, *, obstacle=None, robot=None, reference_point=None
+    ):
+        self.polytope = polytope
+        self.obstacle = obstacle
+        self.robot = robot
+        self.reference_point = (
+            np.zeros(3)
+            if reference_point is None
+            else np.asarray(reference_point, dtype=np.float64)
+        )
+        self.grid = polytope.grid
+        self.kind = "convex"
+        self._impl = _ConvexCO(polytope)
+
+    @classmethod
+    def build(
+        cls, obstacle, robot, reference_point=(0.0, 0.0, 0.0), *, grid: Grid | None = None
+    ) -> "CSpaceObstacle":
+        """Compute ``CO = O ⊕ (c - R)`` exactly (convex obstacle and robot).
+
+        Parameters
+        ----------
+        obstacle, robot : ConvexPolytope, (n, 3) float64 points, or a closed convex mesh
+            Points are hulled; meshes must be convex (``ConvexPolytope.from_mesh``).
+            The robot is in its own frame.
+        reference_point : (3,) float64
+            The robot point whose position ``q`` is planned (robot frame).
+        grid : Grid, optional
+            Common snapping grid; default ``Grid.for_points`` of every input coordinate.
+
+        Returns
+        -------
+        CSpaceObstacle
+
+        Raises
+        ------
+        NotConvexError
+            A mesh operand is not convex. Non-convex C-obstacles need
+            ``cspace.minkowski_sum`` (issue #4).
+        NonFiniteError, EmptyMeshError, DegenerateError
+            Bad operands.
+        """
+        c = np.asarray(reference_point, dtype=np.float64).reshape(3)
+        if not np.isfinite(c).all():
+            raise NonFiniteError(f"reference_point is not finite: {c.tolist()}")
+        if grid is None:
+            grid = Grid.for_points(_vertices_of(obstacle), _vertices_of(robot), c[None, :])
+        O = _as_convex(obstacle, grid, "obstacle")
+        R = _as_convex(robot, grid, "robot")
+        co = convex_minkowski_sum(O, R.reflected(c)).polytope
+        return cls(co, obstacle=O, robot=R, reference_point=grid.to_float(grid.snap(c)))
+
+    # ---- properties ---------------------------------------------------------------------
+
+    @property
+    def n_facets(self) -> int:
+        return self.polytope.n_facets
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64 exact vertices of the C-obstacle."""
+        return self.polytope.vertices
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(m, 3) int64 triangles of the C-obstacle's boundary, counter-clockwise from outside."""
+        return self.polytope.faces
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) float64 bounding box of the C-obstacle."""
+        V = self.vertices
+        return np.stack([V.min(axis=0), V.max(axis=0)])
+
+    def __repr__(self) -> str:
+        return (
+            f"CSpaceObstacle(kind={self.kind!r}, facets={self.n_facets}, "
+            f"vertices={len(self.vertices)})"
+        )
+
+    # ---- queries ------------------------------------------------------------------------
+
+    def contains(self, q) -> np.ndarray | bool:
+        """Is the robot at translation ``q`` in collision (``q`` in the closed CO)?
+
+        Exact for every float64 ``q`` (no snapping, no tolerance); the boundary counts as
+        inside (touching is a collision). Cost: one ``(k, 4) x (4, f)`` product and a max;
+        rows within the filter's bound of a facet plane are decided with Python integers.
+
+        Parameters
+        ----------
+        q : (k, 3) or (3,) float64
+
+        Returns
+        -------
+        inside : (k,) bool, or a Python bool for a ``(3,)`` input
+        """
+        q, single = _translations(q)
+        out = self._impl.contains(q)
+        return bool(out[0]) if single else out
+
+    def plane_signs(self, q) -> np.ndarray:
+        """Exact ``(k, f)`` int8 side of each ``q`` against each facet plane (+1 outside it)."""
+        q, _ = _translations(q)
+        return self._impl.plane_signs(q)
+
+    def signed_distance(self, q) -> np.ndarray | float:
+        """Euclidean distance from ``q`` to the CO boundary, negative inside.
+
+        The sign is exact (:meth:`contains`; boundary points give ``-0.0`` or ``0.0``).
+        Outside: the distance to the nearest point of the polytope, the minimum over facets
+        whose projection holds ``q`` (plane distance) and over all edges (segment distance).
+        Inside: ``-min_j (d_j - n_j . q) / |n_j|``, the exact translational penetration depth
+        of a convex C-obstacle (the shortest translation that frees the robot).
+
+        The magnitude is computed in float64 on coordinates centred on the CO: its error is
+        a few ulps of ``r + |q - centre|`` (``r`` the CO's radius); the a-priori bound used
+        in the tests is ``64 eps (r + |q - centre|)`` (checked against FCL, see
+        :mod:`cspace.fcl_check`).
+
+        Parameters
+        ----------
+        q : (k, 3) or (3,) float64
+
+        Returns
+        -------
+        distance : (k,) float64, or a float for a ``(3,)`` input
+        """
+        q, single = _translations(q)
+        out = self._signed_distance(q)
+        return float(out[0]) if single else out
+
+    def _signed_distance(self, q: np.ndarray) -> np.ndarray:
+        return self._impl.signed_distance(q)
+
+    def segment_free(self, q0, q1) -> np.ndarray | bool:
+        """Does the straight translation from ``q0`` to ``q1`` stay out of CO?
+
+        An exact continuous check, no sampling: the closed segment misses the closed convex
+        CO iff no ``t`` in ``[0, 1]`` satisfies every facet inequality. The parameter interval
+        is clipped facet by facet; each clip is a ratio of two plane values whose signs are
+        exact (float filter), the interval test uses ratios with rigorous error bounds, and
+        segments the filter cannot decide (touching, lying in a facet plane, ...) are redone
+        with Python integers and fractions. Touching counts as a collision (not free). A
+        zero-length segment is free iff ``not contains(q0)``.
+
+        Parameters
+        ----------
+        q0, q1 : (k, 3) or (3,) float64
+            Start and end translations (broadcast to a common ``(k, 3)``).
+
+        Returns
+        -------
+        free : (k,) bool, or a Python bool if both inputs are ``(3,)``
+        """
+        q0, q1, single = self._pair(q0, q1)
+        hit, _ = self._impl.segments(q0, q1, want_t=False)
+        return bool(not hit[0]) if single else ~hit
+
+    def first_contact(self, q0, q1) -> np.ndarray | float:
+        """Parameter ``t`` in ``[0, 1]`` of the first contact along ``q0 + t (q1 - q0)``.
+
+        The exact entry parameter (a rational) rounded to the nearest float64; ``0.0`` when
+        ``q0`` is in CO (touching included); NaN when the segment stays free.
+
+        Parameters
+        ----------
+        q0, q1 : (k, 3) or (3,) float64
+
+        Returns
+        -------
+        t : (k,) float64, or a float if both inputs are ``(3,)``
+
+        Notes
+        -----
+        Free segments are decided by the float filter; each colliding segment is resolved
+        exactly with Python integers (about ``f`` fraction operations).
+        """
+        q0, q1, single = self._pair(q0, q1)
+        _, t = self._impl.segments(q0, q1, want_t=True)
+        return float(t[0]) if single else t
+
+    @staticmethod
+    def _pair(q0, q1):
+        a, s0 = _translations(q0, "q0")
+        b, s1 = _translations(q1, "q1")
+        if len(a) != len(b):
+            if len(a) == 1:
+                a = np.broadcast_to(a, b.shape)
+            elif len(b) == 1:
+                b = np.broadcast_to(b, a.shape)
+            else:
+                raise ValueError(f"q0 and q1 have {len(a)} and {len(b)} rows")
+        return np.ascontiguousarray(a), np.ascontiguousarray(b), s0 and s1
+
+
+_NON_CONVEX = "non-convex C-obstacles need cspace.minkowski_sum (issue #4)"
+
+
+class CSpace:
+    """Several C-obstacles answering the same queries over all of them (no union built).
+
+    Parameters
+    ----------
+    obstacles : sequence of CSpaceObstacle
+    bounds : (2, 3) float64, optional
+        The box translations are planned in (used by sampling checks); default the bounding
+        box of the C-obstacles.
+    """
+
+    def __init__(self, obstacles, *, bounds=None, name: str = "cspace"):
+        self.obstacles = tuple(obstacles)
+        self.name = name
+        if bounds is None:
+            if not self.obstacles:
+                raise ValueError("a CSpace without obstacles needs bounds")
+            b = np.stack([o.bounds for o in self.obstacles])
+            bounds = np.stack([b[:, 0].min(axis=0), b[:, 1].max(axis=0)])
+        self.bounds = np.asarray(bounds, dtype=np.float64).reshape(2, 3)
+
+    @classmethod
+    def from_scene(cls, scene, *, grid: Grid | None = None) -> "CSpace":
+        """C-obstacles of every obstacle of a scene whose bodies are all convex.
+
+        Raises
+        ------
+        NotImplementedError
+            If an obstacle body is not a closed convex mesh: non-convex C-obstacles need
+            ``cspace.minkowski_sum`` (issue #4).
+        """
+        grid = grid or Grid.for_extent(scene.extent())
+        robot = scene.robot_polytope(grid)
+        obs = []
+        for body in scene.obstacles:
+            try:
+                O = ConvexPolytope.from_mesh((body.vertices, body.faces), grid=grid, name=body.name)
+            except NotConvexError as exc:
+                raise NotImplementedError(
+                    f"obstacle {body.name!r} is not convex ({exc}); {_NON_CONVEX}"
+                ) from None
+            obs.append(CSpaceObstacle.build(O, robot, scene.reference_point, grid=grid))
+        return cls(obs, bounds=scene.bounds, name=scene.name)
+
+    def __len__(self) -> int:
+        return len(self.obstacles)
+
+    def __repr__(self) -> str:
+        return f"CSpace(name={self.name!r}, obstacles={len(self.obstacles)})"
+
+    def contains(self, q) -> np.ndarray | bool:
+        """In collision with any obstacle (exact, touching counts).
+
+        See :meth:`CSpaceObstacle.contains`.
+        """
+        q, single = _translations(q)
+        out = np.zeros(len(q), dtype=bool)
+        for o in self.obstacles:
+            rest = np.nonzero(~out)[0]
+            if not rest.size:
+                break
+            out[rest] = o._impl.contains(q[rest])
+        return bool(out[0]) if single else out
+
+    def signed_distance(self, q) -> np.ndarray | float:
+        """Minimum of the obstacles' signed distances.
+
+        Outside every C-obstacle this is the exact clearance (distance to the union).
+        Inside, it is ``-max`` of the penetration depths of the C-obstacles containing ``q``:
+        a lower bound on the penetration depth of the union (overlapping C-obstacles can
+        make the true depth larger); the sign is exact either way.
+        """
+        q, single = _translations(q)
+        out = np.full(len(q), np.inf)
+        for o in self.obstacles:
+            out = np.minimum(out, o._signed_distance(q))
+        return float(out[0]) if single else out
+
+    def segment_free(self, q0, q1) -> np.ndarray | bool:
+        """Free of every obstacle (exact); see :meth:`CSpaceObstacle.segment_free`."""
+        a, b, single = CSpaceObstacle._pair(q0, q1)
+        free = np.ones(len(a), dtype=bool)
+        for o in self.obstacles:
+            rest = np.nonzero(free)[0]
+            if not rest.size:
+                break
+            hit, _ = o._impl.segments(a[rest], b[rest], want_t=False)
+            free[rest] = ~hit
+        return bool(free[0]) if single else free
+
+    def first_contact(self, q0, q1) -> np.ndarray | float:
+        """Smallest first-contact parameter over the obstacles (NaN if the segment is free)."""
+        a, b, single = CSpaceObstacle._pair(q0, q1)
+        t = np.full(len(a), np.nan)
+        for o in self.obstacles:
+            _, to = o._impl.segments(a, b, want_t=True)
+            t = np.fmin(t, to)
+        return float(t[0]) if single else t
