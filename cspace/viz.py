@@ -283,7 +283,7 @@ class _OfflineWindow:
         elif kind == "set_animation":
             node.animation = packed
         else:  # capture_image and the like need a browser
-            raise NotImplementedError(
+            raise RuntimeError(
                 f"meshcat command {kind!r} needs a live viewer (SceneView(live=True))"
             )
 
@@ -681,7 +681,7 @@ class SceneView:
         import meshcat.transformations as tf
 
         d = _vector(direction, "direction")
-        if not np.linalg.norm(d[:2]) > 1e-6 * np.linalg.norm(d):
+        if not np.any(d[:2]):  # the look-at frame is undefined only for an exactly vertical view
             raise ValueError(f"direction must be non-zero and not vertical, got {d}")
         for value, what in ((margin, "margin"), (aspect, "aspect")):
             if not (np.isfinite(value) and value > 0):
