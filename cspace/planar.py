@@ -1,0 +1,937 @@
+"""Exact planar arrangements of segments, and net signed coverage of oriented polygons.
+
+Used by the NCC-CVMS trimming (paper section 3.1-3.2):
+
+* step 6: each superset triangle, projected to a coordinate plane, cut by its intersection
+  segments with other triangles -> :class:`Arrangement2D` of the triangle's edges plus the cuts;
+* step 2: coplanar facets merged and opposite ones cancelled -> :func:`polygon_coverage` /
+  :func:`merge_coplanar` (net signed coverage of oriented polygons in one plane).
+* step 3: triangulation of a face with holes, without new vertices -> :func:`triangulate_face`.
+
+Everything is exact: coordinates are :class:`fractions.Fraction` (constructed intersection points
+are rationals), every decision is the exact sign of a rational expression. No epsilon, no atan2:
+half-edges are ordered around a vertex by a half-plane test and a cross-product sign.
+
+The structures are pure Python and meant for small inputs (a handful to a few dozen segments);
+see :class:`Arrangement2D` for the complexity.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+from fractions import Fraction
+from functools import cmp_to_key
+from math import gcd
+from numbers import Integral, Rational, Real
+
+import numpy as np
+
+__all__ = [
+    "Face",
+    "Arrangement2D",
+    "Coverage",
+    "MergeResult",
+    "polygon_coverage",
+    "merge_coplanar",
+    "to_point",
+    "project_homogeneous",
+    "winding_number",
+    "point_on_segment",
+    "triangulate_face",
+]
+
+Point = tuple  # (Fraction, Fraction)
+
+
+# --------------------------------------------------------------------------------------------
+# exact point helpers
+# --------------------------------------------------------------------------------------------
+
+
+def _frac(x) -> Fraction:
+    if isinstance(x, Fraction):
+        return x
+    if isinstance(x, (Integral, np.integer)):
+        return Fraction(int(x))
+    if isinstance(x, Rational):
+        return Fraction(x.numerator, x.denominator)
+    if isinstance(x, (Real, np.floating)):
+        xf = float(x)
+        if xf != xf or xf in (float("inf"), float("-inf")):
+            raise ValueError(f"non-finite coordinate {x!r}")
+        return Fraction(xf)  # the exact binary value of the float
+    raise TypeError(f"cannot read {x!r} as an exact rational coordinate")
+
+
+def to_point(p) -> Point:
+    """Read one 2D point exactly.
+
+    Accepts a pair ``(x, y)`` of ints / Fractions / other rationals (floats are taken at their
+    exact binary value) or a homogeneous integer triple ``(x, y, w)`` with ``w != 0``, meaning
+    ``(x / w, y / w)``. Returns a pair of :class:`Fraction` (canonical: equal points give equal,
+    equally hashing tuples).
+    """
+    p = tuple(p)
+    if len(p) == 2:
+        return (_frac(p[0]), _frac(p[1]))
+    if len(p) == 3:
+        w = _frac(p[2])
+        if w == 0:
+            raise ValueError(f"homogeneous point {p!r} has w == 0")
+        return (_frac(p[0]) / w, _frac(p[1]) / w)
+    raise ValueError(f"a point is (x, y) or (x, y, w), got {p!r}")
+
+
+def project_homogeneous(p4, drop: int) -> tuple[int, int, int]:
+    """Project a homogeneous 3D point ``(X, Y, Z, W)`` (see
+    :func:`cspace.arrangement.endpoint_coordinates`) to the plane of the two other coordinates.
+
+    ``drop`` is the axis removed (0, 1 or 2); the remaining axes keep their cyclic order
+    ``(drop + 1, drop + 2)`` so that a normal whose ``drop`` component is positive projects to
+    a counter-clockwise orientation. Returns the homogeneous triple ``(a, b, W)``.
+    """
+    a, b = (drop + 1) % 3, (drop + 2) % 3
+    return (p4[a], p4[b], p4[3])
+
+
+def _sub(a, b):
+    return (a[0] - b[0], a[1] - b[1])
+
+
+def _cross(u, v):
+    return u[0] * v[1] - u[1] * v[0]
+
+
+def _dot(u, v):
+    return u[0] * v[0] + u[1] * v[1]
+
+
+def _orient(a, b, c) -> int:
+    d = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    return (d > 0) - (d < 0)
+
+
+def point_on_segment(p, a, b) -> bool:
+    """Exact: is ``p`` on the closed segment ``[a, b]`` (``a == b`` allowed)."""
+    if _orient(a, b, p) != 0:
+        return False
+    return min(a[0], b[0]) <= p[0] <= max(a[0], b[0]) and min(a[1], b[1]) <= p[1] <= max(a[1], b[1])
+
+
+def winding_number(points, p) -> int:
+    """Exact winding number of the closed polyline ``points`` (last joined to first) around ``p``.
+
+    ``p`` must not lie on the polyline (the result would be meaningless); check with
+    :func:`point_on_segment` first. Sunday's crossing rule with exact orientation signs.
+    """
+    w = 0
+    n = len(points)
+    py = p[1]
+    for i in range(n):
+        a = points[i]
+        b = points[(i + 1) % n]
+        if a[1] <= py:
+            if b[1] > py and _orient(a, b, p) > 0:
+                w += 1
+        elif b[1] <= py and _orient(a, b, p) < 0:
+            w -= 1
+    return w
+
+
+def _signed_area(points) -> Fraction:
+    n = len(points)
+    s = Fraction(0)
+    for i in range(n):
+        a = points[i]
+        b = points[(i + 1) % n]
+        s += a[0] * b[1] - a[1] * b[0]
+    return s / 2
+
+
+def _angle_cmp(u, v) -> int:
+    """Counter-clockwise angular order of non-zero directions, starting at angle 0 (inclusive)."""
+    hu = 0 if (u[1] > 0 or (u[1] == 0 and u[0] > 0)) else 1
+    hv = 0 if (v[1] > 0 or (v[1] == 0 and v[0] > 0)) else 1
+    if hu != hv:
+        return hu - hv
+    c = _cross(u, v)
+    return -1 if c > 0 else (1 if c < 0 else 0)
+
+
+def _hom(p) -> tuple[int, int, int]:
+    """Canonical homogeneous integer triple ``(X, Y, W)``, ``W > 0``, ``gcd == 1`` of a
+    Fraction pair."""
+    x, y = p
+    b, d = x.denominator, y.denominator
+    w = b * d // gcd(b, d)
+    return (x.numerator * (w // b), y.numerator * (w // d), w)
+
+
+def _hnorm(X: int, Y: int, W: int) -> tuple[int, int, int]:
+    if W < 0:
+        X, Y, W = -X, -Y, -W
+    g = gcd(gcd(X, Y), W)
+    return (X // g, Y // g, W // g)
+
+
+def _horient(a, b, c) -> int:
+    """Orientation sign of three homogeneous points (all ``W > 0``): the 3x3 determinant."""
+    d = (
+        a[0] * (b[1] * c[2] - b[2] * c[1])
+        - a[1] * (b[0] * c[2] - b[2] * c[0])
+        + a[2] * (b[0] * c[1] - b[1] * c[0])
+    )
+    return (d > 0) - (d < 0)
+
+
+def _hcross3(u, v):
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+def _hcmp(a, b, ax: int) -> int:
+    """Compare coordinate ``ax`` of two homogeneous points."""
+    l, r = a[ax] * b[2], b[ax] * a[2]
+    return (l > r) - (l < r)
+
+
+def _hbetween(p, q, x, ax: int) -> bool:
+    """For ``x`` on the line of ``p != q`` (``ax``: an axis along which they differ), is ``x``
+    on the closed segment?"""
+    c1, c2 = _hcmp(x, p, ax), _hcmp(x, q, ax)
+    return c1 * c2 <= 0
+
+
+def _hdir(a, b):
+    """An integer vector with the direction of ``b - a`` (scaled by ``Wa * Wb > 0``)."""
+    return (b[0] * a[2] - a[0] * b[2], b[1] * a[2] - a[1] * b[2])
+
+
+def _hwinding(poly, p) -> int:
+    """Winding number of the closed homogeneous polyline around ``p`` (not on it)."""
+    w = 0
+    n = len(poly)
+    for i in range(n):
+        a = poly[i]
+        b = poly[(i + 1) % n]
+        if _hcmp(a, p, 1) <= 0:
+            if _hcmp(b, p, 1) > 0 and _horient(a, b, p) > 0:
+                w += 1
+        elif _hcmp(b, p, 1) <= 0 and _horient(a, b, p) < 0:
+            w -= 1
+    return w
+
+
+def _hon_segment(x, p, q) -> bool:
+    if _horient(p, q, x) != 0:
+        return False
+    if p == q:
+        return x == p
+    return _hbetween(p, q, x, 0 if p[0] * q[2] != q[0] * p[2] else 1)
+
+
+# --------------------------------------------------------------------------------------------
+# arrangement
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Face:
+    """One face of an :class:`Arrangement2D`.
+
+    Attributes
+    ----------
+    outer : list[int]
+        The outer boundary as a cycle of half-edge ids, counter-clockwise (face on the left).
+        Empty for the unbounded face.
+    holes : list[list[int]]
+        Inner boundary cycles (half-edge ids, clockwise: face on the left), one per connected
+        component of the arrangement lying directly inside this face.
+    isolated : list[int]
+        Isolated vertices (from zero-length input segments) lying directly inside this face.
+    sample : (Fraction, Fraction)
+        A point strictly inside the face (not on any edge or vertex of the arrangement).
+    area : Fraction or None
+        The face's area (outer boundary area minus hole areas), > 0; None for the unbounded face.
+    """
+
+    outer: list
+    holes: list = field(default_factory=list)
+    isolated: list = field(default_factory=list)
+    sample: tuple = None
+    area: Fraction = None
+
+
+class Arrangement2D:
+    """Exact planar subdivision induced by a set of segments with rational endpoints.
+
+    Parameters
+    ----------
+    segments : sequence of (p, q)
+        Endpoints as accepted by :func:`to_point` (Fraction / int pairs or homogeneous integer
+        triples ``(x, y, w)``). Zero-length segments become vertices: isolated vertices if they
+        touch no other segment, otherwise they split the segments they lie on.
+    labels : sequence, optional
+        A hashable label per segment (default: the segment's index). Every edge records the set
+        of labels of the input segments covering it; zero-length segments record theirs in
+        :attr:`vertex_labels`.
+
+    Attributes
+    ----------
+    vertices : list[(Fraction, Fraction)]
+        Distinct points, sorted lexicographically (x, then y).
+    edges : (e, 2) int64 array
+        Undirected edges ``(u, v)`` with ``u < v``; edge ``k`` has half-edges ``2k`` (u -> v) and
+        ``2k + 1`` (v -> u). Collinear overlapping inputs give one edge per elementary piece.
+    edge_labels : list[set]
+        Labels of the input segments covering each edge.
+    vertex_labels : dict[int, set]
+        Labels of zero-length input segments, by vertex.
+    faces : list[Face]
+        Bounded faces (ids 0 .. F-1). The unbounded face is :attr:`unbounded`, id -1.
+    unbounded : Face
+        Its ``holes`` are the outer boundaries of the top-level connected components.
+    edge_faces : (e, 2) int64 array
+        ``[left, right]`` face ids of each edge seen from ``u`` to ``v`` (-1: unbounded). Both
+        sides are the same face exactly when the edge is a bridge of the graph (its removal
+        disconnects its component): dangling edges, trees, edges joining a hole to a boundary.
+    half_edge_face : list[int]
+        The face on the left of each half-edge.
+    next_half_edge : list[int]
+        Successor of each half-edge along its face cycle.
+    components : int
+        Number of connected components (isolated vertices included).
+
+    Notes
+    -----
+    Algorithm: all O(n^2) segment pairs are intersected exactly (proper crossings, touching
+    endpoints, collinear overlaps); each segment is split at the sorted points found on it, and
+    equal pieces are merged. Outgoing half-edges are sorted around each vertex exactly; face
+    cycles follow ``next(h) = clockwise neighbour of twin(h)`` around the head of h. Cycles of
+    positive signed area are outer boundaries of bounded faces; the others (clockwise, or of
+    zero area for trees) are holes, attached to the smallest positive cycle strictly containing
+    their lexicographically smallest vertex (exact winding number). Cost is
+    O(n^2 + k log k + C * H) Fraction operations for n segments, k pieces, C cycles and H
+    half-edges: fine for tens of segments, not meant for thousands.
+    """
+
+    def __init__(self, segments, labels=None):
+        segs = [(to_point(p), to_point(q)) for p, q in segments]
+        if labels is None:
+            labels = list(range(len(segs)))
+        else:
+            labels = list(labels)
+            if len(labels) != len(segs):
+                raise ValueError("labels must have one entry per segment")
+        self._build(segs, labels)
+
+    # ---------------------------------------------------------------- construction
+
+    def _build(self, segs, labels):
+        H = [(_hom(p), _hom(q)) for p, q in segs]
+        proper = [i for i, (p, q) in enumerate(H) if p != q]
+        points_only = [i for i, (p, q) in enumerate(H) if p == q]
+        on = {i: {H[i][0], H[i][1]} for i in proper}
+        axis = {i: (0 if H[i][0][0] * H[i][1][2] != H[i][1][0] * H[i][0][2] else 1) for i in proper}
+        lines = {i: _hcross3(H[i][0], H[i][1]) for i in proper}
+        # conservative integer boxes (floor / ceil): a cheap exact filter, decides nothing alone
+        boxes = {}
+        for i in proper:
+            (p, q) = H[i]
+            xa, xb = sorted((p[0] // p[2], q[0] // q[2]))
+            ya, yb = sorted((p[1] // p[2], q[1] // q[2]))
+            boxes[i] = (xa, xb + 1, ya, yb + 1)
+        for ii, i in enumerate(proper):
+            p, q = H[i]
+            bi = boxes[i]
+            for j in proper[ii + 1:]:
+                bj = boxes[j]
+                if bi[1] < bj[0] or bj[1] < bi[0] or bi[3] < bj[2] or bj[3] < bi[2]:
+                    continue
+                r, s = H[j]
+                o1, o2 = _horient(p, q, r), _horient(p, q, s)
+                if o1 == 0 and o2 == 0:  # collinear: overlap or touch
+                    for x in (r, s):
+                        if _hbetween(p, q, x, axis[i]):
+                            on[i].add(x)
+                    for x in (p, q):
+                        if _hbetween(r, s, x, axis[j]):
+                            on[j].add(x)
+                    continue
+                if o1 * o2 > 0:
+                    continue
+                o3, o4 = _horient(r, s, p), _horient(r, s, q)
+                if o3 * o4 > 0:
+                    continue
+                if o1 == 0:
+                    x = r
+                elif o2 == 0:
+                    x = s
+                elif o3 == 0:
+                    x = p
+                elif o4 == 0:
+                    x = q
+                else:
+                    x = _hnorm(*_hcross3(lines[i], lines[j]))
+                on[i].add(x)
+                on[j].add(x)
+        vertex_set = set()
+        point_label = {}
+        for k in points_only:
+            x = H[k][0]
+            vertex_set.add(x)
+            point_label.setdefault(x, set()).add(labels[k])
+            xi, yi = x[0] // x[2], x[1] // x[2]
+            for i in proper:
+                bi = boxes[i]
+                if bi[0] <= xi <= bi[1] and bi[2] <= yi <= bi[3] and _hon_segment(x, *H[i]):
+                    on[i].add(x)
+        pieces = {}
+        for i in proper:
+            ax = axis[i]
+            pts = sorted(on[i], key=cmp_to_key(lambda a, b: _hcmp(a, b, ax)))
+            vertex_set.update(pts)
+            for a, b in zip(pts, pts[1:]):
+                key = (a, b) if a < b else (b, a)
+                pieces.setdefault(key, set()).add(labels[i])
+
+        order = sorted(vertex_set, key=lambda h: (Fraction(h[0], h[2]), Fraction(h[1], h[2])))
+        self._H = order
+        self.vertices = [(Fraction(h[0], h[2]), Fraction(h[1], h[2])) for h in order]
+        index = {h: n for n, h in enumerate(order)}
+        self._index = index
+        self.vertex_labels = {index[x]: s for x, s in point_label.items()}
+        keyed = sorted(((index[a], index[b]) if index[a] < index[b] else (index[b], index[a]), lab)
+                       for (a, b), lab in ((k, v) for k, v in pieces.items()))
+        self.edges = np.array([k for k, _ in keyed], dtype=np.int64).reshape(-1, 2)
+        self.edge_labels = [lab for _, lab in keyed]
+        self._trace()
+
+    def _trace(self):
+        V = self.vertices
+        E = self.edges.tolist()
+        nh = 2 * len(E)
+        origin = [0] * nh
+        for k, (u, v) in enumerate(E):
+            origin[2 * k] = u
+            origin[2 * k + 1] = v
+        self.half_edge_origin = origin
+        out = [[] for _ in V]
+        for h in range(nh):
+            out[origin[h]].append(h)
+        pos = [0] * nh
+        for v, hs in enumerate(out):
+            if len(hs) > 1:
+                o = self._H[v]
+                dirs = {h: _hdir(o, self._H[origin[h ^ 1]]) for h in hs}
+                hs.sort(key=cmp_to_key(lambda a, b: _angle_cmp(dirs[a], dirs[b])))
+            for n, h in enumerate(hs):
+                pos[h] = n
+        self._out = out
+        nxt = [0] * nh
+        for h in range(nh):
+            t = h ^ 1
+            ring = out[origin[t]]
+            nxt[h] = ring[pos[t] - 1]
+        self.next_half_edge = nxt
+
+        # cycles
+        cyc_of = [-1] * nh
+        cycles = []
+        for h in range(nh):
+            if cyc_of[h] >= 0:
+                continue
+            c = []
+            g = h
+            while cyc_of[g] < 0:
+                cyc_of[g] = len(cycles)
+                c.append(g)
+                g = nxt[g]
+            cycles.append(c)
+        areas = [self._harea(c) for c in cycles]
+        self._cycles = cycles
+        self._cycle_areas = areas
+
+        # components (union-find over edges) for the Euler count
+        parent = list(range(len(V)))
+
+        def find(a):
+            while parent[a] != a:
+                parent[a] = parent[parent[a]]
+                a = parent[a]
+            return a
+
+        for u, v in E:
+            ru, rv = find(u), find(v)
+            if ru != rv:
+                parent[ru] = rv
+        self.components = sum(1 for a in range(len(V)) if find(a) == a)
+
+        positive = [c for c in range(len(cycles)) if areas[c] > 0]
+        self._positive = sorted(positive, key=lambda c: areas[c])
+        self._poly = {c: [V[origin[h]] for h in cycles[c]] for c in positive}
+        self._hpoly = {c: [self._H[origin[h]] for h in cycles[c]] for c in positive}
+        face_of_cycle = {c: n for n, c in enumerate(positive)}
+        self.faces = [Face(outer=cycles[c], area=areas[c]) for c in positive]
+        self.unbounded = Face(outer=[], area=None)
+
+        comp_of_cycle = [find(origin[c[0]]) for c in cycles]
+        bbox = {}
+        for c in positive:
+            poly = self._poly[c]
+            xs = [q[0] for q in poly]
+            ys = [q[1] for q in poly]
+            bbox[c] = (min(xs), max(xs), min(ys), max(ys))
+        self._bbox = bbox
+
+        def host(v, comp):
+            p, hp = V[v], self._H[v]
+            # The innermost positive cycle of another component strictly containing p (smallest
+            # area first). p is a lexicographically smallest vertex of its component ``comp``:
+            # no cycle of its own component strictly contains it, and cycles of other components
+            # do not pass through it.
+            for c in self._positive:
+                if comp_of_cycle[c] == comp:
+                    continue
+                b = bbox[c]
+                if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
+                    continue
+                if _hwinding(self._hpoly[c], hp) != 0:
+                    return face_of_cycle[c]
+            return -1
+
+        self._face_of_cycle = face_of_cycle
+        cycle_face = [0] * len(cycles)
+        for c in range(len(cycles)):
+            if c in face_of_cycle:
+                cycle_face[c] = face_of_cycle[c]
+                continue
+            f = host(min(origin[h] for h in cycles[c]), comp_of_cycle[c])
+            cycle_face[c] = f
+            face = self.faces[f] if f >= 0 else self.unbounded
+            face.holes.append(cycles[c])
+            if f >= 0:
+                face.area += areas[c]
+        for v in range(len(V)):
+            if not out[v]:
+                f = host(v, find(v))
+                (self.faces[f] if f >= 0 else self.unbounded).isolated.append(v)
+        self.half_edge_face = [cycle_face[cyc_of[h]] for h in range(nh)]
+        self.edge_faces = np.array(
+            [(self.half_edge_face[2 * k], self.half_edge_face[2 * k + 1]) for k in range(len(E))],
+            dtype=np.int64,
+        ).reshape(-1, 2)
+        for f in self.faces:
+            f.sample = self._sample(f)
+        if V:
+            self.unbounded.sample = (V[0][0] - 1, V[0][1])
+        else:
+            self.unbounded.sample = (Fraction(0), Fraction(0))
+
+    def _harea(self, cycle) -> Fraction:
+        """Signed area of a half-edge cycle: sum of (Xa Yb - Ya Xb) / (Wa Wb) / 2, accumulated
+        over a common denominator with one reduction at the end."""
+        H, origin = self._H, self.half_edge_origin
+        num, den = 0, 1
+        for h in cycle:
+            a, b = H[origin[h]], H[origin[h ^ 1]]
+            t = a[0] * b[1] - a[1] * b[0]
+            if t:
+                w = a[2] * b[2]
+                if w == den:
+                    num += t
+                elif den % w == 0:
+                    num += t * (den // w)
+                else:
+                    g = gcd(den, w)
+                    num = num * (w // g) + t * (den // g)
+                    den = den * (w // g)
+        return Fraction(num, 2 * den)
+
+    def _sample(self, face: Face):
+        """A point strictly inside a bounded face.
+
+        Let ``y0`` be the lowest y of the outer boundary and ``y1`` the next distinct y among the
+        face's boundary vertices and isolated vertices (holes lie strictly above ``y0``). In the
+        open slab
+        ``y0 < y < y1`` only outer-boundary edges are present and none ends there, so on the line
+        ``y = (y0 + y1) / 2`` some gap between consecutive crossings lies in the face: the first
+        gap with non-zero winding of the outer cycle.
+        """
+        V, origin = self.vertices, self.half_edge_origin
+        ids = {origin[h] for h in face.outer}
+        ids.update(origin[h] for c in face.holes for h in c)
+        ids.update(face.isolated)
+        ys = [V[v][1] for v in ids]
+        y0 = min(ys)
+        y1 = min(y for y in ys if y > y0)
+        ym = (y0 + y1) / 2
+        xs = []
+        for h in face.outer:
+            a, b = V[origin[h]], V[origin[h ^ 1]]
+            if (a[1] < ym) != (b[1] < ym):
+                x = a[0] + (ym - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
+                xs.append((x, 1 if b[1] > a[1] else -1))
+        xs.sort()
+        # winding of a point at x: edges to the right going up count +1 (ccw), down -1
+        w = sum(d for _, d in xs)
+        for (xa, da), (xb, _) in zip(xs, xs[1:]):
+            w -= da
+            if w != 0 and xa < xb:
+                return ((xa + xb) / 2, ym)
+        raise AssertionError("no interior sample found")  # pragma: no cover
+
+    # ---------------------------------------------------------------- queries
+
+    def cycle_vertices(self, cycle) -> list:
+        """Vertex ids along a half-edge cycle."""
+        return [self.half_edge_origin[h] for h in cycle]
+
+    def cycle_points(self, cycle) -> list:
+        """Exact points along a half-edge cycle."""
+        return [self.vertices[self.half_edge_origin[h]] for h in cycle]
+
+    def face(self, f: int) -> Face:
+        """Face by id (-1: the unbounded face)."""
+        return self.unbounded if f < 0 else self.faces[f]
+
+    def on_edge(self, point) -> int | None:
+        """The id of an edge containing ``point`` (its endpoints included), or None."""
+        x = _hom(to_point(point))
+        H = self._H
+        for k, (u, v) in enumerate(self.edges.tolist()):
+            if _hon_segment(x, H[u], H[v]):
+                return k
+        return None
+
+    def locate(self, point) -> int | None:
+        """Exact face id containing ``point`` (-1: unbounded), or None when the point lies on
+        an edge or a vertex of the arrangement."""
+        p = to_point(point)
+        x = _hom(p)
+        if x in self._index or self.on_edge(p) is not None:
+            return None
+        for c in self._positive:
+            b = self._bbox[c]
+            if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
+                continue
+            if _hwinding(self._hpoly[c], x) != 0:
+                return self._face_of_cycle[c]
+        return -1
+
+    def __repr__(self) -> str:
+        return (
+            f"Arrangement2D({len(self.vertices)} vertices, {len(self.edges)} edges, "
+            f"{len(self.faces)} bounded faces, {self.components} components)"
+        )
+
+
+# --------------------------------------------------------------------------------------------
+# coverage of oriented polygons (step 2)
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Coverage:
+    """Result of :func:`polygon_coverage`.
+
+    Attributes
+    ----------
+    arrangement : Arrangement2D
+        Arrangement of all polygon edges; edge labels are ``(polygon index, edge index)``.
+    coverage : list[int]
+        Net coverage of each bounded face (the unbounded face always has 0).
+    """
+
+    arrangement: Arrangement2D
+    coverage: list
+
+    def of(self, f: int) -> int:
+        return 0 if f < 0 else self.coverage[f]
+
+
+@dataclass
+class MergeResult:
+    """Result of :func:`merge_coplanar`.
+
+    Attributes
+    ----------
+    arrangement : Arrangement2D
+    faces : list[int]
+        Ids of the faces with non-zero net coverage.
+    signs : list[int]
+        ``sign(coverage)`` of each of them: +1 counter-clockwise (same orientation as the
+        plane's positive side), -1 clockwise.
+    coverage : list[int]
+        The net coverage of each of them.
+    boundary : list[tuple[int, int]]
+        The oriented boundary of the merged region: ``(half-edge id, sign)`` for each half-edge
+        whose left face has non-zero sign ``sign`` and whose right face has a different sign.
+        For sign +1 these half-edges run counter-clockwise around the region.
+    """
+
+    arrangement: Arrangement2D
+    faces: list
+    signs: list
+    coverage: list
+    boundary: list
+
+
+def _polygons(polygons, weights):
+    polys = [[to_point(p) for p in poly] for poly in polygons]
+    if weights is None:
+        weights = [1] * len(polys)
+    weights = [int(w) for w in weights]
+    if len(weights) != len(polys):
+        raise ValueError("weights must have one entry per polygon")
+    return polys, weights
+
+
+def polygon_coverage(polygons, weights=None) -> Coverage:
+    """Net signed coverage of oriented closed polygons in one plane.
+
+    Parameters
+    ----------
+    polygons : sequence of sequences of points
+        Each polygon is a closed polyline (last vertex joined to the first), vertices as
+        accepted by :func:`to_point`. Counter-clockwise polygons count positively. Simple
+        polygons are the intended input, but any closed polyline works (it counts by its winding
+        number); repeated consecutive vertices are ignored.
+    weights : sequence of int, optional
+        Integer weight per polygon (default 1).
+
+    Returns
+    -------
+    Coverage
+        The arrangement of all polygon edges and, for each bounded face ``f``,
+        ``coverage[f] = sum_i weights[i] * winding(polygon_i, sample_f)``. This is constant on
+        each face. It is computed by propagation across edges from the unbounded face
+        (coverage 0): crossing a directed edge from its right to its left adds the weights of the
+        polygon edges covering it in the same direction and subtracts those in the opposite one.
+    """
+    polys, weights = _polygons(polygons, weights)
+    segs, labels, dirs = [], [], {}
+    for i, poly in enumerate(polys):
+        n = len(poly)
+        for j in range(n):
+            a, b = poly[j], poly[(j + 1) % n]
+            if a == b:
+                continue
+            segs.append((a, b))
+            labels.append((i, j))
+            dirs[(i, j)] = _sub(b, a)
+    arr = Arrangement2D(segs, labels)
+    V = arr.vertices
+    nf = len(arr.faces)
+    adj = {}
+    for k, (u, v) in enumerate(arr.edges.tolist()):
+        d = _sub(V[v], V[u])
+        delta = 0
+        for lab in arr.edge_labels[k]:
+            delta += weights[lab[0]] * (1 if _dot(dirs[lab], d) > 0 else -1)
+        left, right = arr.edge_faces[k]
+        left, right = int(left), int(right)
+        adj.setdefault(right, []).append((left, delta))
+        adj.setdefault(left, []).append((right, -delta))
+    cov = {-1: 0}
+    queue = deque([-1])
+    while queue:
+        f = queue.popleft()
+        for g, d in adj.get(f, ()):
+            if g not in cov:
+                cov[g] = cov[f] + d
+                queue.append(g)
+            elif cov[g] != cov[f] + d:  # pragma: no cover - impossible for closed polylines
+                raise AssertionError("inconsistent coverage propagation")
+    return Coverage(arr, [cov[f] for f in range(nf)])
+
+
+def merge_coplanar(polygons, weights=None) -> MergeResult:
+    """Union of coplanar same-orientation facets, cancellation of opposite ones.
+
+    Semantics: the plane is split into the faces of the arrangement of all polygon edges and
+    each face gets its net coverage ``c`` (see :func:`polygon_coverage`; with unit weights,
+    ``c = #(CCW polygons containing it) - #(CW polygons containing it)``). The result is the
+    set of faces with ``c != 0``, each oriented by ``sign(c)``. Hence overlapping facets with
+    the same orientation merge into their union (sign kept), a facet and an opposite one cancel
+    where they overlap (symmetric difference of opposite conjoint facets), and where more of one
+    orientation than the other overlap, the majority orientation survives. Edges and vertices
+    are measure-zero and not reported as regions; :attr:`MergeResult.boundary` gives the
+    region boundaries.
+    """
+    cov = polygon_coverage(polygons, weights)
+    arr = cov.arrangement
+    faces = [f for f, c in enumerate(cov.coverage) if c != 0]
+    signs = [1 if cov.coverage[f] > 0 else -1 for f in faces]
+    sign_of = {-1: 0}
+    for f, c in enumerate(cov.coverage):
+        sign_of[f] = (c > 0) - (c < 0)
+    boundary = []
+    for h, f in enumerate(arr.half_edge_face):
+        s = sign_of[f]
+        if s != 0 and sign_of[arr.half_edge_face[h ^ 1]] != s:
+            boundary.append((h, s))
+    return MergeResult(arr, faces, signs, [cov.coverage[f] for f in faces], boundary)
+
+
+# --------------------------------------------------------------------------------------------
+# triangulation of a face (step 3)
+# --------------------------------------------------------------------------------------------
+
+
+def _strip_spikes(cycle: list) -> list:
+    """Remove back-and-forth excursions ``a b a`` (dangling edges) from a cyclic vertex list;
+    an empty list when nothing with area is left."""
+    out = list(cycle)
+    while len(out) >= 3:
+        n = len(out)
+        for k in range(n):
+            if out[k - 1] == out[(k + 1) % n]:
+                for idx in sorted({k, (k + 1) % n}, reverse=True):
+                    del out[idx]
+                break
+        else:
+            return out
+    return []
+
+
+def _half(a, d) -> int:
+    c = _cross(a, d)
+    return 0 if (c > 0 or (c == 0 and _dot(a, d) > 0)) else 1
+
+
+def _in_cone(d, a, b) -> bool:
+    """Is the direction ``d`` strictly inside the counter-clockwise sweep from ``a`` to ``b``?
+    When ``b`` has the direction of ``a`` the sweep is a full turn (all but that direction)."""
+    hd = _half(a, d)
+    if hd == 0 and _cross(a, d) == 0:  # d along a
+        return False
+    hb = _half(a, b)
+    if hb == 0 and _cross(a, b) == 0:  # full turn
+        return True
+    if hd != hb:
+        return hd < hb
+    return _cross(d, b) > 0
+
+
+def _proper_cross(a, b, c, d) -> bool:
+    """Do the open segments ``ab`` and ``cd`` cross at a single interior point of both."""
+    o1, o2 = _orient(a, b, c), _orient(a, b, d)
+    o3, o4 = _orient(c, d, a), _orient(c, d, b)
+    return o1 * o2 < 0 and o3 * o4 < 0
+
+
+def _in_closed_triangle(p, a, b, c) -> bool:
+    return _orient(a, b, p) >= 0 and _orient(b, c, p) >= 0 and _orient(c, a, p) >= 0
+
+
+def _bridge_ok(P, i, H, j, others) -> bool:
+    """Can the polygon occurrence ``P[i]`` be joined to the hole occurrence ``H[j]``?"""
+    o, h = P[i], H[j]
+    if o == h:
+        return False
+    d = _sub(h, o)
+    if not _in_cone(d, _sub(P[(i + 1) % len(P)], o), _sub(P[i - 1], o)):
+        return False
+    e = _sub(o, h)
+    if not _in_cone(e, _sub(H[(j + 1) % len(H)], h), _sub(H[j - 1], h)):
+        return False
+    for ring in others:
+        n = len(ring)
+        for k in range(n):
+            a, b = ring[k], ring[(k + 1) % n]
+            if a != o and a != h and point_on_segment(a, o, h):
+                return False
+            if _proper_cross(a, b, o, h):
+                return False
+    return True
+
+
+def _ear_ok(poly, i) -> bool:
+    n = len(poly)
+    p, v, q = poly[i - 1], poly[i], poly[(i + 1) % n]
+    if _orient(p, v, q) <= 0:
+        return False
+    corners = (p, v, q)
+    ears = {(i - 1) % n, i}  # edge k joins poly[k] -> poly[k + 1]
+    cones = {
+        v: (_sub(q, v), _sub(p, v)),
+        p: (_sub(v, p), _sub(q, p)),
+        q: (_sub(p, q), _sub(v, q)),
+    }
+    for k in range(n):
+        a, b = poly[k], poly[(k + 1) % n]
+        if a not in corners and _in_closed_triangle(a, p, v, q):
+            return False
+        if k in ears:
+            continue
+        if _proper_cross(a, b, p, q):
+            return False
+        for s, t in ((a, b), (b, a)):
+            if s in cones and t != s:
+                lo, hi = cones[s]
+                d = _sub(t, s)
+                if _cross(lo, d) > 0 and _cross(d, hi) > 0:
+                    return False
+    return True
+
+
+def triangulate_face(arr: Arrangement2D, f: int) -> list:
+    """Triangulate a bounded face (with its holes) without new vertices, exactly.
+
+    Returns counter-clockwise triangles as triples of vertex ids of ``arr``. The triangles
+    tile the face (their areas sum to ``face.area``) and meet the face boundary only at its
+    vertices: every vertex lying on the outer boundary or on a hole boundary with non-zero
+    extent is a triangle corner (no T-junctions there). Dangling edges, tree-shaped holes and
+    isolated vertices carry no area and are *not* constraints: their vertices may lie inside
+    a triangle or on one of its edges.
+
+    Algorithm: strip dangling excursions from the cycles, bridge each hole to the outer polygon
+    by a segment joining two mutually visible vertex occurrences (exact cone and crossing tests;
+    holes that only see other holes wait for a later round), then ear clipping whose ear test
+    rejects any vertex in the closed ear, any edge crossing its diagonal and any edge leaving a
+    corner into its interior. O(n^3) in the number n of boundary vertices; for small faces.
+    """
+    face = arr.faces[f]
+    V = arr.vertices
+    poly = _strip_spikes(arr.cycle_vertices(face.outer))
+    holes = [h for h in (_strip_spikes(arr.cycle_vertices(c)) for c in face.holes) if h]
+    P = [V[v] for v in poly]
+    ids = list(poly)
+    pending = [([V[v] for v in h], list(h)) for h in holes]
+    while pending:
+        others = [P] + [hp for hp, _ in pending]
+        done = False
+        for hi, (HP, Hid) in enumerate(pending):
+            cands = [
+                (_dot(_sub(HP[j], P[i]), _sub(HP[j], P[i])), i, j)
+                for i in range(len(P)) for j in range(len(HP))
+            ]
+            cands.sort()
+            for _, i, j in cands:
+                if _bridge_ok(P, i, HP, j, others):
+                    P = P[: i + 1] + HP[j:] + HP[:j] + [HP[j], P[i]] + P[i + 1:]
+                    ids = ids[: i + 1] + Hid[j:] + Hid[:j] + [Hid[j], ids[i]] + ids[i + 1:]
+                    pending.pop(hi)
+                    done = True
+                    break
+            if done:
+                break
+        if not done:  # pragma: no cover - a visible pair always exists
+            raise AssertionError("no bridge found for a hole")
+    tris = []
+    while len(P) > 3:
+        n = len(P)
+        for i in range(n):
+            if _ear_ok(P, i):
+                tris.append((ids[i - 1], ids[i], ids[(i + 1) % n]))
+                del P[i]
+                del ids[i]
+                break
+        else:
+            if _signed_area(P) == 0:
+                return tris
+            raise AssertionError("ear clipping found no ear")  # pragma: no cover
+    if len(P) == 3 and _orient(*P) > 0:
+        tris.append(tuple(ids))
+    return tris
