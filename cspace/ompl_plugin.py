@@ -1,0 +1,476 @@
+"""OMPL adapter: exact C-space validity and motion checking for translational planning.
+
+The robot's configuration is the ``(3,)`` float64 translation of its reference point, an OMPL
+``RealVectorStateSpace(3)`` state bounded by the scene's ``(2, 3)`` bounds.
+
+- :class:`CSpaceValidityChecker`: a state is valid iff it is inside the bounds and not in any
+  closed C-obstacle (:meth:`cspace.CSpace.contains`, exact; touching is invalid).
+- :class:`CSpaceMotionValidator`: a motion is valid iff its end state is valid and the
+  straight segment misses every closed C-obstacle (:meth:`cspace.CSpace.segment_free`, an
+  exact continuous check, no sampling resolution).
+- :func:`plan` → :class:`PlanResult`: solve with any bound geometric planner, simplify, and
+  re-prove the returned path exactly (every waypoint and every segment) before reporting it.
+
+This is the only module of cspace that imports ``ompl`` (imported here, at use of
+:func:`plan` or the classes; OMPL 2.0.1 nanobind bindings). Callbacks return real Python
+``bool`` (OMPL 2.0.1 raises on ``np.bool_``). ``solve()`` holds the GIL.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+
+from .obstacle import CSpace
+
+__all__ = [
+    "MOTIONS",
+    "PlanResult",
+    "CSpaceValidityChecker",
+    "CSpaceMotionValidator",
+    "planner_names",
+    "plan",
+    "verify_path",
+]
+
+MOTIONS = ("exact", "discrete")
+
+
+def _ompl():
+    try:
+        from ompl import base as ob, geometric as og, util as ou
+    except ImportError as exc:  # pragma: no cover
+        raise ImportError("cspace.ompl_plugin needs OMPL's Python bindings (ompl>=2.0)") from exc
+    return ob, og, ou
+
+
+def planner_names() -> tuple[str, ...]:
+    """Names of the geometric planners bound in ``ompl.geometric`` (sorted)."""
+    ob, og, _ = _ompl()
+    return tuple(sorted(
+        n for n in dir(og)
+        if isinstance(getattr(og, n), type) and issubclass(getattr(og, n), ob.Planner)
+    ))
+
+
+def _vec(state) -> np.ndarray:
+    return np.array([state[0], state[1], state[2]], dtype=np.float64)
+
+
+def _bounds(bounds) -> np.ndarray:
+    b = np.array(bounds, dtype=np.float64)
+    if b.shape != (2, 3):
+        raise ValueError(f"bounds must be (2, 3), got shape {b.shape}")
+    if not np.isfinite(b).all() or (b[0] >= b[1]).any():
+        raise ValueError(f"bounds must be finite with lower < upper, got {b.tolist()}")
+    return b
+
+
+def _boxes(cspace: CSpace) -> list:
+    """``(obstacle, lo, hi)`` per C-obstacle: its bounding box as Python floats, grown outward.
+
+    A broad phase only: the box is a superset of the C-obstacle (float vertices may be rounded,
+    so it is grown by ``2**-40`` relative plus ``2**-1000``), and every query that meets it is
+    decided exactly by the obstacle itself.
+    """
+    out = []
+    for o in cspace.obstacles:
+        lo, hi = o.bounds
+        pad = (np.abs(lo) + np.abs(hi)) * 2.0**-40 + 2.0**-1000
+        out.append((o, (lo - pad).tolist(), (hi + pad).tolist()))
+    return out
+
+
+def _in_bounds(q: np.ndarray, b: np.ndarray) -> np.ndarray:
+    q = np.atleast_2d(q)
+    return ((b[0] <= q) & (q <= b[1])).all(axis=1)
+
+
+# --------------------------------------------------------------------------------------
+# checker classes (built lazily: the base classes come from ompl)
+
+_CLASSES: dict[str, type] = {}
+
+
+def _classes() -> dict[str, type]:
+    if _CLASSES:
+        return _CLASSES
+    ob, _, _ = _ompl()
+
+    class CSpaceValidityChecker(ob.StateValidityChecker):
+        """Exact state validity: inside ``bounds`` and ``not cspace.contains(q)``.
+
+        Parameters
+        ----------
+        si : ompl.base.SpaceInformation
+            Over a ``RealVectorStateSpace(3)``.
+        cspace : CSpace
+        clearance : bool, default False
+            Whether :meth:`clearance` reports ``cspace.signed_distance(q)`` (exact sign;
+            float64 magnitude) instead of OMPL's default.
+        bounds : (2, 3) float64, optional
+            Default ``cspace.bounds``.
+
+        Attributes
+        ----------
+        calls : int
+            Number of :meth:`isValid` calls (OMPL's own counters miss Python checkers).
+        """
+
+        def __init__(self, si, cspace: CSpace, *, clearance: bool = False, bounds=None):
+            super().__init__(si)
+            self.cspace = cspace
+            b = _bounds(cspace.bounds if bounds is None else bounds)
+            self._lo, self._hi = b[0].tolist(), b[1].tolist()
+            self._clearance = bool(clearance)
+            self._boxes = _boxes(cspace)
+            self.calls = 0
+
+        def isValid(self, state) -> bool:
+            self.calls += 1
+            lo, hi = self._lo, self._hi
+            x, y, z = state[0], state[1], state[2]
+            if not (lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1] and lo[2] <= z <= hi[2]):
+                return False
+            q = None
+            for o, a, b in self._boxes:  # broad phase, then the exact test
+                if a[0] <= x <= b[0] and a[1] <= y <= b[1] and a[2] <= z <= b[2]:
+                    if q is None:
+                        q = np.array([x, y, z])
+                    if o.contains(q):
+                        return False
+            return True
+
+        def clearance(self, state) -> float:
+            if not self._clearance:
+                return 0.0
+            return float(self.cspace.signed_distance(_vec(state)))
+
+    class CSpaceMotionValidator(ob.MotionValidator):
+        """Exact motion validity: the end state is valid and the segment is free.
+
+        ``checkMotion(s1, s2)`` is ``checker.isValid(s2)`` and ``cspace.segment_free(q1, q2)``:
+        a continuous check with no resolution (touching counts as a collision). Bounds are
+        convex, so a segment between in-bounds states stays in bounds. Only the two-argument
+        form reaches Python in OMPL 2.0.1.
+
+        Parameters
+        ----------
+        si : ompl.base.SpaceInformation
+        cspace : CSpace
+        checker : CSpaceValidityChecker, optional
+            Decides the end state; default a new one on ``cspace`` (its bounds).
+
+        Attributes
+        ----------
+        calls : int
+            Number of :meth:`checkMotion` calls.
+        """
+
+        def __init__(self, si, cspace: CSpace, checker=None):
+            super().__init__(si)
+            # Holding ``si`` here would make a reference cycle through C++ (a leak).
+            self.checker = checker if checker is not None else CSpaceValidityChecker(si, cspace)
+            self.cspace = cspace
+            self._boxes = _boxes(cspace)
+            self.calls = 0
+
+        def checkMotion(self, s1, s2, *last_valid) -> bool:
+            self.calls += 1
+            if not self.checker.isValid(s2):
+                return False
+            x0, y0, z0, x1, y1, z1 = s1[0], s1[1], s1[2], s2[0], s2[1], s2[2]
+            lx, hx = (x0, x1) if x0 <= x1 else (x1, x0)
+            ly, hy = (y0, y1) if y0 <= y1 else (y1, y0)
+            lz, hz = (z0, z1) if z0 <= z1 else (z1, z0)
+            a = b = None
+            for o, lo, hi in self._boxes:  # broad phase on the segment's box, then exact
+                if (lo[0] <= hx and lx <= hi[0] and lo[1] <= hy and ly <= hi[1]
+                        and lo[2] <= hz and lz <= hi[2]):
+                    if a is None:
+                        a, b = np.array([x0, y0, z0]), np.array([x1, y1, z1])
+                    if not o.segment_free(a, b):
+                        return False
+            return True
+
+    _CLASSES["CSpaceValidityChecker"] = CSpaceValidityChecker
+    _CLASSES["CSpaceMotionValidator"] = CSpaceMotionValidator
+    return _CLASSES
+
+
+def __getattr__(name: str):
+    # CSpaceValidityChecker / CSpaceMotionValidator subclass ompl classes: import ompl on use.
+    if name in ("CSpaceValidityChecker", "CSpaceMotionValidator"):
+        return _classes()[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+# --------------------------------------------------------------------------------------
+# exact path verification
+
+
+def verify_path(cspace: CSpace, path, bounds=None) -> dict:
+    """Re-prove a piecewise-linear path exactly.
+
+    Parameters
+    ----------
+    cspace : CSpace
+    path : (n, 3) float64
+        Waypoints (translations of the reference point).
+    bounds : (2, 3) float64, optional
+        Default ``cspace.bounds``.
+
+    Returns
+    -------
+    report : dict
+        ``valid`` (bool: every waypoint in bounds and outside every closed C-obstacle, every
+        segment ``segment_free``); ``bad_waypoints`` and ``bad_segments``, ``(j,) int64``
+        indices (segment ``i`` joins waypoints ``i`` and ``i + 1``).
+    """
+    P = np.asarray(path, dtype=np.float64).reshape(-1, 3)
+    b = _bounds(cspace.bounds if bounds is None else bounds)
+    bad_w = np.nonzero(~_in_bounds(P, b) | cspace.contains(P))[0].astype(np.int64)
+    if len(P) > 1:
+        bad_s = np.nonzero(~cspace.segment_free(P[:-1], P[1:]))[0].astype(np.int64)
+    else:
+        bad_s = np.zeros(0, dtype=np.int64)
+    return {"valid": bool(len(P) > 0 and not bad_w.size and not bad_s.size),
+            "bad_waypoints": bad_w, "bad_segments": bad_s}
+
+
+# --------------------------------------------------------------------------------------
+# planning
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Outcome of :func:`plan`.
+
+    Attributes
+    ----------
+    path : (n, 3) float64
+        The returned path (after simplification), ``(0, 3)`` if OMPL returned none.
+    solved : bool
+        OMPL found an exact solution *and* the path was re-proved valid exactly.
+    exact : bool
+        OMPL reported an exact (not approximate) solution.
+    valid : bool
+        The exact re-proof of ``path`` (:func:`verify_path`): every waypoint outside the
+        closed C-obstacles and in bounds, every segment ``segment_free``.
+    planner : str
+    motion : {'exact', 'discrete'}
+    time : float
+        Wall seconds for solve, simplification and re-proof.
+    solve_time : float
+        Wall seconds in ``solve()`` alone.
+    n_states : int
+        Waypoints in ``path``.
+    status : str
+        OMPL's ``PlannerStatus.asString()``.
+    state_checks, motion_checks : int
+        Python ``isValid`` / ``checkMotion`` calls (motion checks are 0 for ``'discrete'``:
+        OMPL's discrete validator calls ``isValid`` at each resolution step).
+    simplified : bool
+        Whether ``path`` is the simplified path (else the raw one; simplification is dropped
+        if its result fails the exact re-proof).
+    """
+
+    path: np.ndarray
+    solved: bool
+    exact: bool
+    valid: bool
+    planner: str
+    motion: str
+    time: float
+    solve_time: float
+    n_states: int
+    status: str
+    state_checks: int
+    motion_checks: int
+    simplified: bool
+
+    @property
+    def length(self) -> float:
+        """Euclidean length of ``path``."""
+        return float(np.linalg.norm(np.diff(self.path, axis=0), axis=1).sum())
+
+
+def _as_cspace(scene_or_cspace):
+    if isinstance(scene_or_cspace, CSpace):
+        return scene_or_cspace, None
+    if hasattr(scene_or_cspace, "obstacles") and hasattr(scene_or_cspace, "robot"):
+        return CSpace.from_scene(scene_or_cspace), scene_or_cspace
+    raise TypeError(f"expected a Scene or a CSpace, got {type(scene_or_cspace).__name__}")
+
+
+def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
+    if q is None:
+        raise ValueError(f"{what} is required when planning on a CSpace (no scene to take it from)")
+    a = np.array(q, dtype=np.float64)
+    if a.shape != (3,) or not np.isfinite(a).all():
+        raise ValueError(f"{what} must be a finite (3,) translation, got {np.asarray(q).tolist()}")
+    if not _in_bounds(a, b)[0]:
+        raise ValueError(f"{what} {a.tolist()} is outside the bounds {b.tolist()}")
+    hits = [i for i, o in enumerate(cspace.obstacles) if o.contains(a)]
+    if hits:
+        names = []
+        for i in hits:
+            o = cspace.obstacles[i].obstacle
+            names.append(repr(getattr(o, "name", None) or f"#{i}"))
+        raise ValueError(
+            f"{what} {a.tolist()} is in collision (in the closed C-obstacle of "
+            f"{', '.join(names)}; touching counts)"
+        )
+    return a
+
+
+def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
+         time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
+         motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
+         planner_range: float | None = None) -> PlanResult:
+    """Plan a collision-free translation with OMPL, checked exactly.
+
+    Parameters
+    ----------
+    scene_or_cspace : Scene or CSpace
+        A scene (its C-obstacles are built with :meth:`CSpace.from_scene`; start, goal and
+        bounds default to the scene's) or a built :class:`CSpace`.
+    start, goal : (3,) float64, optional
+        Reference-point translations; required for a CSpace.
+    planner : str, default 'RRTConnect'
+        A geometric planner bound in ``ompl.geometric`` (:func:`planner_names`).
+    time : float, default 1.0
+        Seconds for ``solve()`` (simplification gets ``min(1, time / 2)`` more).
+    seed : int, optional
+        ``ompl.util.RNG.setSeed(seed)`` before building the planner. Runs are then
+        reproducible for the same inputs and call order in a process (OMPL derives every
+        RNG from one global seed generator and logs an error if it already handed out seeds).
+    simplify : bool, default True
+        ``og.PathSimplifier.simplify`` (shortcutting; never B-spline smoothing).
+    bounds : (2, 3) float64, optional
+        Default the scene's bounds, else ``cspace.bounds``.
+    motion : {'exact', 'discrete'}, default 'exact'
+        ``'exact'`` installs :class:`CSpaceMotionValidator`; ``'discrete'`` keeps OMPL's
+        default discrete motion validator (states checked every ``resolution`` times the
+        space's maximum extent) — it can miss thin obstacles (for comparison only).
+    resolution : float, default 0.01
+        ``si.setStateValidityCheckingResolution`` for ``motion='discrete'``.
+    optimize : bool, default False
+        For optimizing planners (RRTstar, BITstar, ...): use the whole ``time`` to improve
+        path length. If False, the objective's cost threshold is infinite, so they stop at
+        the first solution.
+    planner_range : float, optional
+        ``planner.setRange`` for planners that have it.
+
+    Returns
+    -------
+    PlanResult
+        ``path`` is re-proved exactly (:func:`verify_path`) after OMPL returns it; ``solved``
+        requires an exact OMPL solution and a valid path.
+
+    Raises
+    ------
+    ValueError
+        Unknown planner or motion (the message lists the choices); start or goal outside the
+        bounds or in collision (the message says which and which obstacle).
+    """
+    ob, og, ou = _ompl()
+    names = planner_names()
+    if planner not in names:
+        raise ValueError(f"{planner!r} is not a valid planner, must be one of {', '.join(names)}")
+    if motion not in MOTIONS:
+        raise ValueError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
+    if not (time > 0):
+        raise ValueError(f"time must be positive, got {time}")
+    cs, scene = _as_cspace(scene_or_cspace)
+    if bounds is None:
+        bounds = scene.bounds if scene is not None else cs.bounds
+    b = _bounds(bounds)
+    if scene is not None:
+        start = scene.start if start is None else start
+        goal = scene.goal if goal is None else goal
+    q0 = _endpoint(cs, start, b, "start")
+    q1 = _endpoint(cs, goal, b, "goal")
+
+    ou.setLogLevel(ou.LOG_ERROR)
+    if seed is not None:
+        # OMPL logs an error when seeds were already handed out, but still reseeds its seed
+        # generator, so the RNGs created from here on are reproducible.
+        ou.setLogLevel(ou.LOG_NONE)
+        ou.RNG.setSeed(int(seed))
+        ou.setLogLevel(ou.LOG_ERROR)
+    space = ob.RealVectorStateSpace(3)
+    rb = ob.RealVectorBounds(3)
+    for k in range(3):
+        rb.setLow(k, float(b[0, k]))
+        rb.setHigh(k, float(b[1, k]))
+    space.setBounds(rb)
+    si = ob.SpaceInformation(space)
+    classes = _classes()
+    checker = classes["CSpaceValidityChecker"](si, cs, bounds=b)
+    si.setStateValidityChecker(checker)
+    mv = None
+    if motion == "exact":
+        mv = classes["CSpaceMotionValidator"](si, cs, checker)
+        si.setMotionValidator(mv)  # keep the Python reference (mv) alive until the end
+    else:
+        si.setStateValidityCheckingResolution(float(resolution))
+    si.setup()
+
+    s0 = si.allocState()
+    s0[0:3] = q0.tolist()
+    s1 = si.allocState()
+    s1[0:3] = q1.tolist()
+    pdef = ob.ProblemDefinition(si)
+    pdef.setStartAndGoalStates(s0, s1)
+    objective = ob.PathLengthOptimizationObjective(si)
+    if not optimize:
+        objective.setCostThreshold(ob.Cost(float("inf")))
+    pdef.setOptimizationObjective(objective)
+    p = getattr(og, planner)(si)
+    if planner_range is not None and hasattr(p, "setRange"):
+        p.setRange(float(planner_range))
+    p.setProblemDefinition(pdef)
+    p.setup()
+
+    t0 = _time.perf_counter()
+    status = p.solve(float(time))
+    solve_time = _time.perf_counter() - t0
+    exact = status.getStatus() == ob.PlannerStatus.EXACT_SOLUTION
+    have = exact or status.getStatus() == ob.PlannerStatus.APPROXIMATE_SOLUTION
+    P = np.zeros((0, 3))
+    simplified = False
+    valid = False
+    if have:
+        path = pdef.getSolutionPath()
+        raw = np.array([_vec(s) for s in path.getStates()]).reshape(-1, 3)
+        P = raw
+        if simplify and exact and len(raw) > 2:
+            ps = og.PathSimplifier(si)
+            ps.simplify(path, min(1.0, time / 2.0))
+            P = np.array([_vec(s) for s in path.getStates()]).reshape(-1, 3)
+            simplified = True
+        valid = verify_path(cs, P, b)["valid"]
+        if simplified and not valid:
+            # Keep the planner's own path if shortcutting produced something we cannot prove.
+            raw_valid = verify_path(cs, raw, b)["valid"]
+            if raw_valid:
+                P, valid, simplified = raw, True, False
+    elapsed = _time.perf_counter() - t0
+    return PlanResult(
+        path=np.ascontiguousarray(P, dtype=np.float64),
+        solved=bool(exact and valid),
+        exact=bool(exact),
+        valid=bool(valid),
+        planner=planner,
+        motion=motion,
+        time=elapsed,
+        solve_time=solve_time,
+        n_states=int(len(P)),
+        status=status.asString(),
+        state_checks=int(checker.calls),
+        motion_checks=int(mv.calls) if mv is not None else 0,
+        simplified=simplified,
+    )
