@@ -91,3 +91,16 @@ def test_check_cross_checks_a_shipped_scene_with_fcl(capsys):
     out = capsys.readouterr().out
     assert "membership disagreements beyond 1e-09 of the surface: 0" in out
     assert "time per query" in out
+
+
+def test_plan_writes_an_exactly_checked_path(tmp_path, capsys):
+    out = tmp_path / "path.txt"
+    assert main(["plan", str(SCENES / "comb.toml"), "--time", "2", "--seed", "1", "-o", str(out)]) == 0
+    text = capsys.readouterr().out
+    assert "solved" in text and "exact re-check: valid" in text
+    path = np.loadtxt(out)
+    assert path.ndim == 2 and path.shape[1] == 3 and len(path) >= 2
+    from cspace import CSpace, load_scene
+
+    cs = CSpace.from_scene(load_scene(SCENES / "comb.toml"))
+    assert (cs.segment_free(path[:-1], path[1:])).all() and not cs.contains(path).any()
