@@ -33,14 +33,12 @@ import numpy as np
 
 from .convex import ConvexPolytope, convex_minkowski_sum
 from .errors import InvalidMeshError, NonFiniteError, NotConvexError
-from .exact import Grid
+from .exact import _EPS, _FILTER, Grid
 
-__all__ = ["CSpaceObstacle", "CSpace"]
+__all__ = ["CSpaceObstacle", "CSpace", "scene_obstacles"]
 
-_EPS = 2.0**-53
-# Filter factor: a dot product of 4 terms (3 coordinates and the offset) from rounded
-# inputs needs about 6 eps times the permanent; 16 leaves room for rounding the bound.
-_FILTER = 16.0 * _EPS
+# _FILTER (16 eps, from the kernel) also covers the 4-term products here (3 coordinates and
+# the offset, from rounded inputs): they need about 6 eps times the permanent.
 # Absolute slack covering underflow of the scaled queries (ldexp to subnormals).
 _TINY = 2.0**-1000
 # Rows x facets evaluated at once (memory and cache).
@@ -660,17 +658,15 @@ class CSpace:
             If an obstacle body is not a closed convex mesh: non-convex C-obstacles need
             ``cspace.minkowski_sum`` (issue #4).
         """
-        grid = grid or Grid.for_extent(scene.extent())
-        robot = scene.robot_polytope(grid)
         obs = []
-        for body in scene.obstacles:
-            try:
-                O = ConvexPolytope.from_mesh((body.vertices, body.faces), grid=grid, name=body.name)
-            except NotConvexError as exc:
+        for body, co, error in scene_obstacles(scene, grid=grid)[2]:
+            if isinstance(error, NotConvexError):
                 raise NotImplementedError(
-                    f"obstacle {body.name!r} is not convex ({exc}); {_NON_CONVEX}"
+                    f"obstacle {body.name!r} is not convex ({error}); {_NON_CONVEX}"
                 ) from None
-            obs.append(CSpaceObstacle.build(O, robot, scene.reference_point, grid=grid))
+            if error is not None:
+                raise error
+            obs.append(co)
         return cls(obs, bounds=scene.bounds, name=scene.name)
 
     def __len__(self) -> int:
@@ -727,3 +723,34 @@ class CSpace:
             _, to = o._impl.segments(a, b, want_t=True)
             t = np.fmin(t, to)
         return float(t[0]) if single else t
+
+
+def scene_obstacles(scene, *, grid: Grid | None = None):
+    """The C-obstacle of each obstacle body of a scene, on one grid, or why there is none.
+
+    Parameters
+    ----------
+    scene : Scene
+    grid : Grid, optional
+        Default ``Grid.for_extent(scene.extent())``: holds every body and C-obstacle.
+
+    Returns
+    -------
+    grid : Grid
+    robot : ConvexPolytope
+        The robot's hull on ``grid`` (in its frame; ``scene.reference_point`` not applied).
+    bodies : list of (Body, CSpaceObstacle or None, InvalidMeshError or None)
+        For a closed convex body its C-obstacle; otherwise None and the error that says why
+        (``NotConvexError`` for a non-convex body, whose C-obstacle needs issue #4).
+    """
+    grid = grid or Grid.for_extent(scene.extent())
+    robot = scene.robot_polytope(grid)
+    out = []
+    for body in scene.obstacles:
+        try:
+            O = ConvexPolytope.from_mesh((body.vertices, body.faces), grid=grid, name=body.name)
+        except InvalidMeshError as exc:
+            out.append((body, None, exc))
+            continue
+        out.append((body, CSpaceObstacle.build(O, robot, scene.reference_point, grid=grid), None))
+    return grid, robot, out

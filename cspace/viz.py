@@ -817,31 +817,22 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
     """
     import warnings
 
-    from .convex import ConvexPolytope, convex_minkowski_sum
     from .errors import InvalidMeshError
-    from .exact import Grid
+    from .obstacle import scene_obstacles
     from .superset import minkowski_superset
 
-    grid = Grid.for_extent(scene.extent())
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the scene already warned when it was loaded
-        robot = scene.robot_polytope(grid)
+        _, robot, bodies = scene_obstacles(scene)
     minus_r = robot.reflected(scene.reference_point)
     report: dict[str, str] = {}
-    for body in scene.obstacles:
+    for body, co, error in bodies:
         view.add_obstacle(body.name, body.vertices, body.faces)
         report[body.name] = "obstacle"
-        if not (cobstacles or superset):
-            continue
-        try:
-            O = ConvexPolytope.from_mesh((body.vertices, body.faces), grid=grid, name=body.name)
-        except InvalidMeshError as e:
-            O, why = None, str(e)
-        if O is not None and cobstacles:
-            co = convex_minkowski_sum(O, minus_r)
+        if co is not None and cobstacles:
             view.add_cobstacle(body.name, co.vertices, co.faces)
-            report[body.name] = f"C-obstacle (CVMS, {co.polytope.n_facets} facets)"
-        elif O is None and superset:
+            report[body.name] = f"C-obstacle (CVMS, {co.n_facets} facets)"
+        elif co is None and superset:
             try:
                 S = minkowski_superset((body.vertices, body.faces), minus_r)
             except InvalidMeshError as e:
@@ -849,8 +840,8 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
                 continue
             view.add_superset(body.name, S)
             report[body.name] = f"superset ({S.n_facets} facets; trimming not available yet)"
-        elif O is None:
-            report[body.name] = f"obstacle only (not convex: {why.split(': ', 1)[-1]})"
+        elif co is None:
+            report[body.name] = f"obstacle only (not convex: {str(error).split(': ', 1)[-1]})"
     view.add_robot("start", scene.robot.vertices, scene.robot.faces, scene.start,
                    reference=scene.reference_point)
     view.add_robot("goal", scene.robot.vertices, scene.robot.faces, scene.goal,
