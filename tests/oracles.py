@@ -9,7 +9,8 @@
 - :func:`membership_disagreements`: compare a membership answer with FCL's, ignoring points
   within a band of the C-obstacle boundary.
 
-Nothing here uses :mod:`cspace`; everything is float64.
+Everything is float64. The winding number and the ``fcl.Convex`` builder are
+:mod:`cspace.fcl_check`'s (one implementation, tested here against known answers).
 """
 
 from __future__ import annotations
@@ -19,150 +20,14 @@ from typing import NamedTuple
 import fcl
 import numpy as np
 
+from cspace.fcl_check import fcl_convex as _convex
+from cspace.fcl_check import winding_number
+
 __all__ = ["winding_number", "FclSolid", "FclClassification", "membership_disagreements"]
 
 
 # --------------------------------------------------------------------------------------
-# generalized winding number
-
-
-def _winding_block(tri, nv_src, idx, p, w) -> np.ndarray:
-    """Sum over the triangles of ``w * Omega / 2`` for the points ``p`` (k, 3); see below."""
-    (x0, y0, z0), (x1, y1, z1), (x2, y2, z2) = tri
-    vx, vy, vz = nv_src
-    px, py, pz = p[:, 0:1], p[:, 1:2], p[:, 2:3]
-    # Distances from each point to each vertex once, then gathered per triangle corner.
-    dx = vx[None, :] - px
-    dy = vy[None, :] - py
-    dz = vz[None, :] - pz
-    dx *= dx
-    dy *= dy
-    dx += dy
-    dz *= dz
-    dx += dz
-    nv = np.sqrt(dx, out=dx)
-    i0, i1, i2 = idx
-    na, nb, nc = np.take(nv, i0, axis=1), np.take(nv, i1, axis=1), np.take(nv, i2, axis=1)
-    ax, ay, az = x0 - px, y0 - py, z0 - pz
-    bx, by, bz = x1 - px, y1 - py, z1 - pz
-    cx, cy, cz = x2 - px, y2 - py, z2 - pz
-    # num = a . (b x c)
-    u = by * cz
-    u -= bz * cy
-    v = bz * cx
-    v -= bx * cz
-    t = bx * cy
-    t -= by * cx
-    num = ax * u
-    v *= ay
-    num += v
-    t *= az
-    num += t
-    # den = |a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|
-    den = na * nb
-    den *= nc
-    np.multiply(ax, bx, out=u)
-    u += ay * by
-    u += az * bz
-    u *= nc
-    den += u
-    np.multiply(ax, cx, out=u)
-    u += ay * cy
-    u += az * cz
-    u *= nb
-    den += u
-    np.multiply(bx, cx, out=u)
-    u += by * cy
-    u += bz * cz
-    u *= na
-    den += u
-    np.arctan2(num, den, out=num)  # = Omega / 2 for each (point, triangle)
-    return num @ w
-
-
-def winding_number(vertices, faces, points, *, weights=None, chunk: int = 1 << 12) -> np.ndarray:
-    """Generalized winding number of a triangle mesh at points.
-
-    ``w(p) = sum_t weights[t] * Omega_t(p) / (4 pi)`` with ``Omega_t`` the signed solid angle
-    of triangle ``t`` seen from ``p`` (Van Oosterom and Strackee 1983):
-    ``tan(Omega / 2) = a.(b x c) / (|a||b||c| + (a.b)|c| + (a.c)|b| + (b.c)|a|)`` with
-    ``a, b, c`` the corners relative to ``p``, evaluated with ``arctan2`` so ``Omega`` is in
-    ``(-2 pi, 2 pi]``.
-
-    Parameters
-    ----------
-    vertices : (n, 3) float
-    faces : (m, 3) int
-        Counter-clockwise seen from outside for a positive winding number inside.
-    points : (k, 3) float
-    weights : (m,) float, optional
-        Multiplier of each triangle's contribution (default 1): integer multiplicities of
-        superset facets, or 0.5 for a mesh listed twice.
-    chunk : int
-        Point x triangle pairs per block; triangles are split into blocks of at most
-        ``chunk`` too. About 20 float64 arrays of ``chunk`` entries are alive at once, so the
-        default 2**12 (~0.6 MB) stays in a core's L2 cache: measured here, 2**13 and more
-        ran 3x slower (cache misses) and 2**11 1.5x slower (numpy call overhead).
-
-    Returns
-    -------
-    w : (k,) float64
-        For a closed oriented mesh: 1 inside, 0 outside (an integer up to rounding, about
-        1e-14 for points well away from the surface), 1/2 on a face, other fractions on edges
-        and vertices. A point on a vertex contributes 0 for the triangles at that vertex.
-
-    Notes
-    -----
-    The corner vectors are differences ``v - p`` formed directly (not expanded into
-    ``v.v - 2 p.v + p.p``), so a point at distance ``d`` from a face of size ``L`` gets the
-    right sign of ``Omega`` while ``d * L**2`` exceeds about ``1e-16 * L**3`` plus the
-    rounding of the differences. Throughput: see ``tests/test_oracles.py``
-    (``test_winding_number_throughput``); about 2e7 point x triangle pairs per second on one
-    core here (numpy, no numba).
-    """
-    V = np.asarray(vertices, dtype=np.float64)
-    F = np.asarray(faces, dtype=np.int64)
-    P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-    if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3:
-        raise ValueError(f"expected (n, 3) vertices and (m, 3) faces, got {V.shape} and {F.shape}")
-    m = len(F)
-    w = np.ones(m) if weights is None else np.asarray(weights, dtype=np.float64).reshape(-1)
-    if len(w) != m:
-        raise ValueError(f"weights has {len(w)} entries for {m} faces")
-    out = np.zeros(len(P))
-    if m == 0 or len(P) == 0:
-        return out
-    # Centre the coordinates: smaller magnitudes, smaller rounding in the differences.
-    centre = (V.min(axis=0) + V.max(axis=0)) / 2
-    V = V - centre
-    P = P - centre
-    tb = max(1, min(m, int(chunk)))
-    for t0 in range(0, m, tb):
-        Ft = F[t0 : t0 + tb]
-        used, local = np.unique(Ft, return_inverse=True)
-        local = local.reshape(-1, 3)
-        Vu = V[used]
-        nv_src = tuple(np.ascontiguousarray(Vu[:, c]) for c in range(3))
-        tri = tuple(
-            tuple(np.ascontiguousarray(V[Ft[:, j], c])[None, :] for c in range(3)) for j in range(3)
-        )
-        idx = tuple(np.ascontiguousarray(local[:, j]) for j in range(3))
-        wt = np.ascontiguousarray(w[t0 : t0 + tb])
-        kp = max(1, int(chunk) // len(Ft))
-        for s in range(0, len(P), kp):
-            out[s : s + kp] += _winding_block(tri, nv_src, idx, P[s : s + kp], wt)
-    return out / (2 * np.pi)
-
-
-# --------------------------------------------------------------------------------------
 # FCL with solid semantics
-
-
-def _convex(vertices, faces) -> fcl.Convex:
-    V = np.ascontiguousarray(vertices, dtype=np.float64)
-    F = np.asarray(faces, dtype=np.int64)
-    flat = np.hstack([np.full((len(F), 1), 3, dtype=np.int64), F]).ravel()
-    return fcl.Convex(V, len(F), flat)
 
 
 class FclClassification(NamedTuple):
