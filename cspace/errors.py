@@ -19,6 +19,7 @@ __all__ = [
     "GridRangeError",
     "ExactnessError",
     "SceneError",
+    "BuildError",
 ]
 
 
@@ -69,3 +70,7 @@ class ExactnessError(CspaceError, RuntimeError):
 
 class SceneError(CspaceError, ValueError):
     """A scene file is malformed or describes an impossible problem; the message says where."""
+
+
+class BuildError(CspaceError, RuntimeError):
+    """A C-obstacle of a scene body could not be built; the message names the body and why."""

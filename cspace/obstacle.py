@@ -649,25 +649,29 @@ class CSpace:
         self.bounds = np.asarray(bounds, dtype=np.float64).reshape(2, 3)
 
     @classmethod
-    def from_scene(cls, scene, *, grid: Grid | None = None) -> "CSpace":
-        """C-obstacles of every obstacle of a scene whose bodies are all convex.
+    def from_scene(cls, scene, *, grid: Grid | None = None, cache=None,
+                   progress=None) -> "CSpace":
+        """The C-obstacles a scene needs, built: :func:`cspace.model.model_scene` decides per
+        body (split, deduplicated; convex, solid, surface or dropped) and builds each.
+
+        Parameters
+        ----------
+        scene : Scene
+        grid : Grid, optional
+            Default ``Grid.for_extent(scene.extent())``.
+        cache : COCache, path, True, or None
+            Disk cache of C-obstacles (:mod:`cspace.cache`); None: none.
+        progress : callable, optional
+            ``progress(fraction, message)``, see :func:`cspace.model.model_scene`.
 
         Raises
         ------
-        NotImplementedError
-            If an obstacle body is not a closed convex mesh: non-convex C-obstacles need
-            ``cspace.minkowski_sum`` (issue #4).
+        BuildError
+            A body's C-obstacle could not be built; the message names the body and why.
         """
-        obs = []
-        for body, co, error in scene_obstacles(scene, grid=grid)[2]:
-            if isinstance(error, NotConvexError):
-                raise NotImplementedError(
-                    f"obstacle {body.name!r} is not convex ({error}); {_NON_CONVEX}"
-                ) from None
-            if error is not None:
-                raise error
-            obs.append(co)
-        return cls(obs, bounds=scene.bounds, name=scene.name)
+        from .model import model_scene
+
+        return model_scene(scene, grid=grid, cache=cache, progress=progress).cspace()
 
     def __len__(self) -> int:
         return len(self.obstacles)
@@ -726,7 +730,10 @@ class CSpace:
 
 
 def scene_obstacles(scene, *, grid: Grid | None = None):
-    """The C-obstacle of each obstacle body of a scene, on one grid, or why there is none.
+    """The C-obstacle of each modelled obstacle body of a scene, or why there is none.
+
+    Bodies are as :func:`cspace.model.model_scene` models them (split into parts,
+    deduplicated); every kept body is built.
 
     Parameters
     ----------
@@ -739,18 +746,15 @@ def scene_obstacles(scene, *, grid: Grid | None = None):
     grid : Grid
     robot : ConvexPolytope
         The robot's hull on ``grid`` (in its frame; ``scene.reference_point`` not applied).
-    bodies : list of (Body, CSpaceObstacle or None, InvalidMeshError or None)
-        For a closed convex body its C-obstacle; otherwise None and the error that says why
-        (``NotConvexError`` for a non-convex body, whose C-obstacle needs issue #4).
+    bodies : list of (BodyModel, CSpaceObstacle or None, str or None)
+        Each body (``name``, ``vertices``, ``faces``, ``kind``, ``reason``) with its
+        C-obstacle, or None and why (dropped: its reason; a failed build: the error).
     """
-    grid = grid or Grid.for_extent(scene.extent())
-    robot = scene.robot_polytope(grid)
+    from .model import model_scene
+
+    m = model_scene(scene, grid=grid)
     out = []
-    for body in scene.obstacles:
-        try:
-            O = ConvexPolytope.from_mesh((body.vertices, body.faces), grid=grid, name=body.name)
-        except InvalidMeshError as exc:
-            out.append((body, None, exc))
-            continue
-        out.append((body, CSpaceObstacle.build(O, robot, scene.reference_point, grid=grid), None))
-    return grid, robot, out
+    for b in m.bodies:
+        why = b.error or (b.reason if b.kind == "dropped" else None)
+        out.append((b, b.co, why))
+    return m.grid, m.robot, out

@@ -1,0 +1,422 @@
+"""Model only what a scene needs: per obstacle body, what to build and why.
+
+:func:`model_scene` turns a :class:`~cspace.scene.Scene` into a :class:`SceneModel`. Each
+obstacle body (a mesh as its file gives it) goes through these steps, all exact on the
+scene grid (``Grid.for_extent(scene.extent())``):
+
+1. **Weld** vertices by exact snapped position; triangles whose corners weld to fewer than
+   three points are dropped (they have no area), and counted.
+2. **Duplicates**: triangles on the same three welded vertices are one surface patch. The
+   first (in file order) is kept and later copies are dropped, counted as *double-sided*
+   (opposite winding: the two sides of a zero-thickness sheet) or *repeated* (same
+   winding). A sheet modelled with both sides becomes the single open surface it is; a
+   closed surface modelled double-sided becomes closed.
+3. **Split** into connected parts (triangles sharing an edge). Closed parts (no boundary
+   edge) whose bounding box lies inside another closed part's are kept with it (it may be a
+   cavity of that solid); every other part is its own body, named ``<body>#<k>``.
+4. **Drop** a part whose C-obstacle cannot meet the planning bounds: its bounding box is
+   exactly ``[lo(O) + lo(c - R), hi(O) + hi(c - R)]`` in grid integers, compared exactly
+   with the bounds, before anything is built.
+5. **Classify**: ``convex`` (a closed convex mesh: CVMS), ``solid`` (closed, oriented
+   2-manifold, not convex: NCC-CVMS through :meth:`CSpaceObstacle.build`), ``surface``
+   (open, or closed but not a valid solid, e.g. non-manifold: the union of the pieces
+   ``t ⊕ (c - R)`` of its triangles, :class:`~cspace.surface.SurfaceObstacle`; triangles
+   whose piece cannot meet the bounds are left out), or ``dropped``. Each decision carries a
+   human-readable reason.
+6. **Build** (``build=True``) each kept body's C-obstacle, through the disk cache
+   (:mod:`cspace.cache`) when one is given.
+
+Surface semantics equals FCL's mesh collision: a robot wholly inside an unclosed surface
+meets nothing.
+"""
+
+from __future__ import annotations
+
+import time
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .cache import COCache, co_key, pack_polytopes, unpack_polytopes
+from .convex import ConvexPolytope
+from .errors import BuildError, InvalidMeshError, NotConvexError
+from .exact import Grid
+from .mesh import ClosedMesh
+from .obstacle import CSpace, CSpaceObstacle
+from .surface import SurfaceMesh, SurfaceObstacle
+
+__all__ = ["KINDS", "BodyModel", "SceneModel", "model_scene"]
+
+KINDS = ("convex", "solid", "surface", "dropped")
+
+
+@dataclass(eq=False)
+class BodyModel:
+    """One obstacle body of a scene after modelling.
+
+    Attributes
+    ----------
+    name : str
+        ``<scene body>`` or ``<scene body>#<k>`` when the scene body was split.
+    source : str
+        The scene body's name.
+    kind : {'convex', 'solid', 'surface', 'dropped'}
+    reason : str
+        Why this kind, in words.
+    vertices : (n, 3) float64
+        Welded, snapped vertices (world frame).
+    faces : (m, 3) int64
+        Deduplicated triangles of this body.
+    pieces : int
+        Surface: triangles whose piece can meet the bounds (built); else 0.
+    co : CSpaceObstacle or None
+        The built C-obstacle (None if dropped, not built, or failed).
+    seconds : float
+        Build (or cache load) time.
+    cache : {'hit', 'miss', 'off', ''}
+        '' when not built.
+    error : str
+        Why the build failed ('' if it did not).
+    """
+
+    name: str
+    source: str
+    kind: str
+    reason: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    pieces: int = 0
+    co: CSpaceObstacle | None = None
+    seconds: float = 0.0
+    cache: str = ""
+    error: str = ""
+    _ints: np.ndarray | None = field(default=None, repr=False)
+    _solid: object = field(default=None, repr=False)
+    _keep: np.ndarray | None = field(default=None, repr=False)
+
+    def line(self) -> str:
+        """One report line: name, kind, sizes, reason, build time and cache."""
+        size = f"{len(self.faces)} triangles"
+        if self.co is not None:
+            size += f" -> CO {self.co.n_facets} facets"
+            if self.kind == "surface":
+                size += f" in {self.pieces} pieces"
+        built = ""
+        if self.cache:
+            built = f"; built in {self.seconds:.3f} s (cache {self.cache})"
+        if self.error:
+            built = f"; BUILD FAILED: {self.error}"
+        return f"{self.name}: {self.kind} ({size}): {self.reason}{built}"
+
+
+@dataclass(eq=False)
+class SceneModel:
+    """What :func:`model_scene` decided and built for a scene.
+
+    Attributes
+    ----------
+    scene : Scene
+    grid : Grid
+    robot : ConvexPolytope
+        The robot's hull on ``grid`` (its frame).
+    bodies : list of BodyModel
+    sources : dict
+        Per scene body: ``triangles`` (input), ``collapsed``, ``double_sided``, ``repeated``
+        (dropped in steps 1-2) and ``parts`` (after splitting).
+    seconds : dict
+        ``model`` (steps 1-5) and ``build`` (step 6) wall seconds.
+    """
+
+    scene: object
+    grid: Grid
+    robot: ConvexPolytope
+    bodies: list
+    sources: dict
+    seconds: dict
+
+    def of_kind(self, kind: str) -> list[BodyModel]:
+        return [b for b in self.bodies if b.kind == kind]
+
+    def counts(self) -> dict:
+        """Number of bodies of each kind."""
+        return {k: len(self.of_kind(k)) for k in KINDS}
+
+    def cspace(self) -> CSpace:
+        """The :class:`CSpace` of the built bodies (dropped ones cannot matter).
+
+        Raises
+        ------
+        BuildError
+            If the model was made with ``build=False`` or a body's build failed.
+        """
+        failed = [b for b in self.bodies if b.error]
+        if failed:
+            raise BuildError(f"scene {self.scene.name!r}: " + "; ".join(
+                f"cannot build the C-obstacle of body {b.name!r} ({b.kind}: {b.reason}): "
+                f"{b.error}" for b in failed))
+        kept = [b for b in self.bodies if b.kind != "dropped"]
+        missing = [b.name for b in kept if b.co is None]
+        if missing:
+            raise BuildError(f"scene {self.scene.name!r}: bodies {missing} were modelled "
+                             "without building (build=False)")
+        return CSpace([b.co for b in kept], bounds=self.scene.bounds, name=self.scene.name)
+
+    def explain(self) -> str:
+        """A human-readable report: per scene body and per modelled body."""
+        c = self.counts()
+        lines = [f"scene {self.scene.name!r}: {len(self.scene.obstacles)} obstacle bodies -> "
+                 f"{len(self.bodies)} modelled: " + ", ".join(f"{c[k]} {k}" for k in KINDS),
+                 f"robot: {self.robot.n_facets} facets, {len(self.robot.ints)} vertices (hull); "
+                 f"grid step 2**{self.grid.exponent}; bounds {self.scene.bounds.tolist()}"]
+        for name, s in self.sources.items():
+            extra = [f"{s[k]} {k.replace('_', '-')}" for k in ("collapsed", "double_sided",
+                                                                 "repeated") if s[k]]
+            lines.append(f"  {name}: {s['triangles']} triangles, {s['parts']} parts"
+                         + (f"; dropped triangles: {', '.join(extra)}" if extra else ""))
+        for b in self.bodies:
+            lines.append("    " + b.line())
+        lines.append(f"modelling {self.seconds['model']:.3f} s, building "
+                     f"{self.seconds['build']:.3f} s")
+        return "\n".join(lines)
+
+
+# --------------------------------------------------------------------------------------
+# steps 1-3: weld, deduplicate, split
+
+
+def _parity(F: np.ndarray) -> np.ndarray:
+    """Permutation parity of each triple (equal parity on the same vertices: same winding)."""
+    inv = (F[:, 0] > F[:, 1]).astype(np.int8) + (F[:, 0] > F[:, 2]) + (F[:, 1] > F[:, 2])
+    return inv % 2
+
+
+def _weld_dedupe(body, grid: Grid):
+    """Welded grid ints, deduplicated faces and the counts of steps 1-2."""
+    ints, inverse = np.unique(grid.snap(body.vertices), axis=0, return_inverse=True)
+    F = inverse.reshape(-1)[body.faces]
+    collapsed = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
+    F = F[~collapsed]
+    _, first, which = np.unique(np.sort(F, axis=1), axis=0, return_index=True,
+                                return_inverse=True)
+    which = which.reshape(-1)
+    keep = np.zeros(len(F), dtype=bool)
+    keep[first] = True
+    same = _parity(F) == _parity(F[first[which]])
+    counts = {"triangles": len(body.faces), "collapsed": int(collapsed.sum()),
+              "double_sided": int((~keep & ~same).sum()), "repeated": int((~keep & same).sum())}
+    return ints, F[np.sort(first)], counts
+
+
+def _edges(F: np.ndarray, n: int):
+    """Undirected edge key of each half-edge ``3 * face + corner``, and its use count."""
+    a, b = F.reshape(-1), F[:, [1, 2, 0]].reshape(-1)
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    _, inv, count = np.unique(key, return_inverse=True, return_counts=True)
+    return inv.reshape(-1), count
+
+
+def _parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
+    """Face index arrays of the bodies of step 3, in order of their first face."""
+    m = len(F)
+    edge, count = _edges(F, len(ints))
+    face = np.repeat(np.arange(m), 3)
+    # Faces sharing an edge: link each half-edge's face to the first face using that edge.
+    first = np.full(len(count), m, dtype=np.int64)
+    np.minimum.at(first, edge, face)
+    g = coo_matrix((np.ones(3 * m), (face, first[edge])), shape=(m, m))
+    ncomp, label = connected_components(g, directed=False)
+    boundary = np.zeros(ncomp, dtype=bool)
+    np.logical_or.at(boundary, label[face], count[edge] == 1)
+    # Closed components nested in another closed one's box stay with it (possible cavity).
+    lo = np.full((ncomp, 3), np.iinfo(np.int64).max)
+    hi = np.full((ncomp, 3), np.iinfo(np.int64).min)
+    corners = ints[F]  # (m, 3, 3)
+    np.minimum.at(lo, label, corners.min(axis=1))
+    np.maximum.at(hi, label, corners.max(axis=1))
+    closed = np.nonzero(~boundary)[0]
+    inside = ((lo[closed, None] <= lo[None, closed]) & (hi[None, closed] <= hi[closed, None])).all(2)
+    np.fill_diagonal(inside, False)
+    i, j = np.nonzero(inside)
+    _, group = connected_components(
+        coo_matrix((np.ones(len(i)), (closed[i], closed[j])), shape=(ncomp, ncomp)),
+        directed=False)
+    group = group[label]
+    firsts = np.full(group.max() + 1, m)
+    np.minimum.at(firsts, group, np.arange(m))
+    return [np.nonzero(group == g)[0] for g in np.argsort(firsts) if firsts[g] < m]
+
+
+# --------------------------------------------------------------------------------------
+# steps 4-5: drop and classify
+
+
+def _meets(lo: np.ndarray, hi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> np.ndarray:
+    """Exact: do the boxes ``[lo, hi]`` (grid ints, (k, 3)) meet ``[blo, bhi]`` (grid units)?"""
+    return ((lo.astype(np.float64) <= bhi) & (blo <= hi.astype(np.float64))).all(axis=-1)
+
+
+def _classify(name, source, ints, F, minus_r: ConvexPolytope, bounds_g, grid) -> BodyModel:
+    used, local = np.unique(F, return_inverse=True)
+    P, F = ints[used], local.reshape(-1, 3)
+    V = grid.to_float(P)
+    r_lo, r_hi = minus_r.ints.min(axis=0), minus_r.ints.max(axis=0)
+    lo, hi = P.min(axis=0) + r_lo, P.max(axis=0) + r_hi
+    body = BodyModel(name, source, "dropped", "", V, F, _ints=P)
+    if not _meets(lo, hi, *bounds_g):
+        body.reason = (f"its C-obstacle's bounding box {grid.to_float(np.stack([lo, hi])).tolist()} "
+                       "misses the planning bounds: the robot can never touch it")
+        return body
+    edge, count = _edges(F, len(P))
+    n_boundary = int((count == 1).sum())
+    why_surface = ""
+    if n_boundary:
+        why_surface = f"open: {n_boundary} boundary edges"
+    else:
+        try:
+            solid = ClosedMesh.from_arrays(V, F, grid=grid, name=name)
+        except InvalidMeshError as exc:
+            why_surface = (f"closed but not a valid solid ({type(exc).__name__}: "
+                           f"{str(exc).split(': ', 1)[-1]})")
+        else:
+            shells = int(solid.components.max()) + 1
+            chi = len(solid.ints) - len(F) * 3 // 2 + len(F)
+            try:
+                poly = ConvexPolytope.from_mesh(solid)
+            except NotConvexError:
+                body.kind, body._solid = "solid", solid
+                genus = f", genus {1 - chi // 2}" if shells == 1 else ""
+                body.reason = (f"closed 2-manifold, not convex ({shells} shell"
+                               f"{'s' if shells > 1 else ''}, Euler characteristic {chi}{genus}): "
+                               "NCC-CVMS")
+                return body
+            body.kind, body._solid = "convex", poly
+            body.reason = f"closed and convex ({poly.n_facets} facets): CVMS"
+            return body
+    # Surface semantics; leave out triangles whose piece cannot meet the bounds.
+    tri = P[F]
+    keep = _meets(tri.min(axis=1) + r_lo, tri.max(axis=1) + r_hi, *bounds_g)
+    body.kind, body._keep, body.pieces = "surface", keep, int(keep.sum())
+    body.reason = (f"{why_surface}: surface semantics, the union of triangle ⊕ (-R) over "
+                   f"{int(keep.sum())} triangles" + (f" ({int((~keep).sum())} more cannot "
+                                                     "reach the bounds)" if (~keep).any() else ""))
+    return body
+
+
+# --------------------------------------------------------------------------------------
+# step 6: build, through the cache
+
+
+def _to_arrays(co) -> dict:
+    if co.kind == "convex":
+        return pack_polytopes([co.polytope, co.obstacle], "p_")
+    if co.kind == "surface":
+        return pack_polytopes(co.pieces, "p_")
+    return {"vertices": np.asarray(co.vertices), "faces": np.asarray(co.faces)}
+
+
+def _from_arrays(a: dict, body: BodyModel, robot, c, grid):
+    if body.kind == "convex":
+        co, obs = unpack_polytopes(a, "p_", grid)
+        return CSpaceObstacle(co, obstacle=obs, robot=robot, reference_point=c)
+    if body.kind == "surface":
+        F = body.faces[body._keep]
+        return SurfaceObstacle(unpack_polytopes(a, "p_", grid),
+                               obstacle=SurfaceMesh(body.vertices, F, body.name), robot=robot,
+                               reference_point=c, grid=grid)
+    return CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
+                                    robot=robot, reference_point=c, grid=grid)
+
+
+def _build(body: BodyModel, robot, c, grid, progress):
+    if body.kind == "surface":
+        F = body.faces[body._keep]
+        return SurfaceObstacle.build((body.vertices, F), robot, c, grid=grid, name=body.name,
+                                     progress=progress)
+    return CSpaceObstacle.build(body._solid, robot, c, grid=grid)
+
+
+def _key(body: BodyModel, robot, c_ints, grid) -> str:
+    faces = body.faces[body._keep] if body.kind == "surface" else body.faces
+    return co_key(body.kind, grid, body._ints, faces, robot.ints, c_ints)
+
+
+def model_scene(scene, *, build: bool = True, cache=None, progress=None,
+                grid: Grid | None = None) -> SceneModel:
+    """Decide, per obstacle body, what to build and why; build it.
+
+    Parameters
+    ----------
+    scene : Scene
+    build : bool, default True
+        Build the C-obstacles (else only steps 1-5: cheap, for reports).
+    cache : COCache, path, True, or None/False
+        A :class:`~cspace.cache.COCache` (or its folder; True: the default folder,
+        ``$CSPACE_CACHE`` or ``~/.cache/cspace``); None or False: no disk cache.
+    progress : callable, optional
+        ``progress(fraction, message)`` with the overall fraction in ``[0, 1]``: once per
+        body and during long surface builds.
+    grid : Grid, optional
+        Default ``Grid.for_extent(scene.extent())``.
+
+    Returns
+    -------
+    SceneModel
+        Build failures are recorded per body (``body.error``) and raised as
+        :class:`~cspace.errors.BuildError` by :meth:`SceneModel.cspace`.
+    """
+    t0 = time.perf_counter()
+    grid = grid or Grid.for_extent(scene.extent())
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the scene warned about its robot when loaded
+        robot = scene.robot_polytope(grid)
+    c = np.asarray(scene.reference_point, dtype=np.float64)
+    c_ints = grid.snap(c)
+    minus_r = robot.reflected(c)
+    bounds_g = np.ldexp(np.asarray(scene.bounds, dtype=np.float64), -grid.exponent)
+    bodies, sources = [], {}
+    for sb in scene.obstacles:
+        ints, F, counts = _weld_dedupe(sb, grid)
+        parts = _parts(ints, F) if len(F) else []
+        counts["parts"] = len(parts)
+        sources[sb.name] = counts
+        for k, faces in enumerate(parts):
+            name = sb.name if len(parts) == 1 else f"{sb.name}#{k}"
+            bodies.append(_classify(name, sb.name, ints, F[faces], minus_r, bounds_g, grid))
+    t1 = time.perf_counter()
+    if isinstance(cache, COCache):
+        store = cache
+    elif cache is None or cache is False:
+        store = None
+    else:
+        store = COCache(None if cache is True else cache)
+    if build:
+        todo = [b for b in bodies if b.kind != "dropped"]
+        c_snapped = grid.to_float(c_ints)
+        for i, b in enumerate(todo):
+            def sub(f, i=i, b=b):
+                if progress is not None:
+                    progress((i + f) / len(todo), f"{b.name}: {b.kind} {f:.0%}")
+            sub(0.0)
+            t = time.perf_counter()
+            try:
+                key = _key(b, robot, c_ints, grid) if store is not None else None
+                arrays = store.load(key) if store is not None else None
+                if arrays is not None:
+                    b.co, b.cache = _from_arrays(arrays, b, robot, c_snapped, grid), "hit"
+                else:
+                    b.co = _build(b, robot, c, grid, sub if b.kind == "surface" else None)
+                    b.cache = "off" if store is None else "miss"
+                    if store is not None:
+                        store.store(key, _to_arrays(b.co))
+            except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
+                b.error = f"{type(exc).__name__}: {exc}"
+                b.cache = "off" if store is None else "miss"
+            b.seconds = time.perf_counter() - t
+        if progress is not None:
+            progress(1.0, "done")
+    t2 = time.perf_counter()
+    return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
+                      seconds={"model": t1 - t0, "build": t2 - t1})
