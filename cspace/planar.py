@@ -687,7 +687,7 @@ def _polygons(polygons, weights):
     return polys, weights
 
 
-def polygon_coverage(polygons, weights=None) -> Coverage:
+def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
     """Net signed coverage of oriented closed polygons in one plane.
 
     Parameters
@@ -699,6 +699,9 @@ def polygon_coverage(polygons, weights=None) -> Coverage:
         number); repeated consecutive vertices are ignored.
     weights : sequence of int, optional
         Integer weight per polygon (default 1).
+    cuts : sequence of (p, q), optional
+        Extra segments (zero-length ones are points) that split faces without changing any
+        coverage; their edge labels are ``(-1, k)`` for cut ``k``.
 
     Returns
     -------
@@ -720,6 +723,9 @@ def polygon_coverage(polygons, weights=None) -> Coverage:
             segs.append((a, b))
             labels.append((i, j))
             dirs[(i, j)] = _sub(b, a)
+    for k, (a, b) in enumerate(cuts):
+        segs.append((a, b))
+        labels.append((-1, k))
     arr = Arrangement2D(segs, labels)
     V = arr.vertices
     nf = len(arr.faces)
@@ -728,7 +734,8 @@ def polygon_coverage(polygons, weights=None) -> Coverage:
         d = _sub(V[v], V[u])
         delta = 0
         for lab in arr.edge_labels[k]:
-            delta += weights[lab[0]] * (1 if _dot(dirs[lab], d) > 0 else -1)
+            if lab[0] >= 0:
+                delta += weights[lab[0]] * (1 if _dot(dirs[lab], d) > 0 else -1)
         left, right = arr.edge_faces[k]
         left, right = int(left), int(right)
         adj.setdefault(right, []).append((left, delta))

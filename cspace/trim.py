@@ -9,15 +9,23 @@ return a :class:`SumPolyhedron`.
 from __future__ import annotations
 
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
+from functools import cmp_to_key
+from math import gcd
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 
+from .arrangement import POINT, SEGMENT, TriTriResult, candidate_pairs, endpoint_coordinates, intersect_pairs
 from .convex import ConvexPolytope, convex_minkowski_sum
-from .errors import NotConvexError
+from .errors import ExactnessError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
+from .planar import _hom, polygon_coverage, project_homogeneous, triangulate_face, winding_number
+from .superset import Superset, minkowski_superset
 
 __all__ = ["SumPolyhedron", "minkowski_sum"]
 
@@ -182,5 +190,775 @@ def minkowski_sum(A, B, *, progress=None) -> SumPolyhedron:
     return _trim(as_mesh(A, name=getattr(A, "name", None) or "A"), Bc, t0, progress)
 
 
+# --------------------------------------------------------------------------------------------
+# NCC-CVMS trimming
+#
+# Sub-facets. Superset triangles are grouped by exact supporting plane. Each plane gets ONE
+# exact 2D arrangement (cspace.planar) of its triangles' edges and of the segments where the
+# other planes' triangles cut them (steps 4–5, cspace.arrangement); every face gets its net
+# coverage (signed multiplicity), so coplanar conjoint facets merge and opposite conjoint ones
+# cancel (step 2) inside the same arrangement (step 6). Faces of non-zero coverage are the
+# sub-facets; vertices are canonical homogeneous points, so sub-facets of different planes
+# meet along identical edges.
+#
+# Traversal. Around an edge, the half-planes of its sub-facets are ordered by angle (exact
+# integer triple products); from one side of a sub-facet, rotating through the free wedge
+# reaches the first half-plane, and the side of it facing that wedge. These pairings group
+# sub-facet sides into shells: the boundary components of the cells of the arrangement
+# (the closeness/two-manifoldness traversal of the paper, with the plane-angle rule, applied
+# to both sides of every sub-facet; it handles non-manifold edges because each wedge is
+# followed separately).
+#
+# Membership. Each shell bounds one cell. The unbounded cell is found exactly (the supporting
+# plane of the sum in the direction of a facet normal of B). The winding number w of the
+# superset is propagated across sub-facets (it jumps by the coverage). w != 0 means inside:
+# w is the Euler characteristic of A ∩ (q - B) (tests/test_superset.py), which is 0 for the
+# empty set. w == 0 on a bounded cell is either a polyhedral hole or a "ring" cell inside the
+# sum; these cells are decided by an exact test at a symbolic point p + eps * v next to a
+# sub-facet: q is in the sum iff q - B meets the surface of A (with w == 0, q - B inside A
+# would give w == 1), i.e. iff q lies in a convex piece t ⊕ B, decided by separating axes.
+# A sub-facet is a facet of the sum exactly when its two sides have different membership.
+# --------------------------------------------------------------------------------------------
+
+
 def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress) -> SumPolyhedron:
-    raise NotImplementedError("NCC-CVMS trimming is being wired (issue #4)")
+    stats: dict = {}
+    report = progress or (lambda stage, fraction: None)
+
+    def lap(name: str, since: float) -> float:
+        now = time.perf_counter()
+        stats[name] = now - since
+        return now
+
+    t = time.perf_counter()
+    S = minkowski_superset(A, B)
+    A, B = _common_operands(A, B, S.grid)
+    t = lap("superset", t)
+    report("superset", 1.0)
+    stats["superset_facets"] = S.n_facets
+
+    planes = _plane_groups(S)
+    t = lap("planes", t)
+    stats["superset_triangles"] = len(planes.faces)
+    stats["planes"] = len(planes.keys)
+
+    cuts = _cuts(S.ints, planes)
+    t = lap("intersections", t)
+    stats["candidate_pairs"] = cuts.n_pairs
+    stats["cut_pairs"] = cuts.n_cut
+
+    cx = _complex(S.ints, planes, cuts, report)
+    t = lap("arrangements", t)
+    stats["subfacets"] = len(cx.face_plane)
+
+    shells = _shells(cx, planes)
+    t = lap("traversal", t)
+    stats["shells"] = int(shells.n)
+
+    inside, n_tested, anchor = _classify(cx, shells, planes, S, A, B)
+    t = lap("membership", t)
+    stats["membership_tests"] = n_tested
+
+    out = _output(cx, shells, inside, anchor, planes, S)
+    lap("output", t)
+    stats["total"] = time.perf_counter() - t0
+    report("done", 1.0)
+    return _result(out, S, stats)
+
+
+def _common_operands(A: ClosedMesh, B: ConvexPolytope, grid: Grid):
+    if A.grid != grid:
+        A = A.on_grid(grid)
+    if B.grid != grid:
+        B = B.on_grid(grid)
+    return A, B
+
+
+@dataclass
+class _Planes:
+    """Superset triangles grouped by exact supporting plane.
+
+    ``keys[p] = (n0, n1, n2, d)``: primitive normal with its first non-zero component positive
+    and offset ``d = n · x`` (Python ints, grid units). ``sign[t]`` is +1 when triangle ``t``
+    turns counter-clockwise around ``n`` (its normal is a positive multiple of ``n``).
+    ``axis[p]`` is the coordinate dropped to project plane ``p`` (largest ``|n_i|``) and
+    ``sigma[p] = sign(n[axis])``: counter-clockwise in the projection is the orientation of
+    ``sigma * n``.
+    """
+
+    ints: np.ndarray
+    faces: np.ndarray
+    facet: np.ndarray
+    weight: np.ndarray
+    plane: np.ndarray
+    sign: np.ndarray
+    keys: list
+    axis: np.ndarray
+    sigma: np.ndarray
+    members: list  # triangles of each plane
+
+    def normal(self, p: int) -> tuple[int, int, int]:
+        """``sigma * n``: the orientation counter-clockwise projected faces have."""
+        s = int(self.sigma[p])
+        n = self.keys[p]
+        return (s * n[0], s * n[1], s * n[2])
+
+
+def _plane_groups(S: Superset) -> _Planes:
+    faces, facet, weight = S.triangles()
+    P = S.ints[faces]
+    N = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])  # |k| < 2**29: below 2**61
+    keep = (weight > 0) & np.any(N != 0, axis=1)
+    faces, facet, weight, N, P = faces[keep], facet[keep], weight[keep], N[keep], P[keep]
+    g = np.gcd.reduce(np.abs(N), axis=1)
+    n = N // g[:, None]
+    first = np.where(n[:, 0] != 0, n[:, 0], np.where(n[:, 1] != 0, n[:, 1], n[:, 2]))
+    sign = np.sign(first).astype(np.int8)
+    n = n * sign[:, None]
+    no, ao = n.astype(object), P[:, 0].astype(object)
+    d = no[:, 0] * ao[:, 0] + no[:, 1] * ao[:, 1] + no[:, 2] * ao[:, 2]
+    index: dict = {}
+    plane = np.empty(len(faces), dtype=np.int64)
+    for k, key in enumerate(zip(n[:, 0].tolist(), n[:, 1].tolist(), n[:, 2].tolist(), d.tolist())):
+        plane[k] = index.setdefault(key, len(index))
+    keys = list(index)
+    kn = np.array([k[:3] for k in keys], dtype=np.int64).reshape(-1, 3)
+    axis = np.argmax(np.abs(kn), axis=1)
+    sigma = np.sign(kn[np.arange(len(kn)), axis]).astype(np.int8)
+    order = np.argsort(plane, kind="stable")
+    bounds = np.searchsorted(plane[order], np.arange(len(keys) + 1))
+    members = [order[bounds[p]: bounds[p + 1]] for p in range(len(keys))]
+    return _Planes(S.ints, faces, facet, weight, plane, sign, keys, axis, sigma, members)
+
+
+@dataclass
+class _Cuts:
+    """Exact pieces where triangles of different planes meet (steps 4–5).
+
+    ``segments[p]``: list of ``(X4, Y4)`` homogeneous 3D endpoints (equal for points) of the
+    intersections lying on plane ``p``.
+    """
+
+    segments: list
+    n_pairs: int
+    n_cut: int
+
+
+def _cuts(ints: np.ndarray, planes: _Planes) -> _Cuts:
+    pairs = candidate_pairs(ints, planes.faces)
+    pairs = pairs[planes.plane[pairs[:, 0]] != planes.plane[pairs[:, 1]]]
+    res = intersect_pairs(ints, planes.faces, pairs)
+    hit = (res.cls == SEGMENT) | (res.cls == POINT)
+    segments: list = [[] for _ in planes.keys]
+    if hit.any():
+        sub = TriTriResult(
+            pairs=res.pairs[hit], cls=res.cls[hit], kind=res.kind[hit], u=res.u[hit],
+            v=res.v[hit], plane=res.plane[hit],
+        )
+        ex, _ = endpoint_coordinates(ints, planes.faces, sub)
+        pl = planes.plane[sub.pairs]
+        for (pa, pb), (x, y) in zip(pl.tolist(), ex.tolist()):
+            segments[pa].append((x, y))
+            segments[pb].append((x, y))
+    return _Cuts(segments, len(pairs), int(hit.sum()))
+
+
+@dataclass
+class _Complex:
+    """The sub-facets (faces of non-zero coverage of the plane arrangements) and their edges.
+
+    ``points[i]``: canonical ``(X, Y, Z, W)`` (Python ints, ``W > 0``, primitive) of global
+    vertex ``i`` in grid units. Sub-facet ``f`` is face ``face_local[f]`` of the arrangement of
+    plane ``face_plane[f]``, with net coverage ``face_cov[f]`` counted along
+    ``planes.normal(plane)``. Incidence ``k``: sub-facet ``inc_face[k]`` has a boundary
+    half-edge on edge ``inc_edge[k]`` (``edges[e] = (u, v)``, ``u < v``), running ``u -> v``
+    when ``inc_sign[k] = +1``; the sub-facet lies on its left seen from ``planes.normal``.
+    """
+
+    points: list
+    edges: np.ndarray
+    face_plane: np.ndarray
+    face_local: np.ndarray
+    face_cov: np.ndarray
+    inc_face: np.ndarray
+    inc_edge: np.ndarray
+    inc_sign: np.ndarray
+    arrangements: list
+    global_ids: list
+    face_tri: list  # (superset triangle, ccw global ids) for a lone uncut triangle, else None
+
+
+def _lift(H, key, ax: int) -> tuple:
+    """Canonical homogeneous 3D point of the projected point ``H = (x, y, w)`` of plane ``key``."""
+    x, y, w = H
+    n0, n1, n2, d = key
+    n = (n0, n1, n2)
+    a, b = (ax + 1) % 3, (ax + 2) % 3
+    P = [0, 0, 0]
+    P[a], P[b] = x * n[ax], y * n[ax]
+    P[ax] = d * w - n[a] * x - n[b] * y
+    W = w * n[ax]
+    if W < 0:
+        P, W = [-c for c in P], -W
+    g = gcd(gcd(P[0], P[1]), gcd(P[2], W))
+    return (P[0] // g, P[1] // g, P[2] // g, W // g)
+
+
+def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex:
+    vid: dict = {}
+    eid: dict = {}
+    face_plane, face_local, face_cov = [], [], []
+    inc_face, inc_edge, inc_sign = [], [], []
+    arrangements, global_ids = [], []
+    F = planes.faces
+    n_planes = len(planes.keys)
+    face_tri = []
+    for p in range(n_planes):
+        ax = int(planes.axis[p])
+        a, b = (ax + 1) % 3, (ax + 2) % 3
+        tris = planes.members[p]
+        if len(tris) == 1 and not cuts.segments[p]:
+            # A lone uncut triangle is its own sub-facet (no arrangement needed).
+            t = int(tris[0])
+            ccw = int(planes.sign[t]) * int(planes.sigma[p])
+            corners = F[t] if ccw > 0 else F[t][::-1]
+            g = [vid.setdefault((*ints[c].tolist(), 1), len(vid)) for c in corners.tolist()]
+            fid = len(face_plane)
+            face_plane.append(p)
+            face_local.append(-1)
+            face_cov.append(ccw * int(planes.weight[t]))
+            face_tri.append((t, g))
+            for k in range(3):
+                gu, gv = g[k], g[(k + 1) % 3]
+                inc_face.append(fid)
+                inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
+                inc_sign.append(1 if gu < gv else -1)
+            arrangements.append(None)
+            global_ids.append(None)
+            continue
+        polys = [[(c[a], c[b], 1) for c in ints[F[t]].tolist()] for t in tris]
+        weights = planes.weight[tris].tolist()
+        segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in cuts.segments[p]]
+        cov = polygon_coverage(polys, weights, segs)
+        arr = cov.arrangement
+        key = planes.keys[p]
+        gid = [-1] * len(arr.vertices)
+        origin = arr.half_edge_origin
+        for f, c in enumerate(cov.coverage):
+            if c == 0:
+                continue
+            fid = len(face_plane)
+            face_plane.append(p)
+            face_local.append(f)
+            face_cov.append(c)
+            face_tri.append(None)
+            face = arr.faces[f]
+            for cyc in [face.outer, *face.holes]:
+                for h in cyc:
+                    u, v = origin[h], origin[h ^ 1]
+                    for x in (u, v):
+                        if gid[x] < 0:
+                            gid[x] = vid.setdefault(_lift(arr._H[x], key, ax), len(vid))
+                    gu, gv = gid[u], gid[v]
+                    e = (gu, gv) if gu < gv else (gv, gu)
+                    inc_face.append(fid)
+                    inc_edge.append(eid.setdefault(e, len(eid)))
+                    inc_sign.append(1 if gu < gv else -1)
+        arrangements.append(arr)
+        global_ids.append(gid)
+        if p % 256 == 0:
+            report("arrangements", p / n_planes)
+    return _Complex(
+        points=list(vid),
+        edges=np.array(list(eid), dtype=np.int64).reshape(-1, 2),
+        face_plane=np.array(face_plane, dtype=np.int64),
+        face_local=np.array(face_local, dtype=np.int64),
+        face_cov=np.array(face_cov, dtype=np.int64),
+        inc_face=np.array(inc_face, dtype=np.int64),
+        inc_edge=np.array(inc_edge, dtype=np.int64),
+        inc_sign=np.array(inc_sign, dtype=np.int8),
+        arrangements=arrangements,
+        global_ids=global_ids,
+        face_tri=face_tri,
+    )
+
+
+@dataclass
+class _Shells:
+    """Sides of sub-facets grouped into shells (boundary components of arrangement cells).
+
+    Side node ``2 f + 1`` is the side of sub-facet ``f`` its plane normal (``planes.normal``)
+    points into, node ``2 f`` the other one; ``of[node]`` is its shell.
+    """
+
+    of: np.ndarray
+    n: int
+    nonmanifold: np.ndarray  # edges with more than two incident half-planes
+
+
+def _cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+
+def _dot(a, b) -> int:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _orient3(a, b, c, d) -> int:
+    """Sign of det[b - a, c - a, d - a] (Python ints)."""
+    u = (b[0] - a[0], b[1] - a[1], b[2] - a[2])
+    v = (c[0] - a[0], c[1] - a[1], c[2] - a[2])
+    w = (d[0] - a[0], d[1] - a[1], d[2] - a[2])
+    x = _dot(u, _cross(v, w))
+    return (x > 0) - (x < 0)
+
+
+def _edge_direction(cx: _Complex, planes: _Planes, e: int, normals: list) -> tuple:
+    """Integer vector along edge ``e`` from its smaller to its larger vertex id, from two
+    non-parallel plane normals of its sub-facets (an edge with three or more half-planes
+    always has two)."""
+    for i in range(len(normals)):
+        for j in range(i + 1, len(normals)):
+            d = _cross(normals[i], normals[j])
+            if d != (0, 0, 0):
+                u, v = cx.edges[e].tolist()
+                P, Q = cx.points[u], cx.points[v]
+                delta = tuple(Q[k] * P[3] - P[k] * Q[3] for k in range(3))
+                s = _dot(d, delta)
+                if s == 0:  # pragma: no cover - the edge lies on both planes
+                    raise ExactnessError(f"edge {e} is not along the line of its planes")
+                return d if s > 0 else tuple(-c for c in d)
+    raise ExactnessError(f"edge {e}: its half-planes all lie in one plane")  # pragma: no cover
+
+
+def _angular_order(vectors: list, d: tuple) -> list:
+    """Indices of ``vectors`` (all orthogonal to ``d``) in counter-clockwise order about ``d``."""
+    r = vectors[0]
+
+    def half(x) -> int:
+        c = _dot(_cross(r, x), d)
+        return 0 if c > 0 or (c == 0 and _dot(r, x) > 0) else 1
+
+    def cmp(i, j) -> int:
+        hi, hj = half(vectors[i]), half(vectors[j])
+        if hi != hj:
+            return hi - hj
+        c = _dot(_cross(vectors[i], vectors[j]), d)
+        if c == 0:
+            raise ExactnessError("two sub-facets share an edge and a half-plane")
+        return -1 if c > 0 else 1
+
+    return sorted(range(len(vectors)), key=cmp_to_key(cmp))
+
+
+def _shells(cx: _Complex, planes: _Planes) -> _Shells:
+    order = np.argsort(cx.inc_edge, kind="stable")
+    e_sorted = cx.inc_edge[order]
+    counts = np.bincount(cx.inc_edge, minlength=len(cx.edges))
+    if np.any(counts < 2):
+        bad = int(np.nonzero(counts < 2)[0][0])
+        raise ExactnessError(
+            f"the sub-facet complex is not closed: edge {bad} {cx.edges[bad].tolist()} has "
+            f"{int(counts[bad])} sub-facet(s); please report this input"
+        )
+    start = np.searchsorted(e_sorted, np.arange(len(cx.edges)))
+    fa, ta = [], []  # side pairs (node, node)
+    two = counts == 2
+    i2 = order[start[two]]
+    j2 = order[start[two] + 1]
+    for s in (1, -1):
+        rot = s * cx.inc_sign[i2].astype(np.int64)
+        s2 = -rot * cx.inc_sign[j2]
+        fa.append(2 * cx.inc_face[i2] + (s > 0))
+        ta.append(2 * cx.inc_face[j2] + (s2 > 0))
+    many = np.nonzero(counts > 2)[0]
+    extra_a, extra_b = [], []
+    for e in many.tolist():
+        inc = order[start[e]: start[e] + counts[e]].tolist()
+        normals = [planes.normal(int(cx.face_plane[cx.inc_face[k]])) for k in inc]
+        sg = [int(cx.inc_sign[k]) for k in inc]
+        d = _edge_direction(cx, planes, e, normals)
+        vec = [tuple(s * c for c in n) for s, n in zip(sg, normals)]
+        L = [inc[k] for k in _angular_order(vec, d)]
+        k = len(L)
+        for pos, i in enumerate(L):
+            for s in (1, -1):
+                rot = s * int(cx.inc_sign[i])
+                j = L[(pos + rot) % k]
+                s2 = -rot * int(cx.inc_sign[j])
+                extra_a.append(2 * int(cx.inc_face[i]) + (s > 0))
+                extra_b.append(2 * int(cx.inc_face[j]) + (s2 > 0))
+    a = np.concatenate(fa + [np.array(extra_a, dtype=np.int64)])
+    b = np.concatenate(ta + [np.array(extra_b, dtype=np.int64)])
+    n_nodes = 2 * len(cx.face_plane)
+    g = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n_nodes, n_nodes))
+    n, of = connected_components(g, directed=False)
+    return _Shells(of=of.astype(np.int64), n=int(n), nonmanifold=many)
+
+
+def _anchor(cx: _Complex, planes: _Planes, S: Superset, B: ConvexPolytope) -> int:
+    """Side node facing the unbounded cell: on the supporting plane of the sum in the direction
+    ``u`` of B's first facet normal, the side towards ``+u`` (nothing of the superset lies
+    beyond that plane, and the corner facets there have coverage 1)."""
+    u = tuple(int(c) for c in B.normals[0])
+    pts = S.ints.astype(object)
+    h = max((pts[:, 0] * u[0] + pts[:, 1] * u[1] + pts[:, 2] * u[2]).tolist())
+    g = gcd(gcd(u[0], u[1]), gcd(u[2], h))
+    n, d = tuple(c // g for c in u), h // g
+    if next(c for c in n if c != 0) < 0:
+        n, d = tuple(-c for c in n), -d
+    try:
+        p = planes.keys.index((*n, d))
+    except ValueError:
+        raise ExactnessError("no sub-facet on the supporting plane of the sum") from None
+    faces = np.nonzero(cx.face_plane == p)[0]
+    if not len(faces):
+        raise ExactnessError("no sub-facet on the supporting plane of the sum")
+    s = _dot(planes.normal(p), u) > 0
+    return 2 * int(faces[0]) + int(s)
+
+
+def _winding(cx: _Complex, sh: _Shells, anchor: int) -> np.ndarray:
+    """Winding number of the superset on each shell's cell, propagated from the unbounded
+    cell (0) across sub-facets: it is larger by the coverage on the side a sub-facet's
+    normal points away from."""
+    nf = len(cx.face_plane)
+    plus, minus = sh.of[2 * np.arange(nf) + 1], sh.of[2 * np.arange(nf)]
+    adj: list = [[] for _ in range(sh.n)]
+    for a, b, c in zip(plus.tolist(), minus.tolist(), cx.face_cov.tolist()):
+        adj[a].append((b, c))
+        adj[b].append((a, -c))
+    w = [None] * sh.n
+    root = int(sh.of[anchor])
+    w[root] = 0
+    queue = deque([root])
+    while queue:
+        x = queue.popleft()
+        for y, c in adj[x]:
+            if w[y] is None:
+                w[y] = w[x] + c
+                queue.append(y)
+            elif w[y] != w[x] + c:
+                raise ExactnessError("inconsistent winding numbers across the sub-facet complex")
+    # Shells of complex components not connected to the outer one (A with several surface
+    # components, e.g. an inner cavity) get no winding number here: marked unknown.
+    return np.array([_UNKNOWN if v is None else v for v in w], dtype=np.int64)
+
+
+_UNKNOWN = np.iinfo(np.int64).min
+
+
+def _face_point(cx: _Complex, planes: _Planes, f: int) -> tuple:
+    """Exact homogeneous 3D point strictly inside sub-facet ``f``."""
+    if cx.face_tri[f] is not None:
+        t = cx.face_tri[f][0]
+        c = planes.ints[planes.faces[t]].sum(axis=0).tolist()  # 3 x centroid: strictly inside
+        g = gcd(gcd(c[0], c[1]), gcd(c[2], 3))
+        return (c[0] // g, c[1] // g, c[2] // g, 3 // g)
+    p = int(cx.face_plane[f])
+    arr = cx.arrangements[p]
+    x, y = arr.faces[int(cx.face_local[f])].sample
+    return _lift(_hom((x, y)), planes.keys[p], int(planes.axis[p]))
+
+
+# Float filter of _PieceTest: each separating-axis value is a sum of a few products of
+# float64 numbers; its rounding error is below a few ulps of ``mag`` (the sum of the absolute
+# products). Values within this bound are re-decided with Python integers.
+_FILTER = 64 * float(np.finfo(np.float64).eps)
+
+
+class _PieceTest:
+    """Exact test of ``q = p + eps * v`` (eps -> 0+) against the convex pieces ``t ⊕ B`` of A⊕B
+    (t a triangle of A), by separating axes: the normals of t, of B's facets and the cross
+    products of their edges contain every facet normal of ``t ⊕ B``."""
+
+    def __init__(self, A: ClosedMesh, B: ConvexPolytope):
+        T = A.ints[A.faces].astype(np.int64)
+        self.T = T
+        self.lo = T.min(axis=1) + B.ints.min(axis=0)
+        self.hi = T.max(axis=1) + B.ints.max(axis=0)
+        self.Bv = B.ints.astype(np.int64)
+        self.nB = B.normals.astype(np.int64)
+        be = B.ints[B.edges[:, 1]] - B.ints[B.edges[:, 0]]
+        self.eB = be.astype(np.int64)
+        self.Bo = B.ints.astype(object)
+
+    def axes(self, t: int) -> np.ndarray:
+        a, b, c = self.T[t]
+        et = np.stack([b - a, c - b, a - c])
+        nt = np.cross(b - a, c - a)
+        cr = np.cross(et[:, None, :], self.eB[None, :, :]).reshape(-1, 3)
+        U = np.concatenate([nt[None], -nt[None], self.nB, cr, -cr])
+        return U[np.any(U != 0, axis=1)]
+
+    def inside_a(self, P4: tuple) -> bool:
+        """Is ``x = p - c`` inside A, for ``c`` the vertex centroid of B (interior to B)?
+
+        Called when ``p + eps * v - B`` misses the surface of A: then the interior of
+        ``p - B`` misses it too, ``x`` is not on the surface, and ``x`` is in A exactly when
+        ``q - B`` is. Decided by the parity of proper crossings of a segment from ``x`` to a
+        point outside A's bounding box; a segment through an edge or vertex of A (detected
+        exactly) is replaced by another one.
+        """
+        nb = len(self.Bv)
+        c = [int(v) for v in self.Bv.sum(axis=0)]
+        W = P4[3] * nb
+        X = [P4[k] * nb - c[k] * P4[3] for k in range(3)]  # x = X / W
+        lo, hi = self.T.reshape(-1, 3).min(axis=0), self.T.reshape(-1, 3).max(axis=0)
+        span = int((hi - lo).max()) + 1
+        rng = np.random.default_rng(0)
+        xf = np.array([X[k] / W for k in range(3)])
+        for _ in range(64):
+            d = rng.integers(-1000, 1001, size=3)
+            if not d.any():
+                continue
+            # far end, integer grid point: beyond the box in the direction d
+            scale = 4 * span // int(np.abs(d).max()) + 4
+            y = [int(round(xf[k])) + int(d[k]) * scale for k in range(3)]
+            crossings = self._crossings(X, W, y)
+            if crossings is not None:
+                return crossings % 2 == 1
+        raise ExactnessError("no non-degenerate ray found for a point-in-solid test")  # pragma: no cover
+
+    def _crossings(self, X: list, W: int, y: list):
+        """Proper crossings of the segment ``X / W -> y`` with A's triangles, None if the
+        segment passes through an edge or a vertex of A."""
+        Y = [c * W for c in y]
+        lo = np.minimum([X[k] / W for k in range(3)], y) - 2
+        hi = np.maximum([X[k] / W for k in range(3)], y) + 2
+        tlo, thi = self.T.min(axis=1), self.T.max(axis=1)
+        cand = np.nonzero(np.all((thi >= lo) & (tlo <= hi), axis=1))[0]
+        n = 0
+        for t in cand.tolist():
+            a, b, c = ([int(x) * W for x in r] for r in self.T[t].tolist())
+            s1, s2 = _orient3(a, b, c, X), _orient3(a, b, c, Y)
+            if s1 == 0 or s2 == 0 or (s1 > 0) == (s2 > 0):
+                continue  # x is on no triangle and y is outside the box: no crossing here
+            e = (_orient3(X, Y, a, b), _orient3(X, Y, b, c), _orient3(X, Y, c, a))
+            if 0 in e:
+                if all(v >= 0 for v in e) or all(v <= 0 for v in e):
+                    return None  # through an edge or a vertex
+                continue
+            if e[0] == e[1] == e[2]:
+                n += 1
+        return n
+
+    def contains(self, P4: tuple, v: tuple) -> bool:
+        W = P4[3]
+        pf = np.array([P4[0] / W, P4[1] / W, P4[2] / W])
+        cand = np.nonzero(np.all((self.lo - 1 <= pf) & (pf <= self.hi + 1), axis=1))[0]
+        for t in cand.tolist():
+            if self._in_piece(t, P4, pf, v):
+                return True
+        return False
+
+    def _in_piece(self, t: int, P4: tuple, pf: np.ndarray, v: tuple) -> bool:
+        U = self.axes(t)
+        Uf = U.astype(np.float64)
+        Tf = self.T[t].astype(np.float64)
+        hA = (Uf @ Tf.T).max(axis=1)
+        hB = (Uf @ self.Bv.T.astype(np.float64)).max(axis=1)
+        g = Uf @ pf - hA - hB
+        mag = np.abs(Uf) @ (np.abs(pf) + np.abs(Tf).max(axis=0) + np.abs(self.Bv).max(axis=0))
+        bound = _FILTER * mag
+        if np.any(g > bound):
+            return False  # a separating axis, decided in floating point
+        close = np.nonzero(np.abs(g) <= bound)[0]
+        W = P4[3]
+        To = self.T[t].astype(object)
+        for k in close.tolist():
+            u = tuple(int(c) for c in U[k])
+            h = max(_dot(u, r) for r in To.tolist()) + max(_dot(u, r) for r in self.Bo.tolist())
+            s = _dot(u, P4[:3]) - W * h
+            if s > 0 or (s == 0 and _dot(u, v) > 0):
+                return False
+        return True
+
+
+def _classify(cx: _Complex, sh: _Shells, planes: _Planes, S: Superset, A: ClosedMesh,
+              B: ConvexPolytope) -> tuple[np.ndarray, int, int]:
+    """Membership of each shell's cell in A ⊕ B (True: inside)."""
+    anchor = _anchor(cx, planes, S, B)
+    w = _winding(cx, sh, anchor)
+    unknown = w == _UNKNOWN
+    inside = (w != 0) & ~unknown
+    root = int(sh.of[anchor])
+    todo = np.nonzero(~inside)[0]
+    todo = todo[todo != root]
+    if not len(todo):
+        return inside, 0, anchor
+    _, node = np.unique(sh.of, return_index=True)  # first side node of each shell
+    test = _PieceTest(A, B)
+    for s in todo.tolist():
+        k = int(node[s])
+        f, side = k // 2, 1 if k % 2 else -1
+        m = planes.normal(int(cx.face_plane[f]))
+        P4 = _face_point(cx, planes, f)
+        inside[s] = test.contains(P4, tuple(side * c for c in m))
+        if not inside[s] and unknown[s]:
+            # w is unknown, so q - B may lie inside A without touching its surface
+            inside[s] = test.inside_a(P4)
+    return inside, len(todo), anchor
+
+
+@dataclass
+class _Output:
+    points: list  # exact homogeneous points of the output vertices
+    faces: np.ndarray
+    face_facet: np.ndarray
+    facet_superset: np.ndarray  # a superset facet each output facet comes from
+    shell: np.ndarray
+    shell_is_hole: np.ndarray
+    volume6: Fraction  # six times the volume, grid units cubed
+
+
+def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: _Planes,
+            S: Superset) -> _Output:
+    nf = len(cx.face_plane)
+    plus = inside[sh.of[2 * np.arange(nf) + 1]]
+    minus = inside[sh.of[2 * np.arange(nf)]]
+    keep = np.nonzero(plus != minus)[0]
+    # Outside cells joined through dropped sub-facets form the complement's components.
+    parent = list(range(sh.n))
+
+    def find(a: int) -> int:
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for f in np.nonzero(~plus & ~minus)[0].tolist():
+        ra, rb = find(int(sh.of[2 * f])), find(int(sh.of[2 * f + 1]))
+        if ra != rb:
+            parent[ra] = rb
+    tris, tri_facet, facet_src, outside_cell = [], [], [], []
+    for n, f in enumerate(keep.tolist()):
+        flip = bool(plus[f])  # inside on the normal's side: the outward normal is reversed
+        for a, b, c in _face_triangles(cx, f):
+            tris.append((a, c, b) if flip else (a, b, c))
+            tri_facet.append(n)
+        facet_src.append(_source_facet(cx, planes, f))
+        outside_cell.append(find(int(sh.of[2 * f + (0 if flip else 1)])))
+    T = np.array(tris, dtype=np.int64).reshape(-1, 3)
+    used, T = np.unique(T, return_inverse=True)
+    T = T.reshape(-1, 3)
+    points = [cx.points[i] for i in used.tolist()]
+    # shells: one per component of the complement a facet faces (the unbounded one is outer)
+    cells, facet_shell = np.unique(np.array(outside_cell, dtype=np.int64), return_inverse=True)
+    root = find(int(sh.of[anchor]))
+    shell_is_hole = cells != root
+    vol = Fraction(0)
+    for a, b, c in T.tolist():
+        P, Q, R = points[a], points[b], points[c]
+        det = _dot(P[:3], _cross(Q[:3], R[:3]))
+        if det:
+            vol += Fraction(det, P[3] * Q[3] * R[3])
+    return _Output(
+        points=points,
+        faces=T,
+        face_facet=np.array(tri_facet, dtype=np.int64),
+        facet_superset=np.array(facet_src, dtype=np.int64),
+        shell=facet_shell.reshape(-1)[np.array(tri_facet, dtype=np.int64)] if len(tri_facet) else np.zeros(0, np.int64),
+        shell_is_hole=shell_is_hole,
+        volume6=vol,
+    )
+
+
+def _face_triangles(cx: _Complex, f: int) -> list:
+    """Counter-clockwise (about ``planes.normal``) triangles of sub-facet ``f``, global ids."""
+    if cx.face_tri[f] is not None:
+        return [tuple(cx.face_tri[f][1])]
+    p = int(cx.face_plane[f])
+    arr, gid = cx.arrangements[p], cx.global_ids[p]
+    face = arr.faces[int(cx.face_local[f])]
+    if not face.holes and len(face.outer) == 3:
+        a, b, c = (gid[v] for v in arr.cycle_vertices(face.outer))
+        return [(a, b, c)]
+    return [(gid[a], gid[b], gid[c]) for a, b, c in triangulate_face(arr, int(cx.face_local[f]))]
+
+
+def _source_facet(cx: _Complex, planes: _Planes, f: int) -> int:
+    """A superset facet whose triangle covers sub-facet ``f`` (the first in plane order)."""
+    if cx.face_tri[f] is not None:
+        return int(planes.facet[cx.face_tri[f][0]])
+    p = int(cx.face_plane[f])
+    arr = cx.arrangements[p]
+    x, y = arr.faces[int(cx.face_local[f])].sample
+    ax = int(planes.axis[p])
+    a, b = (ax + 1) % 3, (ax + 2) % 3
+    for t in planes.members[p].tolist():
+        corners = [(c[a], c[b]) for c in planes.ints[planes.faces[t]].tolist()]
+        if winding_number(corners, (x, y)) != 0:
+            return int(planes.facet[t])
+    raise ExactnessError(f"sub-facet {f} is covered by no superset triangle")  # pragma: no cover
+
+
+def _to_float(points: list, grid: Grid) -> np.ndarray:
+    """Correctly rounded float64 scene coordinates of homogeneous grid points."""
+    V = np.array([(P[0] / P[3], P[1] / P[3], P[2] / P[3]) for P in points], dtype=np.float64)
+    return np.ldexp(V.reshape(-1, 3), grid.exponent)
+
+
+def _nonmanifold(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
+    """Edges used by more than two triangles, and vertices whose triangles form more than one
+    fan (joined across edges used by exactly two triangles)."""
+    m = len(faces)
+    if not m:
+        return np.zeros((0, 2), np.int64), np.zeros(0, np.int64)
+    u = faces.reshape(-1)
+    v = faces[:, [1, 2, 0]].reshape(-1)
+    lo, hi = np.minimum(u, v), np.maximum(u, v)
+    key = lo * n_vertices + hi
+    uniq, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
+    inv = inv.reshape(-1)
+    bad_edges = np.stack([uniq[cnt > 2] // n_vertices, uniq[cnt > 2] % n_vertices], axis=1)
+    # Corner 3 t + i sits at faces[t, i]; half-edge 3 t + i runs from corner 3 t + i to the
+    # next corner of t. Two half-edges of a manifold edge join their corners at equal vertices.
+    h = np.arange(3 * m)
+    cu, cv = h, 3 * (h // 3) + (h % 3 + 1) % 3
+    order = np.argsort(inv, kind="stable")
+    a, b = order[0::2], order[1::2]
+    ok = (cnt[inv[a]] == 2) & (inv[a] == inv[b])
+    a, b = a[ok], b[ok]
+    same = u[a] == u[b]
+    src = np.concatenate([cu[a], cv[a]])
+    dst = np.concatenate([np.where(same, cu[b], cv[b]), np.where(same, cv[b], cu[b])])
+    g = coo_matrix((np.ones(len(src), np.int8), (src, dst)), shape=(3 * m, 3 * m))
+    _, comp = connected_components(g, directed=False)
+    vert = faces.reshape(-1)
+    pairs = np.unique(np.stack([vert, comp], axis=1), axis=0)
+    fans = np.bincount(pairs[:, 0], minlength=n_vertices)
+    return bad_edges.astype(np.int64), np.nonzero(fans > 1)[0].astype(np.int64)
+
+
+def _result(out: _Output, S: Superset, stats: dict) -> SumPolyhedron:
+    t = time.perf_counter()
+    grid = S.grid
+    V = _to_float(out.points, grid)
+    nm_edges, nm_vertices = _nonmanifold(out.faces, len(V))
+    crossings = _rounding_check(out, V)
+    stats["rounding_check"] = time.perf_counter() - t
+    stats["output_triangles"] = len(out.faces)
+    n_facets = len(out.facet_superset)
+    src = out.facet_superset
+    return SumPolyhedron(
+        vertices=V,
+        faces=out.faces,
+        face_facet=out.face_facet,
+        facet_kind=S.kind[src] if n_facets else np.zeros(0, np.int8),
+        facet_source_a=S.source_a[src] if n_facets else np.zeros((0, 2), np.int64),
+        facet_source_b=S.source_b[src] if n_facets else np.zeros((0, 2), np.int64),
+        shell=out.shell,
+        shell_is_hole=out.shell_is_hole,
+        nonmanifold_edges=nm_edges,
+        nonmanifold_vertices=nm_vertices,
+        rounding_self_intersections=crossings,
+        grid=grid,
+        volume_exact=out.volume6 / 6 * Fraction(2) ** (3 * grid.exponent),
+        convex=False,
+        stats=stats,
+    )
+
+
+def _rounding_check(out: _Output, V: np.ndarray) -> np.ndarray:
+    return np.zeros((0, 2), np.int64)
