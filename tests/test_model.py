@@ -1,0 +1,425 @@
+"""Scene modelling (cspace.model), surface C-obstacles (cspace.surface), the disk cache.
+
+Real checks only: classifications are compared with independent inspections of the meshes
+(trimesh watertightness and convexity, float bounding boxes with a margin), surface
+C-obstacles with FCL's own mesh (BVH) collision, cached C-obstacles with fresh ones.
+"""
+
+from __future__ import annotations
+
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+import trimesh
+
+from cspace import CSpace, CSpaceObstacle, load_scene
+from cspace.cache import COCache, cache_dir
+from cspace.errors import BuildError
+from cspace.model import model_scene
+from cspace.scene import Body, Scene
+
+from zoo import hollow_box, torus  # tests/ is on sys.path (rootdir conftest)
+
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+CUBE = trimesh.creation.box(extents=(1.0, 1.0, 1.0))
+
+
+def make_scene(bodies, robot_extent=0.25, bounds=((-3, -3, -3), (3, 3, 3)), name="t"):
+    robot = trimesh.creation.box(extents=(robot_extent,) * 3)
+    lo = np.asarray(bounds[0], float)
+    return Scene(name, None, tuple(bodies), Body("robot", robot.vertices, robot.faces, "box"),
+                 (0.0, 0.0, 0.0), bounds, lo + 0.01, lo + 0.02)
+
+
+def box_body(name, centre=(0, 0, 0), extents=(1, 1, 1)):
+    m = trimesh.creation.box(extents=extents)
+    return Body(name, m.vertices + np.asarray(centre, float), m.faces, "box")
+
+
+def sheet(z=0.0, size=1.0):
+    """An open square in the plane z, two triangles."""
+    s = size / 2
+    V = np.array([[-s, -s, z], [s, -s, z], [s, s, z], [-s, s, z]], float)
+    return V, np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def fcl_mesh_collides(V, F, robot_vertices, robot_faces, Q):
+    """FCL's own mesh semantics: the convex robot at each q against a BVH of (V, F)."""
+    import fcl
+
+    from cspace.fcl_check import fcl_convex
+
+    bvh = fcl.BVHModel()
+    bvh.beginModel(len(F), len(V))
+    bvh.addSubModel(np.asarray(V, float), np.asarray(F, np.int64))
+    bvh.endModel()
+    obs = fcl.CollisionObject(bvh, fcl.Transform())
+    rob = fcl.CollisionObject(fcl_convex(robot_vertices, robot_faces), fcl.Transform())
+    out = np.zeros(len(Q), bool)
+    for i, q in enumerate(Q):
+        rob.setTranslation(np.asarray(q, float))
+        out[i] = fcl.collide(rob, obs, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
+    return out
+
+
+# --------------------------------------------------------------------------------------
+# steps 1-5 on small hand-made bodies
+
+
+def test_double_sided_sheet_keeps_one_side_and_is_a_surface():
+    V, F = sheet()
+    body = Body("sheet", V, np.vstack([F, F[:, ::-1]]), "test")
+    m = model_scene(make_scene([body]), build=False)
+    assert m.sources["sheet"] == {"triangles": 4, "collapsed": 0, "double_sided": 2,
+                                  "repeated": 0, "parts": 1}
+    (b,) = m.bodies
+    assert b.kind == "surface" and len(b.faces) == 2 and "4 boundary edges" in b.reason
+    assert "2 double-sided" in m.explain()
+
+
+def test_double_sided_closed_box_becomes_convex_and_repeats_are_counted():
+    F = CUBE.faces
+    body = Body("box2", CUBE.vertices, np.vstack([F, F[:, ::-1], F[:3]]), "test")
+    m = model_scene(make_scene([body]), build=False)
+    s = m.sources["box2"]
+    assert (s["double_sided"], s["repeated"], s["parts"]) == (12, 3, 1)
+    assert [b.kind for b in m.bodies] == ["convex"]
+
+
+def test_collapsed_triangles_are_dropped_and_counted():
+    V = np.vstack([CUBE.vertices, CUBE.vertices[:1] + 1e-12])  # welds onto vertex 0
+    F = np.vstack([CUBE.faces, [[0, 8, 1]]])
+    m = model_scene(make_scene([Body("b", V, F, "test")]), build=False)
+    assert m.sources["b"]["collapsed"] == 1 and m.bodies[0].kind == "convex"
+
+
+def test_split_into_bodies_and_cavity_stays_with_its_solid():
+    two = np.vstack([CUBE.vertices, CUBE.vertices + [3.0, 0, 0]])
+    body = Body("two", two, np.vstack([CUBE.faces, CUBE.faces + 8]), "test")
+    V, F = hollow_box()
+    hollow = Body("hollow", V, F, "test")
+    m = model_scene(make_scene([body, hollow], bounds=((-4, -4, -4), (6, 6, 6))), build=False)
+    assert [b.name for b in m.bodies] == ["two#0", "two#1", "hollow"]
+    assert [b.kind for b in m.bodies] == ["convex", "convex", "solid"]
+    assert "2 shells" in m.bodies[2].reason and m.sources["hollow"]["parts"] == 1
+
+
+def test_drop_is_exact_at_the_bounds():
+    # Robot half-extent 0.125: a unit box centred at x = c has CO x-range
+    # [c - 0.625, c + 0.625]. Bounds end at x = 3: a box at c = 3.625 touches them (kept),
+    # one four grid steps further is dropped (all values dyadic: exact on the grid).
+    m0 = model_scene(make_scene([box_body("touch", (3.625, 0, 0))]), build=False)
+    step = m0.grid.step
+    m1 = model_scene(make_scene([box_body("touch", (3.625, 0, 0)),
+                                 box_body("beyond", (3.625 + 4 * step, 0, 0))]), build=False,
+                     grid=m0.grid)
+    assert [b.kind for b in m1.bodies] == ["convex", "dropped"]
+    assert "misses the planning bounds" in m1.bodies[1].reason
+    # Dropped bodies are never built and not in the C-space.
+    cs = model_scene(make_scene([box_body("far", (9, 0, 0)), box_body("near")])).cspace()
+    assert len(cs) == 1
+
+
+def test_surface_triangles_that_cannot_reach_the_bounds_are_left_out():
+    # A long open strip: only the triangles near the bounds become pieces.
+    xs = np.arange(0, 21, dtype=float)
+    V = np.array([[x, y, 0.0] for x in xs for y in (0.0, 1.0)])
+    F = np.array([[2 * i, 2 * i + 2, 2 * i + 3] for i in range(20)]
+                 + [[2 * i, 2 * i + 3, 2 * i + 1] for i in range(20)])
+    m = model_scene(make_scene([Body("strip", V, F, "test")], bounds=((-3, -3, -3), (3, 3, 3))))
+    (b,) = m.bodies
+    assert b.kind == "surface" and b.pieces == 8  # 4 quads start at x <= 3.125
+    assert "32 more cannot reach the bounds" in b.reason
+    assert len(b.co.pieces) == 8
+
+
+def test_non_manifold_closed_body_is_a_surface():
+    # Two boxes sharing an edge: closed (every edge used twice or four times), non-manifold.
+    a = trimesh.creation.box(extents=(1, 1, 1))
+    V = np.vstack([a.vertices, a.vertices + [1.0, 1.0, 0.0]])
+    m = model_scene(make_scene([Body("pair", V, np.vstack([a.faces, a.faces + 8]), "test")]),
+                    build=False)
+    (b,) = m.bodies
+    assert b.kind == "surface" and "NonManifoldError" in b.reason
+
+
+# --------------------------------------------------------------------------------------
+# surface C-obstacles
+
+
+def test_surface_co_agrees_with_fcl_mesh_collision_and_with_its_pieces():
+    V, F = torus(1.0, 0.3, 24, 12)
+    keep = np.arange(len(F)) % 7 != 0  # punch holes: an open surface
+    scene = make_scene([Body("open-torus", V, F[keep], "test")], robot_extent=0.25,
+                       bounds=((-1.6, -1.6, -0.6), (1.6, 1.6, 0.6)))
+    m = model_scene(scene)
+    (b,) = m.bodies
+    assert b.kind == "surface" and b.pieces == int(keep.sum())
+    co = b.co
+    rng = np.random.default_rng(0)
+    Q = rng.uniform(scene.bounds[0], scene.bounds[1], (3000, 3))
+    ours = co.contains(Q)
+    brute = np.zeros(len(Q), bool)
+    for piece in co._impl.impl:
+        brute |= piece.contains(Q)
+    np.testing.assert_array_equal(ours, brute)
+    fcl_hit = fcl_mesh_collides(co.obstacle.vertices, co.obstacle.faces, m.robot.vertices,
+                                m.robot.faces, Q)
+    assert 300 < ours.sum() < 2700
+    assert (ours != fcl_hit).sum() == 0
+    # Segments: exact against the pieces one by one.
+    a, b2 = Q[:300], Q[300:600]
+    hit = np.zeros(300, bool)
+    for piece in co._impl.impl:
+        hit |= piece.segments(a, b2, False)[0]
+    np.testing.assert_array_equal(co.segment_free(a, b2), ~hit)
+    t = co.first_contact(a, b2)
+    assert np.isnan(t[~hit]).all() and (t[hit] >= 0).all()
+    # Signed distance: sign exact, magnitude equals the nearest piece.
+    d = co.signed_distance(Q[:200])
+    assert ((d <= 0) == ours[:200]).all()
+    out = ~ours[:200]
+    ref = np.min([p.distance_outside(Q[:200][out]) for p in co._impl.impl], axis=0)
+    np.testing.assert_allclose(d[out], ref, rtol=0, atol=1e-12)
+
+
+def test_surface_co_touching_counts():
+    V, F = sheet(z=0.0)
+    m = model_scene(make_scene([Body("sheet", V, F, "test")]))
+    co = m.bodies[0].co
+    # Robot half-extent 0.125: touching the sheet from above at z = 0.125, free just above.
+    assert co.contains([0.2, 0.2, 0.125])
+    assert not co.contains([0.2, 0.2, np.nextafter(0.125, 1)])
+    # A segment ending on the CO's corner edge touches; one stopping an ulp above is free.
+    assert not co.segment_free([0.0, 0.0, 1.0], [0.625, 0.0, 0.125])
+    assert co.first_contact([0.0, 0.0, 1.0], [0.625, 0.0, 0.125]) == 1.0
+    assert co.segment_free([0.0, 0.0, 1.0], [0.0, 0.0, np.nextafter(0.125, 1)])
+
+
+# --------------------------------------------------------------------------------------
+# cache
+
+
+def _cached_vs_fresh(scene, tmp_path):
+    cache = COCache(tmp_path / "cache")
+    fresh = model_scene(scene, cache=cache)
+    assert all(b.cache == "miss" for b in fresh.bodies if b.kind != "dropped")
+    again = model_scene(scene, cache=cache)
+    assert all(b.cache == "hit" for b in again.bodies if b.kind != "dropped")
+    return fresh.cspace(), again.cspace(), cache
+
+
+def test_cached_c_obstacles_answer_exactly_as_fresh_ones(tmp_path):
+    V, F = sheet(z=0.5)
+    scene = make_scene([box_body("box", (1, 0, 0)), Body("sheet", V, F, "t"),
+                        box_body("far", (20, 0, 0))])
+    a, b, _ = _cached_vs_fresh(scene, tmp_path)
+    rng = np.random.default_rng(1)
+    Q = rng.uniform(-2, 2, (4000, 3))
+    # Points exactly on C-obstacle vertices too (touching decided exactly).
+    Q = np.vstack([Q] + [o.vertices[:50] for o in a.obstacles])
+    np.testing.assert_array_equal(a.contains(Q), b.contains(Q))
+    np.testing.assert_array_equal(a.segment_free(Q[:1000], Q[1000:2000]),
+                                  b.segment_free(Q[:1000], Q[1000:2000]))
+    np.testing.assert_array_equal(a.first_contact(Q[:1000], Q[1000:2000]),
+                                  b.first_contact(Q[:1000], Q[1000:2000]))
+    np.testing.assert_array_equal(a.signed_distance(Q[:300]), b.signed_distance(Q[:300]))
+
+
+def test_corrupt_and_partial_cache_files_are_rebuilt(tmp_path):
+    scene = make_scene([box_body("box", (1, 0, 0))])
+    _, _, cache = _cached_vs_fresh(scene, tmp_path)
+    (entry,) = list((tmp_path / "cache").rglob("*.npz"))
+    data = entry.read_bytes()
+    entry.write_bytes(data[: len(data) // 2])  # a partial write
+    m = model_scene(scene, cache=cache)
+    assert m.bodies[0].cache == "miss" and cache.rebuilt == 1
+    flipped = bytearray(entry.read_bytes())
+    flipped[len(flipped) // 2] ^= 0xFF  # a flipped bit inside the payload
+    entry.write_bytes(bytes(flipped))
+    m = model_scene(scene, cache=cache)
+    assert m.bodies[0].cache == "miss" and cache.rebuilt == 2
+    assert model_scene(scene, cache=cache).bodies[0].cache == "hit"
+    assert not list((tmp_path / "cache").rglob("*.tmp"))
+
+
+def test_cache_key_follows_the_inputs_and_location_follows_the_environment(tmp_path,
+                                                                          monkeypatch):
+    monkeypatch.setenv("CSPACE_CACHE", str(tmp_path / "env-cache"))
+    assert cache_dir() == tmp_path / "env-cache"
+    assert cache_dir(tmp_path / "x") == tmp_path / "x"
+    scene = make_scene([box_body("box", (1, 0, 0))])
+    assert model_scene(scene, cache=True).bodies[0].cache == "miss"
+    assert len(list((tmp_path / "env-cache").rglob("*.npz"))) == 1
+    assert model_scene(scene, cache=True).bodies[0].cache == "hit"
+    # Another robot size: another key.
+    other = make_scene([box_body("box", (1, 0, 0))], robot_extent=0.3)
+    assert model_scene(other, cache=True).bodies[0].cache == "miss"
+    monkeypatch.delenv("CSPACE_CACHE")
+    assert cache_dir() == Path.home() / ".cache" / "cspace"
+
+
+# --------------------------------------------------------------------------------------
+# shipped scenes and solids
+
+
+def test_shipped_scenes_drop_what_the_robot_cannot_reach():
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        counts = {n: model_scene(load_scene(SCENES / f"{n}.toml"), build=False).counts()
+                  for n in ("window", "comb", "maze", "cavity")}
+    assert counts["window"] == {"convex": 4, "solid": 0, "surface": 0, "dropped": 0}
+    assert counts["cavity"] == {"convex": 8, "solid": 0, "surface": 0, "dropped": 1}
+    assert counts["comb"]["dropped"] > 0 and counts["comb"]["surface"] == 0
+
+
+def _solid_path_works() -> bool:
+    V, F = torus(1.0, 0.3, 12, 8)
+    try:
+        CSpaceObstacle.build((V, F), CUBE.vertices * 0.2)
+    except (NotImplementedError, BuildError) as e:  # noqa: F841
+        return False
+    except ValueError as e:
+        return "convex" not in str(e)
+    return True
+
+
+def test_solid_body_builds_or_says_clearly_why_not():
+    V, F = torus(1.0, 0.3, 12, 8)
+    scene = make_scene([Body("torus", V, F, "test")], bounds=((-2, -2, -1), (2, 2, 1)))
+    m = model_scene(scene)
+    (b,) = m.bodies
+    assert b.kind == "solid" and "genus 1" in b.reason
+    if b.error:
+        with pytest.raises(BuildError, match=r"body 'torus' \(solid: closed 2-manifold"):
+            m.cspace()
+        with pytest.raises(BuildError, match="torus"):
+            CSpace.from_scene(scene)
+        assert not _solid_path_works()
+    else:
+        cs = m.cspace()
+        rng = np.random.default_rng(0)
+        Q = rng.uniform(scene.bounds[0], scene.bounds[1], (2000, 3))
+        from cspace.fcl_check import FclOracle
+
+        orc = FclOracle(V, F, m.robot.vertices, m.robot.faces, scene.reference_point,
+                        convex=False)
+        assert (cs.contains(Q) != orc.collides(Q)).sum() == 0
+
+
+# --------------------------------------------------------------------------------------
+# shared data: what the report says, checked against independent inspection
+
+
+def fcl_env_scene(shared_data) -> Scene:
+    """FCL's test environment (85 bodies in one open triangle soup) with its robot, planned in
+    the central part of the environment."""
+    d = shared_data / "fcl_test_resources"
+    env = trimesh.load(d / "env.obj", force="mesh", process=False)
+    rob = trimesh.load(d / "rob.obj", force="mesh", process=False)
+    return Scene("fcl-env", None, (Body("env.obj", env.vertices, env.faces, "env.obj"),),
+                 Body("rob.obj", rob.vertices, rob.faces, "rob.obj"), np.zeros(3),
+                 [[-1500, -1500, 0], [1500, 1500, 1500]], [-1000, -1000, 1000],
+                 [1000, 1000, 1000])
+
+
+def test_fcl_environment_report(shared_data):
+    scene = fcl_env_scene(shared_data)
+    m = model_scene(scene, build=False)
+    assert m.sources["env.obj"]["parts"] == 85
+    assert m.counts() == {"convex": 13, "solid": 0, "surface": 21, "dropped": 51}
+    # Independent inspection of each part: trimesh's watertightness and convexity, and a
+    # float bounding-box test with a margin far above the grid step.
+    welded = trimesh.Trimesh(scene.obstacles[0].vertices, scene.obstacles[0].faces)
+    labels = trimesh.graph.connected_components(
+        welded.face_adjacency, nodes=np.arange(len(welded.faces)), engine="scipy")
+    parts = welded.submesh(labels, append=False)
+    assert len(parts) == 85
+    r = m.robot.vertices - scene.reference_point
+    lo_b, hi_b = scene.bounds
+    by_box = {}
+    for p in parts:
+        key = tuple(np.round(p.bounds.ravel(), 3))
+        by_box[key] = p
+    explain = m.explain()
+    for b in m.bodies:
+        p = by_box[tuple(np.round(np.stack([b.vertices.min(0), b.vertices.max(0)]).ravel(), 3))]
+        co_lo, co_hi = p.bounds[0] - r.max(0), p.bounds[1] - r.min(0)
+        misses = (co_hi < lo_b - 1e-6).any() or (co_lo > hi_b + 1e-6).any()
+        meets = (co_hi > lo_b + 1e-6).all() and (co_lo < hi_b - 1e-6).all()
+        assert misses or meets  # no part is within rounding of the bounds
+        if misses:
+            assert b.kind == "dropped", b.line()
+        elif not p.is_watertight:
+            assert b.kind == "surface" and "open" in b.reason, b.line()
+        else:
+            assert p.is_convex and b.kind == "convex", b.line()
+        assert b.line() in explain
+
+
+PARASOL_SOLIDS = {
+    "bug_trap1.0/bug-trap.env": ("trap.obj", 3212, "genus 1"),
+    "alpha1.6/alpha.env": ("alphaobstacle.obj", 972, "genus 0"),
+    "flange_1.0/flange.env": ("obstacle.g", 990, "genus 5"),
+}
+
+
+@pytest.mark.parametrize("rel", sorted(PARASOL_SOLIDS))
+def test_parasol_scenes_report_one_solid(shared_data, rel):
+    # SOURCES.md: each obstacle is one closed 2-manifold (trap genus 1, alpha genus 0,
+    # flange genus 5), none convex; no duplicates.
+    name, triangles, genus = PARASOL_SOLIDS[rel]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(shared_data / "parasol_open_ppl_env" / rel)
+    m = model_scene(scene, build=False)
+    assert m.counts() == {"convex": 0, "solid": 1, "surface": 0, "dropped": 0}
+    (b,) = m.bodies
+    assert b.name == name and len(b.faces) == triangles and genus in b.reason
+    assert m.sources[name] == {"triangles": triangles, "collapsed": 0, "double_sided": 0,
+                               "repeated": 0, "parts": 1}
+    mesh = trimesh.Trimesh(b.vertices, b.faces)
+    assert mesh.is_watertight and not mesh.is_convex
+    assert f"{name}: solid" in m.explain()
+
+
+def test_stick_bug_as_an_obstacle_is_closed_after_dropping_its_repeated_faces(shared_data):
+    # SOURCES.md: stick-bug.obj lists every face twice (132 triangles, 66 duplicates; cspace's
+    # mesh check names them "the same winding: a repeated face"); one copy of each is a
+    # closed genus-0 body.
+    m0 = trimesh.load(shared_data / "parasol_open_ppl_env" / "bug_trap1.0" / "stick-bug.obj",
+                      force="mesh", process=False)
+    scene = make_scene([Body("bug", m0.vertices * 0.05, m0.faces, "stick-bug.obj")],
+                       bounds=((-30, -30, -30), (30, 30, 30)))
+    m = model_scene(scene, build=False)
+    assert m.sources["bug"]["repeated"] == 66 and m.sources["bug"]["double_sided"] == 0
+    assert [b.kind for b in m.bodies] in (["solid"], ["convex"])
+    assert trimesh.Trimesh(m.bodies[0].vertices, m.bodies[0].faces).is_watertight
+
+
+def test_fcl_environment_builds_and_agrees_with_fcl(shared_data):
+    scene = fcl_env_scene(shared_data)
+    m = model_scene(scene)
+    cs = m.cspace()
+    assert len(cs) == 34
+    rng = np.random.default_rng(2)
+    Q = rng.uniform(scene.bounds[0], scene.bounds[1], (1500, 3))
+    ours = cs.contains(Q)
+    # FCL on every non-dropped part: solids for convex parts (fcl.Convex), meshes for surfaces.
+    import fcl
+
+    from cspace.fcl_check import FclOracle
+
+    ref = np.zeros(len(Q), bool)
+    for b in m.bodies:
+        if b.kind == "convex":
+            ref |= FclOracle(b.vertices, b.faces, m.robot.vertices, m.robot.faces,
+                             scene.reference_point, convex=True).collides(Q)
+        elif b.kind == "surface":
+            ref |= fcl_mesh_collides(b.vertices, b.faces, m.robot.vertices - scene.reference_point,
+                                     m.robot.faces, Q)
+    assert 100 < ours.sum() < 1400
+    assert (ours != ref).sum() == 0
+    del fcl
