@@ -6,8 +6,13 @@
   shape B (hulled), with the same ``--reflect-b``.
 - ``cspace check SCENE`` — :func:`cspace.fcl_check.cross_check` of the scene's C-obstacles
   against FCL (membership and distance on random translations).
-- ``cspace plan SCENE`` — :func:`cspace.ompl_plugin.plan`: an OMPL planner with the exact
-  validity checker and motion validator; the path is re-proved exactly and written out.
+- ``cspace build SCENE`` — :func:`cspace.model.model_scene`: model the scene (which bodies
+  are convex, solid, surface or dropped, and why: ``--explain``) and build the C-obstacles
+  through the disk cache (:mod:`cspace.cache`; ``--no-cache``); progress on stderr
+  (``--quiet``); ``-o`` writes the C-obstacle meshes.
+- ``cspace plan SCENE`` — the same modelling, then :func:`cspace.ompl_plugin.plan`: an OMPL
+  planner with the exact validity checker and motion validator; the path is re-proved
+  exactly and written out. ``--explain`` prints the model first.
 - ``cspace view SCENE`` — :func:`cspace.viz.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``.
 """
@@ -109,14 +114,72 @@ def _check(args: argparse.Namespace) -> int:
     return 0 if r["ok"] else 1
 
 
+class _Progress:
+    """Per-body progress lines on stderr for long builds (``model_scene``'s ``progress``)."""
+
+    def __init__(self, quiet: bool):
+        self.quiet = quiet
+        self.body = None
+        self.shown = -1
+
+    def __call__(self, fraction: float, message: str) -> None:
+        if self.quiet:
+            return
+        tenth = int(fraction * 10)
+        if message != self.body or tenth > self.shown:
+            print(f"[{fraction:4.0%}] {message}", file=sys.stderr, flush=True)
+            self.body, self.shown = message, tenth
+
+
+def _model(args: argparse.Namespace):
+    """Load the scene and model it (build its C-obstacles, through the cache unless --no-cache)."""
+    from .model import model_scene
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    cache = None if args.no_cache else (args.cache_dir or True)
+    return model_scene(scene, cache=cache, progress=_Progress(args.quiet))
+
+
+def _build(args: argparse.Namespace) -> int:
+    import numpy as np
+
+    m = _model(args)
+    built = [b for b in m.bodies if b.co is not None]
+    hits = sum(b.cache == "hit" for b in built)
+    if args.explain:
+        print(m.explain())
+    else:
+        c = m.counts()
+        print(f"{m.scene.name}: {len(m.bodies)} bodies: " + ", ".join(f"{c[k]} {k}" for k in c))
+    print(f"built {len(built)} C-obstacles in {m.seconds['build']:.2f} s "
+          f"({hits} from the cache)")
+    failed = [b for b in m.bodies if b.error]
+    for b in failed:
+        print(f"cspace: error: body {b.name!r} ({b.kind}): {b.error}", file=sys.stderr)
+    if args.output:
+        arrays = {"names": np.array([b.name for b in built]),
+                  "kinds": np.array([b.kind for b in built])}
+        for i, b in enumerate(built):
+            arrays[f"vertices_{i}"] = b.co.vertices
+            arrays[f"faces_{i}"] = b.co.faces
+        np.savez_compressed(args.output, **arrays)
+        print(f"wrote {args.output} (per C-obstacle: vertices_<i>, faces_<i>; names, kinds)")
+    return 1 if failed else 0
+
+
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .ompl_plugin import plan
-    from .scene import load_scene
 
-    scene = load_scene(args.scene)
-    r = plan(scene, planner=args.planner, time=args.time, seed=args.seed)
+    m = _model(args)
+    if args.explain:
+        print(m.explain())
+    scene = m.scene
+    cs = m.cspace()
+    r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner=args.planner,
+             time=args.time, seed=args.seed)
     status = "solved" if r.solved else "NOT solved (approximate path)"
     print(f"{scene.name}: {args.planner} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
           f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
@@ -166,8 +229,19 @@ def _view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _model_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--explain", action="store_true",
+                   help="report what was modelled and why, per body (kind, reason, sizes, "
+                        "build time, cache hit or miss)")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
+    p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
+    from .errors import BuildError
+
     parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("convex-sum", help="exact Minkowski sum of two convex shapes (CVMS)")
@@ -194,8 +268,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--band", type=float, default=1e-9, help="ignore points this close to the surface")
     p.set_defaults(func=_check)
+    p = sub.add_parser("build", help="model a scene and build its C-obstacles (cached)")
+    p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
+    p.add_argument("-o", "--output", help="write the C-obstacles' meshes to an .npz file")
+    _model_options(p)
+    p.set_defaults(func=_build)
     p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles")
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
+    _model_options(p)
     p.add_argument("--planner", default="RRTConnect", help="any bound OMPL geometric planner")
     p.add_argument("--time", type=float, default=5.0, help="planning time budget in seconds")
     p.add_argument("--seed", type=int, default=None, help="OMPL random seed")
@@ -213,6 +293,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ValueError, FileNotFoundError) as e:
+    except (ValueError, FileNotFoundError, BuildError) as e:
         print(f"cspace: error: {e}", file=sys.stderr)
         return 2

@@ -327,7 +327,7 @@ def _from_arrays(a: dict, body: BodyModel, robot, c, grid):
                                obstacle=SurfaceMesh(body.vertices, F, body.name), robot=robot,
                                reference_point=c, grid=grid)
     return CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
-                                    robot=robot, reference_point=c, grid=grid)
+                                    robot=robot, reference_point=c, grid=grid, name=body.name)
 
 
 def _build(body: BodyModel, robot, c, grid, progress):
@@ -398,7 +398,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         for i, b in enumerate(todo):
             def sub(f, i=i, b=b):
                 if progress is not None:
-                    progress((i + f) / len(todo), f"{b.name}: {b.kind} {f:.0%}")
+                    progress((i + f) / len(todo), f"{b.name} ({b.kind})")
             sub(0.0)
             t = time.perf_counter()
             try:
@@ -416,7 +416,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                 b.cache = "off" if store is None else "miss"
             b.seconds = time.perf_counter() - t
         if progress is not None:
-            progress(1.0, "done")
+            progress(1.0, f"{len(todo)} C-obstacles")
     t2 = time.perf_counter()
     return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
                       seconds={"model": t1 - t0, "build": t2 - t1})

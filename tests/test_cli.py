@@ -6,8 +6,10 @@ import subprocess
 import sys
 
 import numpy as np
+import pytest
 import trimesh
 
+from cspace import CSpace, load_scene
 from cspace.cli import main
 
 
@@ -104,3 +106,60 @@ def test_plan_writes_an_exactly_checked_path(tmp_path, capsys):
 
     cs = CSpace.from_scene(load_scene(SCENES / "comb.toml"))
     assert (cs.segment_free(path[:-1], path[1:])).all() and not cs.contains(path).any()
+
+
+@pytest.fixture(autouse=True)
+def _private_cache(tmp_path, monkeypatch):
+    """Every CLI test gets its own cache folder (the default would be ~/.cache/cspace)."""
+    monkeypatch.setenv("CSPACE_CACHE", str(tmp_path / "cache"))
+
+
+def test_build_explains_caches_and_writes(tmp_path, capsys):
+    out = tmp_path / "cos.npz"
+    assert main(["build", str(SCENES / "cavity.toml"), "--explain", "-o", str(out)]) == 0
+    captured = capsys.readouterr()
+    text = captured.out
+    assert "9 obstacle bodies -> 9 modelled: 8 convex, 0 solid, 0 surface, 1 dropped" in text
+    assert "floor: dropped (12 triangles): its C-obstacle's bounding box" in text
+    assert text.count("(cache miss)") == 8 and "(0 from the cache)" in text
+    assert "[100%] 8 C-obstacles" in captured.err  # progress on stderr
+    data = np.load(out)
+    assert list(data["kinds"]) == ["convex"] * 8 and "wall-xmin" in list(data["names"])
+    cs = CSpace.from_scene(load_scene(SCENES / "cavity.toml"))
+    np.testing.assert_array_equal(data["vertices_0"], cs.obstacles[0].vertices)
+    # Second run: every C-obstacle from the cache; --quiet silences the progress.
+    assert main(["build", str(SCENES / "cavity.toml"), "--explain", "-q"]) == 0
+    captured = capsys.readouterr()
+    assert captured.out.count("(cache hit)") == 8 and captured.err == ""
+    assert main(["build", str(SCENES / "cavity.toml"), "--no-cache", "--explain", "-q"]) == 0
+    assert capsys.readouterr().out.count("(cache off)") == 8
+
+
+def test_plan_explain_reports_the_model_then_plans(capsys):
+    assert main(["plan", str(SCENES / "comb.toml"), "--explain", "--time", "2", "--seed", "1",
+                 "-q", "--no-cache"]) == 0
+    text = capsys.readouterr().out
+    assert "17 obstacle bodies -> 17 modelled: 11 convex, 0 solid, 0 surface, 6 dropped" in text
+    assert "front-spine: dropped" in text and "back-tooth-1: convex" in text
+    assert text.index("modelled") < text.index("RRTConnect solved")
+
+
+def test_build_of_a_solid_body_builds_or_names_it(tmp_path, capsys):
+    # A closed non-convex body (a torus) needs NCC-CVMS: built once trimming works, otherwise
+    # the command fails naming the body.
+    from zoo import torus
+
+    V, F = torus(1.0, 0.3, 12, 8)
+    trimesh.Trimesh(V, F, process=False).export(tmp_path / "torus.obj")
+    (tmp_path / "t.toml").write_text(
+        '[robot]\nbox = [0.2, 0.2, 0.2]\n[planning]\nbounds = [[-2, -2, -1], [2, 2, 1]]\n'
+        'start = [-1.8, 0, 0]\ngoal = [1.8, 0, 0]\n[[obstacles]]\nname = "ring"\n'
+        'mesh = "torus.obj"\n')
+    code = main(["build", str(tmp_path / "t.toml"), "--explain", "-q"])
+    captured = capsys.readouterr()
+    assert f"ring: solid ({len(F)} triangles" in captured.out and "genus 1" in captured.out
+    if code:
+        assert "cspace: error: body 'ring' (solid)" in captured.err
+        assert "BUILD FAILED" in captured.out
+    else:
+        assert "(cache miss)" in captured.out
