@@ -19,7 +19,8 @@ demo: $(STAMP)
 	$(PY) examples/convex_sum.py
 	$(PY) examples/view_convex.py --out out/convex_demo.html
 	$(VENV)/bin/cspace view scenes/window.toml -o out/window.html
-	$(VENV)/bin/cspace plan scenes/comb.toml --seed 1 --time 5 -o out/comb_path.txt --html out/comb_plan.html
+	$(VENV)/bin/cspace plan scenes/comb.toml --seed 1 --time 5 --explain --fcl-check \
+		-o out/comb_path.txt --html out/comb_plan.html --result out/comb_result.json
 
 # Needs Chromium (Debian: apt-get install -y chromium); rewrites the README picture.
 screenshot: $(STAMP)

@@ -183,9 +183,35 @@ def _plan(args: argparse.Namespace) -> int:
     status = "solved" if r.solved else "NOT solved (approximate path)"
     print(f"{scene.name}: {args.planner} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
           f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
+    fcl = None
+    if args.fcl_check and len(r.path):
+        from .fcl_check import path_collisions
+
+        bad, n = path_collisions(cs, r.path)
+        fcl = {"colliding_samples": int(len(bad)), "samples": n}
+        print(f"FCL re-check: {len(bad)} colliding of {n} samples along the path")
     if args.output:
         np.savetxt(args.output, r.path)
         print(f"wrote {args.output}")
+    if args.result:
+        import json
+        from pathlib import Path
+
+        result = {
+            "scene": scene.name, "scene_file": str(args.scene), "planner": args.planner,
+            "seed": args.seed, "time_budget": args.time, "solved": r.solved, "exact": r.exact,
+            "valid_exact_recheck": r.valid, "status": r.status, "seconds": r.time,
+            "length": r.length, "path": r.path.tolist(), "fcl_recheck": fcl,
+            "model": {"counts": m.counts(), "model_seconds": m.seconds["model"],
+                      "build_seconds": m.seconds["build"],
+                      "bodies": [{"name": b.name, "kind": b.kind, "reason": b.reason,
+                                  "cache": b.cache, "seconds": b.seconds} for b in m.bodies]},
+        }
+        Path(args.result).parent.mkdir(parents=True, exist_ok=True)
+        Path(args.result).write_text(json.dumps(result, indent=1))
+        print(f"wrote {args.result}")
+    if fcl is not None and fcl["colliding_samples"]:
+        return 1
     if args.html:
         from .viz import SceneView, draw_scene
 
@@ -281,6 +307,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=None, help="OMPL random seed")
     p.add_argument("-o", "--output", help="write the path (n x 3 text)")
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
+    p.add_argument("--fcl-check", action="store_true",
+                   help="re-check the path with FCL sampled every 1e-3 of the scene size")
+    p.add_argument("--result", help="write a JSON summary (model, plan, path, checks)")
     p.set_defaults(func=_plan)
     p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)")
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")

@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-__all__ = ["FclOracle", "cross_check", "winding_number", "fcl_convex"]
+__all__ = ["FclOracle", "cross_check", "winding_number", "fcl_convex", "path_collisions"]
 
 
 def _fcl():
@@ -363,3 +363,53 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         "seconds_per_query_fcl": t_fcl / len(q),
         "ok": bool(counted.size == 0),
     }
+
+
+def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray, int]:
+    """Re-check a piecewise-linear path with FCL, sampled along every segment.
+
+    Each C-obstacle is checked with its own semantics: convex and mesh (solid) C-obstacles
+    with :class:`FclOracle` on their operands (solid: containment counts), surface
+    C-obstacles (``kind='surface'``, open meshes) with FCL's plain mesh collision.
+
+    Parameters
+    ----------
+    cspace : CSpace
+        Built from operands (``CSpaceObstacle.build`` or :func:`cspace.model.model_scene`).
+    path : (n, 3) float64
+        Reference-point waypoints.
+    step : float, optional
+        Sampling step along segments; default ``1e-3`` of the bounds' diagonal.
+
+    Returns
+    -------
+    colliding : (j, 3) float64
+        The samples at which FCL finds a collision.
+    n_samples : int
+    """
+    fcl = _fcl()
+    P = np.asarray(path, dtype=np.float64).reshape(-1, 3)
+    lo, hi = cspace.bounds
+    step = step or 1e-3 * float(np.linalg.norm(hi - lo))
+    parts = [P[:1]]
+    for a, b in zip(P[:-1], P[1:]):
+        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+        parts.append(a + (np.arange(1, n + 1)[:, None] / n) * (b - a))
+    Q = np.vstack(parts)
+    hit = np.zeros(len(Q), dtype=bool)
+    for o in cspace.obstacles:
+        blo, bhi = o.bounds
+        near = np.nonzero(((blo <= Q) & (Q <= bhi)).all(axis=1))[0]  # broad phase: CO box
+        if not near.size:
+            continue
+        surface = o.kind == "surface"
+        orc = FclOracle(o.obstacle.vertices, o.obstacle.faces, o.robot.vertices, o.robot.faces,
+                        o.reference_point, convex=o.kind == "convex")
+        if surface:  # FCL's mesh semantics: the BVH surface alone, no containment
+            for i in near.tolist():
+                orc._robot.setTranslation(Q[i])
+                hit[i] |= fcl.collide(orc._robot, orc._obs, fcl.CollisionRequest(),
+                                      fcl.CollisionResult()) > 0
+        else:
+            hit[near] |= orc.collides(Q[near])
+    return Q[hit], int(len(Q))
