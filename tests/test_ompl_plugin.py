@@ -17,7 +17,7 @@ pytest.importorskip("ompl")
 pytest.importorskip("fcl")
 
 import cspace  # noqa: E402
-from cspace.fcl_check import FclOracle  # noqa: E402
+from cspace.fcl_check import path_collisions  # noqa: E402
 from cspace.ompl_plugin import plan, planner_names, verify_path  # noqa: E402
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
@@ -38,34 +38,14 @@ MUST_SOLVE = {"comb": 0.7}  # fraction of runs per scene
 
 
 class _Fcl:
-    """FCL solid-semantics re-check of a path, sampled along every segment."""
+    """FCL re-check of a path, sampled along every segment (cspace.fcl_check.path_collisions)."""
 
     def __init__(self, cs: cspace.CSpace):
-        self.oracles = [
-            (FclOracle(o.obstacle.vertices, o.obstacle.faces, o.robot.vertices, o.robot.faces,
-                       o.reference_point, convex=True), o.bounds)
-            for o in cs.obstacles
-        ]
-        lo, hi = cs.bounds
-        self.step = 1e-3 * float(np.linalg.norm(hi - lo))
-
-    def samples(self, P: np.ndarray) -> np.ndarray:
-        out = [P[:1]]
-        for a, b in zip(P[:-1], P[1:]):
-            n = max(1, int(np.ceil(np.linalg.norm(b - a) / self.step)))
-            t = np.arange(1, n + 1)[:, None] / n
-            out.append(a + t * (b - a))
-        return np.vstack(out)
+        self.cs = cs
 
     def colliding(self, P: np.ndarray) -> np.ndarray:
         """Sample points along the path where FCL reports a collision."""
-        Q = self.samples(P)
-        hit = np.zeros(len(Q), dtype=bool)
-        for orc, (lo, hi) in self.oracles:
-            near = np.nonzero(((lo <= Q) & (Q <= hi)).all(axis=1))[0]  # broad phase: CO's box
-            if near.size:
-                hit[near] |= orc.collides(Q[near])
-        return Q[hit]
+        return path_collisions(self.cs, P)[0]
 
 
 @pytest.fixture(scope="module")
