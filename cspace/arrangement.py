@@ -58,6 +58,7 @@ __all__ = [
     "EDGE_PLANE",
     "TriTriResult",
     "candidate_pairs",
+    "box_pairs",
     "intersect_pairs",
     "endpoint_coordinates",
 ]
@@ -217,11 +218,18 @@ def candidate_pairs(ints, faces, *, chunk: int = _CHUNK) -> np.ndarray:
         Rows ``(i, j)`` with ``i < j``, sorted lexicographically, each unordered pair once.
     """
     ints, faces = _check_soup(ints, faces)
-    t = len(faces)
+    corners = ints[faces]
+    return box_pairs(corners.min(axis=1), corners.max(axis=1), chunk=chunk)
+
+
+def box_pairs(lo, hi, *, chunk: int = _CHUNK) -> np.ndarray:
+    """All pairs of closed integer boxes ``[lo_i, hi_i]`` that intersect (the sweep of
+    :func:`candidate_pairs`); ``lo, hi (t, 3)`` int64 with ``|k| < 2**29``. Rows ``(i, j)``,
+    ``i < j``, sorted, each unordered pair once."""
+    lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
+    t = len(lo)
     if t < 2:
         return np.zeros((0, 2), dtype=np.int64)
-    corners = ints[faces]
-    lo, hi = corners.min(axis=1), corners.max(axis=1)
     first = np.arange(1, t + 1)
     sweeps = []
     for ax in range(3):

@@ -168,6 +168,18 @@ def _hom(p) -> tuple[int, int, int]:
     return (x.numerator * (w // b), y.numerator * (w // d), w)
 
 
+def _hpoint(p) -> tuple[int, int, int]:
+    """Canonical homogeneous triple of any point :func:`to_point` accepts (no Fractions made
+    for integer pairs and integer triples)."""
+    p = tuple(p)
+    if all(isinstance(c, (int, np.integer)) for c in p):
+        if len(p) == 2:
+            return (int(p[0]), int(p[1]), 1)
+        if len(p) == 3 and p[2] != 0:
+            return _hnorm(int(p[0]), int(p[1]), int(p[2]))
+    return _hom(to_point(p))
+
+
 def _hnorm(X: int, Y: int, W: int) -> tuple[int, int, int]:
     if W < 0:
         X, Y, W = -X, -Y, -W
@@ -258,8 +270,20 @@ class Face:
     outer: list
     holes: list = field(default_factory=list)
     isolated: list = field(default_factory=list)
-    sample: tuple = None
     area: Fraction = None
+    _sample: tuple = field(default=None, repr=False)
+    _owner: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def sample(self) -> tuple:
+        # computed on first use: most faces never need one
+        if self._sample is None and self._owner is not None:
+            self._sample = self._owner._sample(self)
+        return self._sample
+
+    @sample.setter
+    def sample(self, value) -> None:
+        self._sample = value
 
 
 class Arrangement2D:
@@ -316,7 +340,7 @@ class Arrangement2D:
     """
 
     def __init__(self, segments, labels=None):
-        segs = [(to_point(p), to_point(q)) for p, q in segments]
+        segs = [(_hpoint(p), _hpoint(q)) for p, q in segments]
         if labels is None:
             labels = list(range(len(segs)))
         else:
@@ -328,7 +352,7 @@ class Arrangement2D:
     # ---------------------------------------------------------------- construction
 
     def _build(self, segs, labels):
-        H = [(_hom(p), _hom(q)) for p, q in segs]
+        H = segs
         proper = [i for i, (p, q) in enumerate(H) if p != q]
         points_only = [i for i, (p, q) in enumerate(H) if p == q]
         on = {i: {H[i][0], H[i][1]} for i in proper}
@@ -522,7 +546,7 @@ class Arrangement2D:
             dtype=np.int64,
         ).reshape(-1, 2)
         for f in self.faces:
-            f.sample = self._sample(f)
+            f._owner = self
         if V:
             self.unbounded.sample = (V[0][0] - 1, V[0][1])
         else:
@@ -678,7 +702,7 @@ class MergeResult:
 
 
 def _polygons(polygons, weights):
-    polys = [[to_point(p) for p in poly] for poly in polygons]
+    polys = [[_hpoint(p) for p in poly] for poly in polygons]
     if weights is None:
         weights = [1] * len(polys)
     weights = [int(w) for w in weights]
@@ -722,16 +746,16 @@ def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
                 continue
             segs.append((a, b))
             labels.append((i, j))
-            dirs[(i, j)] = _sub(b, a)
+            dirs[(i, j)] = _hdir(a, b)
     for k, (a, b) in enumerate(cuts):
         segs.append((a, b))
         labels.append((-1, k))
     arr = Arrangement2D(segs, labels)
-    V = arr.vertices
+    H = arr._H
     nf = len(arr.faces)
     adj = {}
     for k, (u, v) in enumerate(arr.edges.tolist()):
-        d = _sub(V[v], V[u])
+        d = _hdir(H[u], H[v])
         delta = 0
         for lab in arr.edge_labels[k]:
             if lab[0] >= 0:
@@ -883,6 +907,17 @@ def _ear_ok(poly, i) -> bool:
     return True
 
 
+def _common_scale(arr: Arrangement2D, ids) -> dict:
+    """Integer points of the vertices ``ids``: their homogeneous coordinates over one common
+    denominator (a similarity of the plane, so every orientation sign is kept)."""
+    H = arr._H
+    den = 1
+    for v in set(ids):
+        w = H[v][2]
+        den = den * w // gcd(den, w)
+    return {v: (H[v][0] * (den // H[v][2]), H[v][1] * (den // H[v][2])) for v in ids}
+
+
 def triangulate_face(arr: Arrangement2D, f: int) -> list:
     """Triangulate a bounded face (with its holes) without new vertices, exactly.
 
@@ -900,9 +935,9 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
     corner into its interior. O(n^3) in the number n of boundary vertices; for small faces.
     """
     face = arr.faces[f]
-    V = arr.vertices
     poly = _strip_spikes(arr.cycle_vertices(face.outer))
     holes = [h for h in (_strip_spikes(arr.cycle_vertices(c)) for c in face.holes) if h]
+    V = _common_scale(arr, [*poly, *(v for h in holes for v in h)])
     P = [V[v] for v in poly]
     ids = list(poly)
     pending = [([V[v] for v in h], list(h)) for h in holes]

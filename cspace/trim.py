@@ -12,14 +12,16 @@ import time
 from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
-from functools import cmp_to_key
+from functools import cached_property, cmp_to_key
 from math import gcd
 
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from .arrangement import POINT, SEGMENT, TriTriResult, candidate_pairs, endpoint_coordinates, intersect_pairs
+from .arrangement import (
+    POINT, SEGMENT, TriTriResult, box_pairs, candidate_pairs, endpoint_coordinates, intersect_pairs,
+)
 from .convex import ConvexPolytope, convex_minkowski_sum
 from .errors import ExactnessError, NotConvexError
 from .exact import Grid
@@ -67,8 +69,12 @@ class SumPolyhedron:
         they did not in the exact result (empty when rounding created none).
     grid : Grid
         The snapping grid of the inputs.
+    points_exact : list or ConvexPolytope
+        The exact vertices: homogeneous ``(X, Y, Z, W)`` Python ints in grid units, one per
+        row of :attr:`vertices` (for convex pairs: the CVMS polytope, integer vertices).
     volume_exact : Fraction
-        Exact enclosed volume (holes subtracted), scene units cubed, of the exact surface.
+        Exact enclosed volume (holes subtracted), scene units cubed, of the exact surface
+        (computed on first access).
     convex : bool
         True when both operands were convex and CVMS produced the result.
     stats : dict
@@ -88,9 +94,26 @@ class SumPolyhedron:
     nonmanifold_vertices: np.ndarray
     rounding_self_intersections: np.ndarray
     grid: Grid
-    volume_exact: Fraction
+    points_exact: list = field(repr=False)
     convex: bool = False
     stats: dict = field(default_factory=dict, repr=False)
+
+    @cached_property
+    def volume_exact(self) -> Fraction:
+        """Exact enclosed volume (holes subtracted) of the exact surface, scene units cubed."""
+        if self.convex:
+            P = self.points_exact
+            return Fraction(P.volume6()) / 6 * Fraction(2) ** (3 * self.grid.exponent)
+        pts = self.points_exact
+        num, den = 0, 1
+        for a, b, c in self.faces.tolist():
+            P, Q, R = pts[a], pts[b], pts[c]
+            det = _dot(P[:3], _cross(Q[:3], R[:3]))
+            if det:
+                w = P[3] * Q[3] * R[3]
+                g = gcd(den, w)
+                num, den = num * (w // g) + det * (den // g), den * (w // g)
+        return Fraction(num, den) / 6 * Fraction(2) ** (3 * self.grid.exponent)
 
     @property
     def volume(self) -> float:
@@ -152,7 +175,7 @@ def _from_convex(A: ConvexPolytope, B: ConvexPolytope, t0: float) -> SumPolyhedr
         nonmanifold_vertices=np.zeros(0, dtype=np.int64),
         rounding_self_intersections=empty2,
         grid=P.grid,
-        volume_exact=Fraction(P.volume6()) / 6 * Fraction(P.grid.step) ** 3,
+        points_exact=P,
         convex=True,
         stats={"cvms": total, "total": total, "facets": P.n_facets},
     )
@@ -646,6 +669,8 @@ def _winding(cx: _Complex, sh: _Shells, anchor: int) -> np.ndarray:
 
 
 _UNKNOWN = np.iinfo(np.int64).min
+# Float filter for orientations of float64 points (Shewchuk's bound is below 8 eps).
+_ORIENT_FILTER = 16 * float(np.finfo(np.float64).eps) / 2
 
 
 def _face_point(cx: _Complex, planes: _Planes, f: int) -> tuple:
@@ -809,7 +834,6 @@ class _Output:
     facet_superset: np.ndarray  # a superset facet each output facet comes from
     shell: np.ndarray
     shell_is_hole: np.ndarray
-    volume6: Fraction  # six times the volume, grid units cubed
 
 
 def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: _Planes,
@@ -847,12 +871,6 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
     cells, facet_shell = np.unique(np.array(outside_cell, dtype=np.int64), return_inverse=True)
     root = find(int(sh.of[anchor]))
     shell_is_hole = cells != root
-    vol = Fraction(0)
-    for a, b, c in T.tolist():
-        P, Q, R = points[a], points[b], points[c]
-        det = _dot(P[:3], _cross(Q[:3], R[:3]))
-        if det:
-            vol += Fraction(det, P[3] * Q[3] * R[3])
     return _Output(
         points=points,
         faces=T,
@@ -860,7 +878,6 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
         facet_superset=np.array(facet_src, dtype=np.int64),
         shell=facet_shell.reshape(-1)[np.array(tri_facet, dtype=np.int64)] if len(tri_facet) else np.zeros(0, np.int64),
         shell_is_hole=shell_is_hole,
-        volume6=vol,
     )
 
 
@@ -936,8 +953,9 @@ def _result(out: _Output, S: Superset, stats: dict) -> SumPolyhedron:
     grid = S.grid
     V = _to_float(out.points, grid)
     nm_edges, nm_vertices = _nonmanifold(out.faces, len(V))
-    crossings = _rounding_check(out, V)
+    crossings = _rounding_check(out, V, grid)
     stats["rounding_check"] = time.perf_counter() - t
+    stats["total"] += stats["rounding_check"]
     stats["output_triangles"] = len(out.faces)
     n_facets = len(out.facet_superset)
     src = out.facet_superset
@@ -954,11 +972,150 @@ def _result(out: _Output, S: Superset, stats: dict) -> SumPolyhedron:
         nonmanifold_vertices=nm_vertices,
         rounding_self_intersections=crossings,
         grid=grid,
-        volume_exact=out.volume6 / 6 * Fraction(2) ** (3 * grid.exponent),
+        points_exact=out.points,
         convex=False,
         stats=stats,
     )
 
 
-def _rounding_check(out: _Output, V: np.ndarray) -> np.ndarray:
-    return np.zeros((0, 2), np.int64)
+def _rounding_check(out: _Output, V: np.ndarray, grid: Grid) -> np.ndarray:
+    """Triangle pairs that meet improperly after rounding to float64.
+
+    In the exact result two triangles meet only in shared vertices and edges. Rounding moves
+    a vertex by at most half an ulp per coordinate; only pairs with a moved vertex can change,
+    and only if their rounded boxes overlap. Those pairs are tested exactly on the rounded
+    coordinates (float filter, then Fractions): proper crossings for disjoint triangles,
+    fold-over for triangles sharing an edge, and any contact beyond the shared vertex.
+    """
+    T = out.faces
+    if not len(T):
+        return np.zeros((0, 2), np.int64)
+    scale = Fraction(2) ** grid.exponent
+    moved = np.array(
+        [any(Fraction(float(x)) != Fraction(P[k], P[3]) * scale for k, x in enumerate(v))
+         for P, v in zip(out.points, V.tolist())], dtype=bool)
+    if not moved.any():
+        return np.zeros((0, 2), np.int64)
+    P = V[T]
+    # integer boxes in grid units, rounded outwards: they contain the float boxes
+    lo = np.floor(np.ldexp(P.min(axis=1), -grid.exponent)).astype(np.int64)
+    hi = np.ceil(np.ldexp(P.max(axis=1), -grid.exponent)).astype(np.int64)
+    pairs = box_pairs(lo, hi)
+    pairs = pairs[moved[T[pairs]].any(axis=(1, 2))]
+    pairs = pairs[~(_separated(V, T, pairs[:, 0], pairs[:, 1]) | _separated(V, T, pairs[:, 1], pairs[:, 0]))]
+    Vi, Tl = _common_integers(V), T.tolist()
+    bad = [(i, j) for i, j in pairs.tolist() if _improper(Vi, Tl[i], Tl[j])]
+    return np.array(bad, dtype=np.int64).reshape(-1, 2)
+
+
+def _separated(V: np.ndarray, T: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Pairs where every vertex of triangle ``j`` not shared with ``i`` lies strictly on one
+    side of the plane of ``i`` (float filter; undecided pairs are False): then the two
+    triangles meet at most in their shared vertices and edge."""
+    a, b, c = (V[T[i, k]] for k in range(3))
+    u, v = b - a, c - a
+    n = np.cross(u, v)
+    side = np.zeros((len(i), 3), dtype=np.int8)
+    for k in range(3):
+        w = V[T[j, k]] - a
+        det = np.einsum("ij,ij->i", n, w)
+        perm = (np.abs(u[:, 0]) * (np.abs(v[:, 1] * w[:, 2]) + np.abs(v[:, 2] * w[:, 1]))
+                + np.abs(u[:, 1]) * (np.abs(v[:, 2] * w[:, 0]) + np.abs(v[:, 0] * w[:, 2]))
+                + np.abs(u[:, 2]) * (np.abs(v[:, 0] * w[:, 1]) + np.abs(v[:, 1] * w[:, 0])))
+        sure = np.abs(det) > _ORIENT_FILTER * perm
+        shared = np.any(T[i] == T[j, k][:, None], axis=1)
+        side[:, k] = np.where(shared, 2, np.where(sure, np.sign(det), 0))
+    free = side != 2
+    pos = np.all((side == 1) | ~free, axis=1)
+    neg = np.all((side == -1) | ~free, axis=1)
+    return (pos | neg) & free.any(axis=1)
+
+
+def _common_integers(V: np.ndarray) -> list:
+    """Float64 coordinates as Python ints at one common power-of-two scale (exact): the
+    exact predicates below then run on integers."""
+    ratios = [x.as_integer_ratio() for x in V.reshape(-1).tolist()]
+    den = max(d for _, d in ratios)
+    flat = [n * (den // d) for n, d in ratios]
+    return [flat[k: k + 3] for k in range(0, len(flat), 3)]
+
+
+
+
+
+def _segment_meets_triangle(p, q, tri, V) -> bool:
+    """Does the closed segment ``pq`` meet the closed triangle ``tri`` (vertex ids)?"""
+    a, b, c = (V[k] for k in tri)
+    s1, s2 = _orient3(a, b, c, p), _orient3(a, b, c, q)
+    if s1 * s2 > 0:
+        return False
+    if s1 == 0 and s2 == 0:  # coplanar
+        return _coplanar_seg_tri(*_in_plane_2d([a, b, c], [p, q]))
+    e = (_orient3(p, q, a, b), _orient3(p, q, b, c), _orient3(p, q, c, a))
+    return all(x >= 0 for x in e) or all(x <= 0 for x in e)
+
+
+def _o2(a, b, c) -> int:
+    d = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    return (d > 0) - (d < 0)
+
+
+def _coplanar_seg_tri(a, b, c, p, q) -> bool:
+    if _o2(a, b, c) < 0:
+        b, c = c, b
+    inside = lambda x: _o2(a, b, x) >= 0 and _o2(b, c, x) >= 0 and _o2(c, a, x) >= 0  # noqa: E731
+    if inside(p) or inside(q):
+        return True
+    for u, v in ((a, b), (b, c), (c, a)):
+        o1, o2, o3, o4 = _o2(p, q, u), _o2(p, q, v), _o2(u, v, p), _o2(u, v, q)
+        if o1 * o2 <= 0 and o3 * o4 <= 0 and not (o1 == o2 == o3 == o4 == 0):
+            return True
+        if o1 == o2 == 0 and o3 == o4 == 0 and (
+            min(p[0], q[0]) <= max(u[0], v[0]) and min(u[0], v[0]) <= max(p[0], q[0])
+            and min(p[1], q[1]) <= max(u[1], v[1]) and min(u[1], v[1]) <= max(p[1], q[1])
+        ):
+            return True
+    return False
+
+
+def _in_plane_2d(tri_pts, pts):
+    """Exact coordinates of ``pts`` projected along the dominant axis of the exact normal of
+    ``tri_pts`` (orientation-preserving projection up to one global sign)."""
+    a, b, c = tri_pts
+    n = _cross([b[i] - a[i] for i in range(3)], [c[i] - a[i] for i in range(3)])
+    ax = max(range(3), key=lambda i: abs(n[i]))
+    k = [(ax + 1) % 3, (ax + 2) % 3]
+    return [[p[i] for i in k] for p in (*tri_pts, *pts)]
+
+
+def _improper(V: list, s: list, t: list) -> bool:
+    """Do triangles ``s`` and ``t`` (vertex ids into ``V``, exact integer coordinates of the
+    rounded vertices) meet beyond the
+    vertices and edge they share? A triangle that rounding made degenerate counts as
+    meeting its neighbours."""
+    shared = set(s) & set(t)
+    if not shared:
+        return any(_segment_meets_triangle(V[s[k]], V[s[(k + 1) % 3]], t, V) for k in range(3)) or any(
+            _segment_meets_triangle(V[t[k]], V[t[(k + 1) % 3]], s, V) for k in range(3))
+    if len(shared) == 2:
+        u, v = sorted(shared)
+        a = next(x for x in s if x not in shared)
+        b = next(x for x in t if x not in shared)
+        if _orient3(V[u], V[v], V[a], V[b]) != 0:
+            return False  # two planes: they meet only along their common edge
+        pu, pv, pa, pb = _in_plane_2d([V[u], V[v], V[a]], [V[b]])
+        sa, sb = _o2(pu, pv, pa), _o2(pu, pv, pb)
+        return sa == 0 or sb == 0 or sa == sb  # folded onto each other
+    (u,) = shared
+    a, b = (x for x in s if x != u)
+    c, d = (x for x in t if x != u)
+    if _segment_meets_triangle(V[a], V[b], t, V) or _segment_meets_triangle(V[c], V[d], s, V):
+        return True
+    # an edge at u lying in the other triangle's plane and pointing into its corner at u
+    for x, (o0, o1) in ((a, (c, d)), (b, (c, d)), (c, (a, b)), (d, (a, b))):
+        if _orient3(V[u], V[o0], V[o1], V[x]) == 0:
+            pu, p0, p1, px = _in_plane_2d([V[u], V[o0], V[o1]], [V[x]])
+            o = _o2(pu, p0, p1)
+            if o == 0 or (_o2(pu, p0, px) * o >= 0 and _o2(pu, px, p1) * o >= 0):
+                return True
+    return False
