@@ -228,6 +228,20 @@ def test_cached_c_obstacles_answer_exactly_as_fresh_ones(tmp_path):
     np.testing.assert_array_equal(a.signed_distance(Q[:300]), b.signed_distance(Q[:300]))
 
 
+def test_cached_solid_c_obstacle_answers_exactly_as_the_fresh_one(tmp_path):
+    V, F = torus(1.0, 0.3, 12, 8)
+    scene = make_scene([Body("torus", V, F, "test")], bounds=((-2, -2, -1), (2, 2, 1)))
+    a, b, _ = _cached_vs_fresh(scene, tmp_path)
+    assert a.obstacles[0].kind == b.obstacles[0].kind == "mesh"
+    np.testing.assert_array_equal(a.obstacles[0].vertices, b.obstacles[0].vertices)
+    rng = np.random.default_rng(3)
+    Q = np.vstack([rng.uniform(-1.6, 1.6, (3000, 3)), a.obstacles[0].vertices[:200]])
+    np.testing.assert_array_equal(a.contains(Q), b.contains(Q))
+    np.testing.assert_array_equal(a.segment_free(Q[:1000], Q[1000:2000]),
+                                  b.segment_free(Q[:1000], Q[1000:2000]))
+    np.testing.assert_array_equal(a.signed_distance(Q[:500]), b.signed_distance(Q[:500]))
+
+
 def test_corrupt_and_partial_cache_files_are_rebuilt(tmp_path):
     scene = make_scene([box_body("box", (1, 0, 0))])
     _, _, cache = _cached_vs_fresh(scene, tmp_path)
@@ -423,3 +437,22 @@ def test_fcl_environment_builds_and_agrees_with_fcl(shared_data):
     assert 100 < ours.sum() < 1400
     assert (ours != ref).sum() == 0
     del fcl
+
+
+@pytest.mark.slow
+def test_bug_trap_solid_builds_and_agrees_with_fcl(shared_data, tmp_path):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(shared_data / "parasol_open_ppl_env" / "bug_trap1.0" / "bug-trap.env")
+    m = model_scene(scene, cache=tmp_path / "cache")
+    (b,) = m.bodies
+    assert b.kind == "solid" and not b.error and b.co.kind == "mesh"
+    cs = m.cspace()
+    from cspace.fcl_check import cross_check
+
+    r = cross_check(cs, n=4000, seed=0, band=1e-9)
+    assert r["n_disagree"] == 0, r["disagreements"][:5]
+    # The start and goal of the Parasol query are free.
+    assert not cs.contains(scene.start) and not cs.contains(scene.goal)
+    again = model_scene(scene, cache=tmp_path / "cache")
+    assert again.bodies[0].cache == "hit"
