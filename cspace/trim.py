@@ -1003,6 +1003,7 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid) -> np.ndarray:
     pairs = box_pairs(lo, hi)
     pairs = pairs[moved[T[pairs]].any(axis=(1, 2))]
     pairs = pairs[~(_separated(V, T, pairs[:, 0], pairs[:, 1]) | _separated(V, T, pairs[:, 1], pairs[:, 0]))]
+    pairs = pairs[~_apart_in_projection(V, T, pairs)]
     Vi, Tl = _common_integers(V), T.tolist()
     bad = [(i, j) for i, j in pairs.tolist() if _improper(Vi, Tl[i], Tl[j])]
     return np.array(bad, dtype=np.int64).reshape(-1, 2)
@@ -1029,6 +1030,78 @@ def _separated(V: np.ndarray, T: np.ndarray, i: np.ndarray, j: np.ndarray) -> np
     pos = np.all((side == 1) | ~free, axis=1)
     neg = np.all((side == -1) | ~free, axis=1)
     return (pos | neg) & free.any(axis=1)
+
+
+def _o2_filtered(u, a, b) -> np.ndarray:
+    """Sign of orient2d(u, a, b) on float rows, 0 where the float filter cannot decide."""
+    x1, y1 = a[:, 0] - u[:, 0], a[:, 1] - u[:, 1]
+    x2, y2 = b[:, 0] - u[:, 0], b[:, 1] - u[:, 1]
+    det = x1 * y2 - y1 * x2
+    sure = np.abs(det) > _ORIENT_FILTER * (np.abs(x1 * y2) + np.abs(y1 * x2))
+    return np.where(sure, np.sign(det), 0)
+
+
+def _apart_in_projection(V: np.ndarray, T: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Pairs sharing an edge or a vertex whose projections (along the dominant axis of the
+    first triangle's normal) meet only in the shared part, decided by a float filter
+    (undecided: False). The 3D triangles then meet only there too."""
+    i, j = pairs[:, 0], pairs[:, 1]
+    Ti, Tj = T[i], T[j]
+    eq = Ti[:, :, None] == Tj[:, None, :]  # (k, 3, 3): vertex a of i equals vertex b of j
+    n_shared = eq.sum(axis=(1, 2))
+    out = np.zeros(len(pairs), dtype=bool)
+    n = np.cross(V[Ti[:, 1]] - V[Ti[:, 0]], V[Ti[:, 2]] - V[Ti[:, 0]])
+    ax = np.argmax(np.abs(n), axis=1)
+    keep = np.stack([(ax + 1) % 3, (ax + 2) % 3], axis=1)
+    rows = np.arange(len(pairs))
+
+    def P(ids, r):
+        return np.stack([V[ids, keep[r, 0]], V[ids, keep[r, 1]]], axis=1)
+
+    # disjoint: an edge line of one triangle strictly separates the other (2D axes)
+    z = n_shared == 0
+    if z.any():
+        r = rows[z]
+        sep = np.zeros(len(r), dtype=bool)
+        for A_, B_ in ((Ti[r], Tj[r]), (Tj[r], Ti[r])):
+            for k in range(3):
+                p, q, o3 = P(A_[:, k], r), P(A_[:, (k + 1) % 3], r), P(A_[:, (k + 2) % 3], r)
+                o = _o2_filtered(p, q, o3)
+                allout = o != 0
+                for m in range(3):
+                    allout &= _o2_filtered(p, q, P(B_[:, m], r)) * o < 0
+                sep |= allout
+        out[r] = sep
+    si = eq.any(axis=2)  # vertices of i that are shared
+    sj = eq.any(axis=1)
+    # shared edge (u, v): the two apexes strictly on opposite sides of the edge's line
+    e = n_shared == 2
+    if e.any():
+        r = rows[e]
+        ai = Ti[r, np.argmin(si[r], axis=1)]
+        aj = Tj[r, np.argmin(sj[r], axis=1)]
+        uv = np.sort(np.where(si[r], Ti[r], -1), axis=1)[:, 1:]
+        u, v = P(uv[:, 0], r), P(uv[:, 1], r)
+        s1 = _o2_filtered(u, v, P(ai, r))
+        s2 = _o2_filtered(u, v, P(aj, r))
+        out[r] = s1 * s2 < 0
+    # shared vertex u: each edge ray at u strictly outside the other triangle's corner
+    w = n_shared == 1
+    if w.any():
+        r = rows[w]
+        ku = np.argmax(si[r], axis=1)
+        u_id = Ti[r, ku]
+        a_id, b_id = Ti[r, (ku + 1) % 3], Ti[r, (ku + 2) % 3]
+        kj = np.argmax(sj[r], axis=1)
+        c_id, d_id = Tj[r, (kj + 1) % 3], Tj[r, (kj + 2) % 3]
+        u, a, b, c, d = (P(x, r) for x in (u_id, a_id, b_id, c_id, d_id))
+
+        def outside(x, p, q):  # ray u->x strictly outside the convex corner (p, q) at u
+            o = _o2_filtered(u, p, q)
+            return (o != 0) & ((_o2_filtered(u, p, x) * o < 0) | (_o2_filtered(u, x, q) * o < 0))
+
+        out[r] = outside(c, a, b) & outside(d, a, b) & outside(a, c, d) & outside(b, c, d)
+    return out
 
 
 def _common_integers(V: np.ndarray) -> list:
