@@ -665,10 +665,15 @@ class Coverage:
         Arrangement of all polygon edges; edge labels are ``(polygon index, edge index)``.
     coverage : list[int]
         Net coverage of each bounded face (the unbounded face always has 0).
+    support : list[int]
+        Unsigned coverage of each bounded face: ``sum_i |weights[i] * winding(polygon_i)|``
+        for simple polygons; non-zero exactly where some polygon of non-zero weight covers
+        the face, even where opposite polygons cancel in :attr:`coverage`.
     """
 
     arrangement: Arrangement2D
     coverage: list
+    support: list = None
 
     def of(self, f: int) -> int:
         return 0 if f < 0 else self.coverage[f]
@@ -711,6 +716,20 @@ def _polygons(polygons, weights):
     return polys, weights
 
 
+def _hturn(poly) -> int:
+    """Sign of the signed area of a closed polyline of homogeneous points (0 if none)."""
+    num, den = 0, 1
+    n = len(poly)
+    for j in range(n):
+        a, b = poly[j], poly[(j + 1) % n]
+        t = a[0] * b[1] - a[1] * b[0]
+        if t:
+            w = a[2] * b[2]
+            g = gcd(den, w)
+            num, den = num * (w // g) + t * (den // g), den * (w // g)
+    return (num > 0) - (num < 0)
+
+
 def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
     """Net signed coverage of oriented closed polygons in one plane.
 
@@ -738,6 +757,7 @@ def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
     """
     polys, weights = _polygons(polygons, weights)
     segs, labels, dirs = [], [], {}
+    turn = [_hturn(poly) for poly in polys]  # +1 counter-clockwise, -1 clockwise
     for i, poly in enumerate(polys):
         n = len(poly)
         for j in range(n):
@@ -756,25 +776,28 @@ def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
     adj = {}
     for k, (u, v) in enumerate(arr.edges.tolist()):
         d = _hdir(H[u], H[v])
-        delta = 0
+        delta = total = 0
         for lab in arr.edge_labels[k]:
             if lab[0] >= 0:
-                delta += weights[lab[0]] * (1 if _dot(dirs[lab], d) > 0 else -1)
+                step = weights[lab[0]] * (1 if _dot(dirs[lab], d) > 0 else -1)
+                delta += step
+                total += abs(step) * (1 if step * turn[lab[0]] > 0 else -1)
         left, right = arr.edge_faces[k]
         left, right = int(left), int(right)
-        adj.setdefault(right, []).append((left, delta))
-        adj.setdefault(left, []).append((right, -delta))
-    cov = {-1: 0}
+        adj.setdefault(right, []).append((left, delta, total))
+        adj.setdefault(left, []).append((right, -delta, -total))
+    cov = {-1: (0, 0)}
     queue = deque([-1])
     while queue:
         f = queue.popleft()
-        for g, d in adj.get(f, ()):
+        c, a = cov[f]
+        for g, d, t in adj.get(f, ()):
             if g not in cov:
-                cov[g] = cov[f] + d
+                cov[g] = (c + d, a + t)
                 queue.append(g)
-            elif cov[g] != cov[f] + d:  # pragma: no cover - impossible for closed polylines
+            elif cov[g] != (c + d, a + t):  # pragma: no cover - impossible for closed polylines
                 raise AssertionError("inconsistent coverage propagation")
-    return Coverage(arr, [cov[f] for f in range(nf)])
+    return Coverage(arr, [cov[f][0] for f in range(nf)], [cov[f][1] for f in range(nf)])
 
 
 def merge_coplanar(polygons, weights=None) -> MergeResult:

@@ -467,9 +467,9 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex
         key = planes.keys[p]
         gid = [-1] * len(arr.vertices)
         origin = arr.half_edge_origin
-        for f, c in enumerate(cov.coverage):
-            if c == 0:
-                continue
+        for f, (c, support) in enumerate(zip(cov.coverage, cov.support)):
+            if support == 0:
+                continue  # covered by no superset triangle
             fid = len(face_plane)
             face_plane.append(p)
             face_local.append(f)
@@ -578,12 +578,6 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     order = np.argsort(cx.inc_edge, kind="stable")
     e_sorted = cx.inc_edge[order]
     counts = np.bincount(cx.inc_edge, minlength=len(cx.edges))
-    if np.any(counts < 2):
-        bad = int(np.nonzero(counts < 2)[0][0])
-        raise ExactnessError(
-            f"the sub-facet complex is not closed: edge {bad} {cx.edges[bad].tolist()} has "
-            f"{int(counts[bad])} sub-facet(s); please report this input"
-        )
     start = np.searchsorted(e_sorted, np.arange(len(cx.edges)))
     fa, ta = [], []  # side pairs (node, node)
     two = counts == 2
@@ -594,6 +588,11 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
         s2 = -rot * cx.inc_sign[j2]
         fa.append(2 * cx.inc_face[i2] + (s > 0))
         ta.append(2 * cx.inc_face[j2] + (s2 > 0))
+    # A free edge (one half-plane: the rim of a sheet whose superset pieces cancel) joins
+    # the two sides of its sub-facet: the cell wraps around the rim.
+    one = order[start[counts == 1]]
+    fa += [2 * cx.inc_face[one]]
+    ta += [2 * cx.inc_face[one] + 1]
     many = np.nonzero(counts > 2)[0]
     extra_a, extra_b = [], []
     for e in many.tolist():
