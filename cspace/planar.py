@@ -781,7 +781,7 @@ def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
             if lab[0] >= 0:
                 step = weights[lab[0]] * (1 if _dot(dirs[lab], d) > 0 else -1)
                 delta += step
-                total += abs(step) * (1 if step * turn[lab[0]] > 0 else -1)
+                total += abs(step) * turn[lab[0]] * (1 if step > 0 else -1)
         left, right = arr.edge_faces[k]
         left, right = int(left), int(right)
         adj.setdefault(right, []).append((left, delta, total))
