@@ -18,7 +18,7 @@ import time
 
 import numpy as np
 
-__all__ = ["FclOracle", "cross_check", "winding_number", "fcl_convex", "path_collisions"]
+__all__ = ["FclOracle", "cross_check", "winding_number", "fcl_convex", "co_collider", "path_collisions"]
 
 
 def _fcl():
@@ -365,12 +365,35 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
     }
 
 
+def co_collider(co):
+    """FCL collision test ``collides(q) -> (k,) bool`` for one C-obstacle's operands.
+
+    Convex and mesh (solid) C-obstacles: :class:`FclOracle` on their operands (solid
+    semantics). Surface C-obstacles (``kind='surface'``, open meshes): FCL's plain mesh
+    collision against the surface, no containment.
+    """
+    fcl = _fcl()
+    orc = FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices, co.robot.faces,
+                    co.reference_point, convex=co.kind == "convex")
+    if co.kind != "surface":
+        return orc.collides
+
+    def collides(q) -> np.ndarray:
+        q = orc._q(q)
+        out = np.zeros(len(q), dtype=bool)
+        for i in range(len(q)):
+            orc._robot.setTranslation(q[i])
+            out[i] = fcl.collide(orc._robot, orc._obs, fcl.CollisionRequest(),
+                                 fcl.CollisionResult()) > 0
+        return out
+
+    return collides
+
+
 def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray, int]:
     """Re-check a piecewise-linear path with FCL, sampled along every segment.
 
-    Each C-obstacle is checked with its own semantics: convex and mesh (solid) C-obstacles
-    with :class:`FclOracle` on their operands (solid: containment counts), surface
-    C-obstacles (``kind='surface'``, open meshes) with FCL's plain mesh collision.
+    Each C-obstacle is checked with its own semantics (:func:`co_collider`).
 
     Parameters
     ----------
@@ -387,7 +410,6 @@ def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray
         The samples at which FCL finds a collision.
     n_samples : int
     """
-    fcl = _fcl()
     P = np.asarray(path, dtype=np.float64).reshape(-1, 3)
     lo, hi = cspace.bounds
     step = step or 1e-3 * float(np.linalg.norm(hi - lo))
@@ -400,16 +422,6 @@ def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray
     for o in cspace.obstacles:
         blo, bhi = o.bounds
         near = np.nonzero(((blo <= Q) & (Q <= bhi)).all(axis=1))[0]  # broad phase: CO box
-        if not near.size:
-            continue
-        surface = o.kind == "surface"
-        orc = FclOracle(o.obstacle.vertices, o.obstacle.faces, o.robot.vertices, o.robot.faces,
-                        o.reference_point, convex=o.kind == "convex")
-        if surface:  # FCL's mesh semantics: the BVH surface alone, no containment
-            for i in near.tolist():
-                orc._robot.setTranslation(Q[i])
-                hit[i] |= fcl.collide(orc._robot, orc._obs, fcl.CollisionRequest(),
-                                      fcl.CollisionResult()) > 0
-        else:
-            hit[near] |= orc.collides(Q[near])
+        if near.size:
+            hit[near] |= co_collider(o)(Q[near])
     return Q[hit], int(len(Q))

@@ -19,6 +19,7 @@ Queries take ``(k, 3)`` float64 translations (scene units, world frame), like ev
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
 
@@ -33,7 +34,7 @@ __all__ = ["SurfaceMesh", "SurfaceObstacle", "surface_pieces"]
 # Absolute slack for underflow of scaled queries (as in obstacle.py's convex engine).
 _TINY = 2.0**-1000
 # Candidate (query, piece) pairs evaluated at once.
-_PAIRS = 1 << 14
+_PAIRS = 1 << 12
 # Padding plane value: never the maximum of a piece's real facet values.
 _PAD = -1e300
 
@@ -113,6 +114,8 @@ class _CellGrid:
         order = np.argsort(cell, kind="stable")
         self.boxes = box[order]
         self.starts = np.searchsorted(cell[order], np.arange(self.n.prod() + 1))
+        self._origin, self._size = self.origin.tolist(), self.size.tolist()
+        self._n = self.n.tolist()
 
     def cells(self, x: np.ndarray) -> np.ndarray:
         with np.errstate(invalid="ignore", over="ignore"):
@@ -124,6 +127,13 @@ class _CellGrid:
 
     def pairs(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Candidate ``(row, box)`` pairs: every box registered in each query's cell."""
+        if len(q) == 1:  # one query (an OMPL callback): Python floats, the same rounding
+            c = 0
+            for x, o, s, n in zip(q[0].tolist(), self._origin, self._size, self._n):
+                v = min(max((x - o) / s, 0.0), n - 1.0)
+                c = c * n + int(math.floor(v))
+            boxes = self.boxes[self.starts[c] : self.starts[c + 1]]
+            return np.zeros(len(boxes), dtype=np.int64), boxes
         cell = self._flat(self.cells(q))
         s, e = self.starts[cell], self.starts[cell + 1]
         count = e - s
@@ -149,8 +159,8 @@ class _UnionCO:
         self.A[:, 3, :] = _PAD
         for j, c in enumerate(self.impl):
             self.A[j, :, : c.A.shape[1]] = c.A
-        self.l1max = np.array([c.l1max for c in self.impl])
-        self.dmax = np.array([c.dmax for c in self.impl])
+        self.absA = np.abs(self.A)
+        self.absA[:, 3, :] = 0.0  # padding: exactly -1e300, no error
         self.cells = _CellGrid(self.lo, self.hi)
 
     def _in_box(self, q: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -167,13 +177,16 @@ class _UnionCO:
         rows, js = self.candidates(q)
         for lo in range(0, len(rows), _PAIRS):
             r, j = rows[lo : lo + _PAIRS], js[lo : lo + _PAIRS]
-            Q = np.ones((len(r), 4))
+            Q = np.ones((len(r), 1, 4))
             with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-                np.ldexp(q[r], -self.exponent, out=Q[:, :3])
-                mx = np.einsum("kc,kcf->kf", Q, self.A[j]).max(axis=1)
-                B = _FILTER * (np.abs(Q[:, :3]).max(axis=1) * self.l1max[j] + self.dmax[j]) + _TINY
-            inside = mx < -B
-            unsure = ~(inside | (mx > B)) | ~np.isfinite(mx) | ~np.isfinite(B)
+                np.ldexp(q[r], -self.exponent, out=Q[:, 0, :3])
+                # n . qs - d per (pair, facet), with the per-entry bound of obstacle.py's
+                # convex engine (the facets of a piece have normals of very different sizes).
+                val = np.matmul(Q, self.A[j])[:, 0, :]
+                err = _FILTER * np.matmul(np.abs(Q), self.absA[j])[:, 0, :] + _TINY
+            fin = np.isfinite(val) & np.isfinite(err)
+            inside = ((val < -err) & fin).all(axis=1)
+            unsure = ~inside & ~((val > err) & fin).any(axis=1)
             for k in np.nonzero(unsure)[0].tolist():
                 if not out[r[k]]:
                     inside[k] = bool(self.impl[j[k]]._contains_slow(q[r[k] : r[k] + 1])[0])
@@ -191,10 +204,29 @@ class _UnionCO:
             js.append(j)
         return np.concatenate(rows), np.concatenate(js)
 
+    def _separated(self, q0, q1, rows, js) -> np.ndarray:
+        """Pairs whose segment ends are both strictly beyond one facet plane (certainly free)."""
+        out = np.zeros(len(rows), dtype=bool)
+        for lo in range(0, len(rows), _PAIRS):
+            r, j = rows[lo : lo + _PAIRS], js[lo : lo + _PAIRS]
+            beyond = None
+            for q in (q0, q1):
+                Q = np.ones((len(r), 1, 4))
+                with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                    np.ldexp(q[r], -self.exponent, out=Q[:, 0, :3])
+                    val = np.matmul(Q, self.A[j])[:, 0, :]
+                    err = _FILTER * np.matmul(np.abs(Q), self.absA[j])[:, 0, :] + _TINY
+                    side = (val > err) & np.isfinite(val) & np.isfinite(err)
+                beyond = side if beyond is None else beyond & side
+            out[lo : lo + _PAIRS] = beyond.any(axis=1)
+        return out
+
     def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
         hit = np.zeros(len(q0), dtype=bool)
         t = np.full(len(q0), np.nan)
         rows, js = self._segment_pairs(q0, q1)
+        open_ = ~self._separated(q0, q1, rows, js)
+        rows, js = rows[open_], js[open_]
         order = np.argsort(js, kind="stable")
         rows, js = rows[order], js[order]
         bounds = np.flatnonzero(np.r_[True, js[1:] != js[:-1], True])

@@ -328,15 +328,12 @@ def test_solid_body_builds_or_says_clearly_why_not():
 
 
 def fcl_env_scene(shared_data) -> Scene:
-    """FCL's test environment (85 bodies in one open triangle soup) with its robot, planned in
-    the central part of the environment."""
-    d = shared_data / "fcl_test_resources"
-    env = trimesh.load(d / "env.obj", force="mesh", process=False)
-    rob = trimesh.load(d / "rob.obj", force="mesh", process=False)
-    return Scene("fcl-env", None, (Body("env.obj", env.vertices, env.faces, "env.obj"),),
-                 Body("rob.obj", rob.vertices, rob.faces, "rob.obj"), np.zeros(3),
-                 [[-1500, -1500, 0], [1500, 1500, 1500]], [-1000, -1000, 1000],
-                 [1000, 1000, 1000])
+    """scenes/shared/fcl_env.toml: FCL's test environment (85 bodies in one open triangle
+    soup) with its robot, planned in the central part of the environment."""
+    assert shared_data.is_dir()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # rob.obj is not closed: its hull is used
+        return load_scene(SCENES / "shared" / "fcl_env.toml")
 
 
 def test_fcl_environment_report(shared_data):
