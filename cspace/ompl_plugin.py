@@ -297,11 +297,11 @@ class PlanResult:
         return float(np.linalg.norm(np.diff(self.path, axis=0), axis=1).sum())
 
 
-def _as_cspace(scene_or_cspace):
+def _as_cspace(scene_or_cspace, cache=None):
     if isinstance(scene_or_cspace, CSpace):
         return scene_or_cspace, None
     if hasattr(scene_or_cspace, "obstacles") and hasattr(scene_or_cspace, "robot"):
-        return CSpace.from_scene(scene_or_cspace), scene_or_cspace
+        return CSpace.from_scene(scene_or_cspace, cache=cache), scene_or_cspace
     raise TypeError(f"expected a Scene or a CSpace, got {type(scene_or_cspace).__name__}")
 
 
@@ -329,14 +329,14 @@ def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
 def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
          time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
-         planner_range: float | None = None) -> PlanResult:
+         planner_range: float | None = None, cache=None) -> PlanResult:
     """Plan a collision-free translation with OMPL, checked exactly.
 
     Parameters
     ----------
     scene_or_cspace : Scene or CSpace
-        A scene (its C-obstacles are built with :meth:`CSpace.from_scene`; start, goal and
-        bounds default to the scene's) or a built :class:`CSpace`.
+        A scene (its C-obstacles are modelled and built by :meth:`CSpace.from_scene`;
+        start, goal and bounds default to the scene's) or a built :class:`CSpace`.
     start, goal : (3,) float64, optional
         Reference-point translations; required for a CSpace.
     planner : str, default 'RRTConnect'
@@ -363,6 +363,9 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         the first solution.
     planner_range : float, optional
         ``planner.setRange`` for planners that have it.
+    cache : COCache, path, True, or None
+        For a scene: the disk cache its C-obstacles are built through
+        (:func:`cspace.model.model_scene`); None: no cache.
 
     Returns
     -------
@@ -384,7 +387,7 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         raise ValueError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
     if not (time > 0):
         raise ValueError(f"time must be positive, got {time}")
-    cs, scene = _as_cspace(scene_or_cspace)
+    cs, scene = _as_cspace(scene_or_cspace, cache)
     if bounds is None:
         bounds = scene.bounds if scene is not None else cs.bounds
     b = _bounds(bounds)

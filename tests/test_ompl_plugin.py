@@ -220,3 +220,14 @@ def test_unknown_planner_and_motion(scenes):
         plan(s, motion="continuous")
     names = planner_names()
     assert {"RRTConnect", "RRT", "PRM", "BITstar", "KPIECE1"} <= set(names)
+
+
+def test_plan_on_a_scene_builds_through_the_cache(tmp_path):
+    from cspace.cache import COCache
+
+    s = cspace.load_scene(SCENES / "comb.toml")
+    cache = COCache(tmp_path)
+    r1 = plan(s, seed=1, time=1.0, cache=cache)
+    r2 = plan(s, seed=1, time=1.0, cache=cache)
+    assert (cache.misses, cache.hits) == (11, 11)  # 11 reachable teeth; 6 bodies dropped
+    assert r1.solved and r2.solved
