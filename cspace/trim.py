@@ -120,6 +120,13 @@ class SumPolyhedron:
         """Enclosed volume (float of :attr:`volume_exact`)."""
         return float(self.volume_exact)
 
+    def __repr__(self) -> str:
+        return (
+            f"SumPolyhedron(vertices={len(self.vertices)}, faces={len(self.faces)}, "
+            f"holes={self.n_holes}, nonmanifold_edges={len(self.nonmanifold_edges)}, "
+            f"convex={self.convex})"
+        )
+
     @property
     def n_holes(self) -> int:
         return int(np.count_nonzero(self.shell_is_hole))

@@ -1,0 +1,102 @@
+"""NCC-CVMS trimming on hand-checkable special cases: exact volumes, holes, non-manifold
+contact, change of genus, and the exact re-check of the rounded output."""
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+
+from cspace.trim import _improper, minkowski_sum
+from zoo import box_points, genus3, voxel_solid
+
+
+def _closed_and_oriented(r) -> None:
+    """Every directed edge is cancelled by its reverse (also at non-manifold edges)."""
+    F = r.faces
+    u, v = F.reshape(-1), F[:, [1, 2, 0]].reshape(-1)
+    n = len(r.vertices)
+    fwd = np.unique(u * n + v, return_counts=True)
+    bwd = np.unique(v * n + u, return_counts=True)
+    assert np.array_equal(fwd[0], bwd[0]) and np.array_equal(fwd[1], bwd[1])
+
+
+def _cube(s: float) -> np.ndarray:
+    return box_points(s, s, s)
+
+
+def _cavity_block(n_cavities: int) -> tuple[np.ndarray, np.ndarray]:
+    """A block of unit voxels with ``n_cavities`` 3x3x3 cavities, each open to the top through
+    a 1x1 channel: a 1.5 cube fits in a cavity but not through its channel."""
+    occ = np.ones((4 * n_cavities + 1, 5, 5), dtype=bool)
+    for k in range(n_cavities):
+        occ[4 * k + 1: 4 * k + 4, 1:4, 1:4] = False
+        occ[4 * k + 2, 2, 4] = False
+    return voxel_solid(occ)
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_polyhedral_holes(n):
+    r = minkowski_sum(_cavity_block(n), _cube(1.5))
+    _closed_and_oriented(r)
+    assert r.n_holes == n
+    # (outer box ⊕ cube) minus n eroded cavities (3 - 1.5)^3, exactly
+    outer = Fraction(8 * n + 5, 2) * Fraction(13, 2) ** 2
+    assert r.volume_exact == outer - n * Fraction(3, 2) ** 3
+    assert r.is_manifold
+
+
+def test_channel_wide_enough_leaves_no_hole():
+    r = minkowski_sum(_cavity_block(1), _cube(0.5))
+    _closed_and_oriented(r)
+    assert r.n_holes == 0
+    # the 0.5 cube passes the channel: the eroded cavity (2.5^3) and the channel's free
+    # column (0.5 x 0.5 cross-section, 1.5 long: cavity top to the outside) stay open
+    assert r.volume_exact == Fraction(11, 2) ** 3 - Fraction(5, 2) ** 3 - Fraction(1, 4) * Fraction(3, 2)
+
+
+def test_non_manifold_edge():
+    """Two columns whose sums touch along an edge (diagonal quadrants), joined higher up."""
+    occ = np.zeros((3, 3, 3), dtype=bool)
+    for c in [(0, 0, 0), (0, 0, 1), (0, 0, 2), (1, 0, 2), (2, 0, 2), (2, 1, 2), (2, 2, 2), (2, 2, 1), (2, 2, 0)]:
+        occ[c] = True
+    B = _cube(1.0)
+    r = minkowski_sum(voxel_solid(occ), B)
+    _closed_and_oriented(r)
+    assert len(r.nonmanifold_edges) >= 1
+    E = r.vertices[r.nonmanifold_edges]
+    # the contact line: x = y = 2 in the A frame, shifted by B's minimum corner
+    lo = B.min(axis=0)
+    assert np.all(E[:, :, 0] == 2 + lo[0]) and np.all(E[:, :, 1] == 2 + lo[1])
+    assert set(r.nonmanifold_edges.reshape(-1)) <= set(r.nonmanifold_vertices)
+    assert r.volume_exact == 40
+
+
+def test_tangential_gap_closes():
+    """Two walls whose gap is exactly the robot's width: the sums touch along a face, which is
+    interior to the sum (no wall is left there)."""
+    occ = np.zeros((5, 3, 3), dtype=bool)
+    occ[0], occ[4], occ[:, :, 0] = True, True, True
+    r = minkowski_sum(voxel_solid(occ), box_points(3.0, 1.0, 1.0))
+    _closed_and_oriented(r)
+    assert r.is_manifold and r.n_holes == 0
+    assert r.volume_exact == 8 * 4 * 4  # the box [0, 8] x [0, 4] x [0, 4]
+
+
+def test_change_of_genus():
+    """A genus-3 solid whose handles' holes are smaller than the robot: the sum has genus 0."""
+    V, F = genus3()
+    r = minkowski_sum((V, F), _cube(float(np.ptp(V, axis=0).max())))
+    _closed_and_oriented(r)
+    n_edges = len(np.unique(np.sort(np.stack([r.faces.reshape(-1), r.faces[:, [1, 2, 0]].reshape(-1)], 1), 1), axis=0))
+    assert len(r.vertices) - n_edges + len(r.faces) == 2
+
+
+def test_rounding_check_predicates():
+    """The exact test behind ``rounding_self_intersections`` on integer coordinates."""
+    V = [[0, 0, 0], [4, 0, 0], [0, 4, 0], [1, 1, 0], [1, 1, 5], [1, 1, -5], [9, 9, 9], [0, -4, 0]]
+    assert _improper(V, [0, 1, 2], [0, 1, 3])  # shared edge, folded onto each other
+    assert not _improper(V, [0, 1, 2], [0, 1, 7])  # shared edge, opposite sides
+    assert not _improper(V, [0, 1, 2], [0, 1, 4])  # shared edge, two planes
+    assert _improper(V, [0, 1, 2], [4, 5, 6])  # pierced
+    assert _improper(V, [0, 1, 2], [0, 3, 4])  # shared vertex, edge 0-3 runs inside the corner
+    assert not _improper(V, [0, 1, 2], [0, 7, 5])  # shared vertex only
