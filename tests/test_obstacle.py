@@ -333,15 +333,20 @@ def test_cspace_combines_obstacles(box_co, random_co):
     )
 
 
-def test_from_scene_rejects_non_convex_bodies():
+def test_from_scene_splits_a_body_into_its_convex_parts():
+    # One scene body made of two disjoint boxes: modelled as two convex bodies (model_scene).
     two = np.vstack([CUBE, CUBE + [3.0, 0, 0]])
     F = ConvexPolytope.from_points(CUBE).faces
     body = Body("two-boxes", two, np.vstack([F, F + 8]), "test")
     robot = Body("robot", 0.5 * CUBE, F, "test")
     scene = Scene("nc", None, (body,), robot, (0.25, 0.25, 0.25), [[-2, -2, -2], [6, 3, 3]],
                   [-1.0, -1, -1], [5.0, 2, 2])
-    with pytest.raises(NotImplementedError, match=r"minkowski_sum \(issue #4\)"):
-        CSpace.from_scene(scene)
+    cs = CSpace.from_scene(scene)
+    assert [o.kind for o in cs.obstacles] == ["convex", "convex"]
+    first = CSpaceObstacle.build(CUBE, 0.5 * CUBE, (0.25, 0.25, 0.25))
+    second = CSpaceObstacle.build(CUBE + [3.0, 0, 0], 0.5 * CUBE, (0.25, 0.25, 0.25))
+    q = np.random.default_rng(0).uniform([-2, -2, -2], [6, 3, 3], (2000, 3))
+    np.testing.assert_array_equal(cs.contains(q), first.contains(q) | second.contains(q))
 
 
 @pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
