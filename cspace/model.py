@@ -145,7 +145,8 @@ class SceneModel:
         return {k: len(self.of_kind(k)) for k in KINDS}
 
     def cspace(self) -> CSpace:
-        """The :class:`CSpace` of the built bodies (dropped ones cannot matter).
+        """The :class:`CSpace` of the built bodies (dropped ones cannot matter); the surface
+        bodies' C-obstacles are joined into one (:meth:`SurfaceObstacle.union`).
 
         Raises
         ------
@@ -162,7 +163,12 @@ class SceneModel:
         if missing:
             raise BuildError(f"scene {self.scene.name!r}: bodies {missing} were modelled "
                              "without building (build=False)")
-        return CSpace([b.co for b in kept], bounds=self.scene.bounds, name=self.scene.name)
+        # Surfaces share one broad phase (one cell lookup per query for all of them).
+        surfaces = [b.co for b in kept if b.kind == "surface"]
+        cos = [b.co for b in kept if b.kind != "surface"]
+        if surfaces:
+            cos.append(SurfaceObstacle.union(surfaces))
+        return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name)
 
     def explain(self) -> str:
         """A human-readable report: per scene body and per modelled body."""

@@ -145,12 +145,12 @@ class _CellGrid:
 class _UnionCO:
     """Exact queries on a union of convex pieces (the engine interface of obstacle.py)."""
 
-    def __init__(self, pieces: list[ConvexPolytope]):
+    def __init__(self, pieces: list[ConvexPolytope], impl: list[_ConvexCO] | None = None):
         if not pieces:
             raise ValueError("a surface C-obstacle needs at least one piece")
         self.pieces = list(pieces)
         self.exponent = pieces[0].grid.exponent
-        self.impl = [_ConvexCO(p) for p in self.pieces]
+        self.impl = list(impl) if impl is not None else [_ConvexCO(p) for p in self.pieces]
         V = [p.vertices for p in self.pieces]
         self.lo = np.array([v.min(axis=0) for v in V])
         self.hi = np.array([v.max(axis=0) for v in V])
@@ -295,15 +295,30 @@ class SurfaceObstacle(CSpaceObstacle):
     kind = "surface"
 
     def __init__(self, pieces, *, obstacle: SurfaceMesh, robot: ConvexPolytope,
-                 reference_point, grid: Grid):
+                 reference_point, grid: Grid, _impl: list | None = None):
         self.pieces = list(pieces)
         self.polytope = None
         self.obstacle = obstacle
         self.robot = robot
         self.reference_point = np.asarray(reference_point, dtype=np.float64).reshape(3)
         self.grid = grid
-        self._impl = _UnionCO(self.pieces)
+        self._impl = _UnionCO(self.pieces, _impl)
         self.stats: dict = {}
+
+    @classmethod
+    def union(cls, parts: list["SurfaceObstacle"]) -> "SurfaceObstacle":
+        """One surface C-obstacle for several (same robot and grid): one broad phase over all
+        their pieces, so a query costs one cell lookup instead of one per body."""
+        if len(parts) == 1:
+            return parts[0]
+        offsets = np.cumsum([0] + [len(p.obstacle.vertices) for p in parts[:-1]])
+        mesh = SurfaceMesh(np.vstack([p.obstacle.vertices for p in parts]),
+                           np.vstack([p.obstacle.faces + o for p, o in zip(parts, offsets)]),
+                           ", ".join(p.obstacle.name for p in parts))
+        first = parts[0]
+        return cls([q for p in parts for q in p.pieces], obstacle=mesh, robot=first.robot,
+                   reference_point=first.reference_point, grid=first.grid,
+                   _impl=[c for p in parts for c in p._impl.impl])
 
     @classmethod
     def build(cls, obstacle, robot: ConvexPolytope, reference_point=(0.0, 0.0, 0.0), *,

@@ -414,7 +414,7 @@ def test_fcl_environment_builds_and_agrees_with_fcl(shared_data):
     scene = fcl_env_scene(shared_data)
     m = model_scene(scene)
     cs = m.cspace()
-    assert len(cs) == 34
+    assert len(cs) == 14  # 13 convex and the 21 surfaces joined in one
     rng = np.random.default_rng(2)
     Q = rng.uniform(scene.bounds[0], scene.bounds[1], (1500, 3))
     ours = cs.contains(Q)
