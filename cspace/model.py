@@ -391,6 +391,11 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         for k, faces in enumerate(parts):
             name = sb.name if len(parts) == 1 else f"{sb.name}#{k}"
             bodies.append(_classify(name, sb.name, ints, F[faces], minus_r, bounds_g, grid))
+        if not parts:
+            bodies.append(BodyModel(sb.name, sb.name, "dropped",
+                                    f"empty: all {len(sb.faces)} triangles collapse when welded "
+                                    f"on the grid (step 2**{grid.exponent})",
+                                    np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)))
     t1 = time.perf_counter()
     if isinstance(cache, COCache):
         store = cache

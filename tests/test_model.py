@@ -95,6 +95,14 @@ def test_collapsed_triangles_are_dropped_and_counted():
     assert m.sources["b"]["collapsed"] == 1 and m.bodies[0].kind == "convex"
 
 
+def test_a_body_of_collapsed_triangles_is_dropped_as_empty():
+    V = np.array([[0.0, 0, 0], [1e-12, 0, 0], [0, 1e-12, 0]])
+    m = model_scene(make_scene([Body("dust", V, [[0, 1, 2]], "test"), box_body("box")]))
+    assert [b.kind for b in m.bodies] == ["dropped", "convex"]
+    assert m.bodies[0].reason.startswith("empty: all 1 triangles collapse")
+    assert len(m.cspace()) == 1
+
+
 def test_split_into_bodies_and_cavity_stays_with_its_solid():
     two = np.vstack([CUBE.vertices, CUBE.vertices + [3.0, 0, 0]])
     body = Body("two", two, np.vstack([CUBE.faces, CUBE.faces + 8]), "test")
