@@ -14,7 +14,9 @@ Used only by tests and benchmarks; nothing here depends on :mod:`cspace`.
 from __future__ import annotations
 
 import itertools
+from fractions import Fraction
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -40,6 +42,25 @@ __all__ = [
     "icosphere_points",
     "hull20",
     "cube_rotated",
+    "voxel_defects",
+    "comb_occupancy",
+    "grate_occupancy",
+    "genus3_occupancy",
+    "cup_occupancy",
+    "hollow_box_occupancy",
+    "stairs_occupancy",
+    "SpecialCase",
+    "SPECIAL_CASES",
+    "double_vertex",
+    "nonmanifold_edge",
+    "tangent_facets",
+    "one_hole",
+    "two_holes",
+    "genus_change",
+    "genus_kept",
+    "coplanar_conjoint",
+    "opposite_conjoint",
+    "torus_icosphere",
 ]
 
 
@@ -82,10 +103,17 @@ def _vertex_table() -> np.ndarray:
 _VERTEX_OK = _vertex_table()
 
 
-def _check_voxels(pad: np.ndarray) -> None:
-    """Raise ValueError if the boundary of the padded occupancy is not a 2-manifold."""
-    # Edges: around every lattice edge the four cells must not be a checkerboard (two
-    # cells sharing only that edge).
+def voxel_defects(pad: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """Where the boundary of a padded occupancy is not a 2-manifold.
+
+    Returns ``edges``: for each axis a bool array over the lattice edges along that axis
+    (indexed by the 2x2 block of cells around the edge, shape ``pad.shape - 1`` in the
+    other two axes), True where two cells touch only along the edge (a checkerboard);
+    and ``vertices``: bool over the lattice vertices (the 2x2x2 block of cells around each,
+    shape ``pad.shape - 1``), True where the vertex's neighbourhood is not one disc.
+    Lattice vertex ``i`` (per axis) is the corner between padded cells ``i`` and ``i + 1``.
+    """
+    edges = []
     for axis in range(3):
         b, c = [a for a in range(3) if a != axis]
 
@@ -96,7 +124,21 @@ def _check_voxels(pad: np.ndarray) -> None:
             return pad[tuple(sl)]
 
         x00, x10, x01, x11 = cell(0, 0), cell(1, 0), cell(0, 1), cell(1, 1)
-        bad = (x00 & x11 & ~x10 & ~x01) | (x10 & x01 & ~x00 & ~x11)
+        edges.append((x00 & x11 & ~x10 & ~x01) | (x10 & x01 & ~x00 & ~x11))
+    code = np.zeros(tuple(s - 1 for s in pad.shape), dtype=np.int64)
+    for dx, dy, dz in itertools.product((0, 1), repeat=3):
+        X, Y, Z = pad.shape
+        sub = pad[dx : X - 1 + dx, dy : Y - 1 + dy, dz : Z - 1 + dz]
+        code |= sub.astype(np.int64) << (4 * dx + 2 * dy + dz)
+    return edges, ~_VERTEX_OK[code]
+
+
+def _check_voxels(pad: np.ndarray) -> None:
+    """Raise ValueError if the boundary of the padded occupancy is not a 2-manifold."""
+    edges, vertices = voxel_defects(pad)
+    # Edges: around every lattice edge the four cells must not be a checkerboard (two
+    # cells sharing only that edge).
+    for axis, bad in enumerate(edges):
         if bad.any():
             idx = np.argwhere(bad)[0]
             raise ValueError(
@@ -105,16 +147,10 @@ def _check_voxels(pad: np.ndarray) -> None:
                 f"voxel {tuple(int(i) - 1 for i in idx)}"
             )
     # Vertices: the 2x2x2 block around every lattice vertex.
-    code = np.zeros(tuple(s - 1 for s in pad.shape), dtype=np.int64)
-    for dx, dy, dz in itertools.product((0, 1), repeat=3):
-        X, Y, Z = pad.shape
-        sub = pad[dx : X - 1 + dx, dy : Y - 1 + dy, dz : Z - 1 + dz]
-        code |= sub.astype(np.int64) << (4 * dx + 2 * dy + dz)
-    bad = ~_VERTEX_OK[code]
-    if bad.any():
-        idx = np.argwhere(bad)[0]
+    if vertices.any():
+        idx = np.argwhere(vertices)[0]
         raise ValueError(
-            f"voxel set is not a 2-manifold: {int(bad.sum())} lattice vertices where voxels "
+            f"voxel set is not a 2-manifold: {int(vertices.sum())} lattice vertices where voxels "
             f"touch only at the vertex (or empty cells do), first at lattice vertex "
             f"{tuple(int(i) for i in idx)}"
         )
@@ -212,29 +248,51 @@ def l_shape(arm: int = 2, depth: int = 1) -> Mesh:
     return voxel_solid(occ)
 
 
+def comb_occupancy(teeth: int = 5, length: int = 2) -> np.ndarray:
+    """The voxels of :func:`comb` (for :func:`voxel_solid`; unit voxels at the origin)."""
+    occ = np.zeros((2 * teeth - 1, 1 + length, 1), dtype=bool)
+    occ[:, 0, 0] = True
+    occ[::2, 1:, 0] = True
+    return occ
+
+
 def comb(teeth: int = 5, length: int = 2) -> Mesh:
     """A bar of ``2*teeth - 1`` voxels along x with ``teeth`` teeth of ``length`` voxels along +y.
 
     Defaults: 156 triangles; slots 1 voxel wide between the teeth.
     """
-    occ = np.zeros((2 * teeth - 1, 1 + length, 1), dtype=bool)
-    occ[:, 0, 0] = True
-    occ[::2, 1:, 0] = True
-    return voxel_solid(occ)
+    return voxel_solid(comb_occupancy(teeth, length))
+
+
+def grate_occupancy(n: int = 3) -> np.ndarray:
+    """The voxels of :func:`grate` (for :func:`voxel_solid`; unit voxels at the origin)."""
+    occ = np.ones((2 * n + 1, 2 * n + 1, 1), dtype=bool)
+    occ[1::2, 1::2, :] = False
+    return occ
 
 
 def grate(n: int = 3) -> Mesh:
     """A flat ``(2n+1) x (2n+1) x 1`` frame with ``n x n`` square through-holes: genus ``n*n``."""
-    occ = np.ones((2 * n + 1, 2 * n + 1, 1), dtype=bool)
-    occ[1::2, 1::2, :] = False
-    return voxel_solid(occ)
+    return voxel_solid(grate_occupancy(n))
+
+
+def genus3_occupancy() -> np.ndarray:
+    """The voxels of :func:`genus3` (for :func:`voxel_solid`; unit voxels at the origin)."""
+    occ = np.ones((7, 3, 1), dtype=bool)
+    occ[1::2, 1, :] = False
+    return occ
 
 
 def genus3() -> Mesh:
     """A ``7 x 3 x 1`` plate with 3 through-holes in a row: genus 3."""
-    occ = np.ones((7, 3, 1), dtype=bool)
-    occ[1::2, 1, :] = False
-    return voxel_solid(occ)
+    return voxel_solid(genus3_occupancy())
+
+
+def cup_occupancy() -> np.ndarray:
+    """The voxels of :func:`cup` (for :func:`voxel_solid`; unit voxels at the origin)."""
+    occ = np.ones((3, 3, 3), dtype=bool)
+    occ[1, 1, 1:] = False
+    return occ
 
 
 def cup() -> Mesh:
@@ -242,9 +300,14 @@ def cup() -> Mesh:
 
     Genus 0; the well is not a closed cavity (see :func:`hollow_box` for one).
     """
+    return voxel_solid(cup_occupancy())
+
+
+def hollow_box_occupancy() -> np.ndarray:
+    """The voxels of :func:`hollow_box` (for :func:`voxel_solid`; unit voxels at the origin)."""
     occ = np.ones((3, 3, 3), dtype=bool)
-    occ[1, 1, 1:] = False
-    return voxel_solid(occ)
+    occ[1, 1, 1] = False
+    return occ
 
 
 def hollow_box() -> Mesh:
@@ -252,9 +315,15 @@ def hollow_box() -> Mesh:
 
     Two components (Euler characteristic 4); the cavity shell is wound inwards.
     """
-    occ = np.ones((3, 3, 3), dtype=bool)
-    occ[1, 1, 1] = False
-    return voxel_solid(occ)
+    return voxel_solid(hollow_box_occupancy())
+
+
+def stairs_occupancy(steps: int = 5, width: int = 3) -> np.ndarray:
+    """The voxels of :func:`stairs` (for :func:`voxel_solid`; unit voxels at the origin)."""
+    occ = np.zeros((steps, width, steps), dtype=bool)
+    for i in range(steps):
+        occ[i, :, : i + 1] = True
+    return occ
 
 
 def stairs(steps: int = 5, width: int = 3) -> Mesh:
@@ -262,10 +331,7 @@ def stairs(steps: int = 5, width: int = 3) -> Mesh:
 
     Many coplanar adjacent faces (each unit square is its own pair of triangles).
     """
-    occ = np.zeros((steps, width, steps), dtype=bool)
-    for i in range(steps):
-        occ[i, :, : i + 1] = True
-    return voxel_solid(occ)
+    return voxel_solid(stairs_occupancy(steps, width))
 
 
 # --------------------------------------------------------------------------------------
@@ -491,3 +557,258 @@ def cube_rotated(angle: float, axis=(1.0, 2.0, 3.0), size: float = 1.0) -> np.nd
     half = np.round(R.T * (float(size) / 2) / quantum) * quantum  # rows: rotated half edges
     signs = np.array(list(itertools.product((-1.0, 1.0), repeat=3)))
     return signs @ half
+
+
+# --------------------------------------------------------------------------------------
+# the NCC-CVMS paper's special cases (section 3.3 non-manifold situations, 3.4 holes)
+#
+# Each returns a SpecialCase: A (a closed, outward, one-component 2-manifold unless said
+# otherwise), B (points; the sum is A ⊕ B, the robot of the C-obstacle is -B), and the
+# expected exact properties of A ⊕ B derived by hand. For voxel solids with an axis box B,
+# ``occupancy`` (unit voxels at the origin, as in :func:`voxel_solid`) lets
+# ``oracles.voxel_box_sum`` recompute every expectation exactly: with B = [-h, h]^3 each
+# voxel [v, v + 1] becomes the cube [v - h, v + 1 + h], and two such cubes of voxels whose
+# indices differ by d overlap along an axis iff |d| < 1 + 2h there, touch iff |d| = 1 + 2h.
+
+
+class SpecialCase(NamedTuple):
+    """A special input pair and what its exact Minkowski sum must show.
+
+    vertices, faces : A
+    b : (k, 3) float64
+        Points of B (its hull); the sum is ``A ⊕ B``.
+    occupancy : (X, Y, Z) bool or None
+        A's voxels when A is a voxel solid and B an axis box (for ``oracles.voxel_box_sum``).
+    expected : dict
+        Hand-derived properties of the exact sum: ``n_holes``, ``euler`` (Euler
+        characteristic ``V - E + F`` of the whole boundary surface, an edge shared by four
+        faces counted once: ``oracles.complex_euler``), ``manifold`` (bool),
+        ``nonmanifold_length`` (total length of edges where the solid touches itself along
+        an edge), ``pinch`` ((k, 3) double vertices), ``volume`` (Fraction) when known.
+    """
+
+    vertices: np.ndarray
+    faces: np.ndarray
+    b: np.ndarray
+    occupancy: np.ndarray | None
+    expected: dict
+
+
+def _cells(shape, cells) -> np.ndarray:
+    occ = np.zeros(shape, dtype=bool)
+    for c in cells:
+        occ[c] = True
+    return occ
+
+
+def _voxel_case(occ, b, **expected) -> SpecialCase:
+    v, f = voxel_solid(occ)
+    return SpecialCase(v, f, np.asarray(b, dtype=np.float64), occ, expected)
+
+
+def double_vertex() -> SpecialCase:
+    """A ring of voxels whose two ends, voxels (1,1,1) and (3,3,3), sum to cubes touching at one point.
+
+    A: 11 unit voxels, one component, genus 0: the ends joined by a path
+    (1,1,0)-(4,1,0)-(4,1,3)-(4,3,3) that stays outside the block {1,2,3}^3 (only voxels
+    in that block can reach the contact). B: the unit cube centred at the origin (h = 1/2),
+    so the end cubes [0.5, 2.5]^3 and [2.5, 4.5]^3 share only the corner (2.5, 2.5, 2.5).
+
+    Exhibits the paper's non-manifold situation (1), double vertices. Exact sum: one pinch
+    vertex at (2.5, 2.5, 2.5) and no other defect; no hole; the boundary is a sphere with two
+    points identified, Euler characteristic 2 - 1 = 1; volume 48.
+    """
+    path = [(1, 1, 0), (2, 1, 0), (3, 1, 0), (4, 1, 0), (4, 1, 1), (4, 1, 2), (4, 1, 3),
+            (4, 2, 3), (4, 3, 3)]
+    occ = _cells((5, 5, 5), [(1, 1, 1), (3, 3, 3)] + path)
+    return _voxel_case(
+        occ, box_points(1.0, 1.0, 1.0), n_holes=0, euler=1, manifold=False,
+        nonmanifold_length=0, pinch=np.array([[2.5, 2.5, 2.5]]), volume=48,
+    )
+
+
+def nonmanifold_edge() -> SpecialCase:
+    """A flat ring of voxels whose ends (1,1,1) and (3,3,1) sum to cubes touching along an edge.
+
+    A: 9 voxels in the layer z = 1, one component, genus 0: the ends joined by
+    (1,0)-(4,0)-(4,3) around the empty 3x3 block; B: the unit cube centred at the origin.
+    The end cubes [0.5, 2.5]^2 and [2.5, 4.5]^2 (both z in [0.5, 2.5]) touch along the
+    segment x = y = 2.5, z in [0.5, 2.5], and no other voxel's cube reaches it.
+
+    Exhibits situation (4), an edge with four incident faces. Exact sum: one non-manifold
+    edge of length 2 (its two end vertices are non-manifold too), no hole, no pinch; the
+    solid is a C closed through the edge: its boundary is a sphere with two arcs identified,
+    Euler characteristic 2 - 1 = 1 (counting the shared edge once); volume 40.
+    """
+    ring = [(1, 0, 1), (2, 0, 1), (3, 0, 1), (4, 0, 1), (4, 1, 1), (4, 2, 1), (4, 3, 1)]
+    occ = _cells((5, 5, 3), [(1, 1, 1), (3, 3, 1)] + ring)
+    return _voxel_case(
+        occ, box_points(1.0, 1.0, 1.0), n_holes=0, euler=1, manifold=False,
+        nonmanifold_length=2, pinch=np.zeros((0, 3)), volume=40,
+    )
+
+
+def tangent_facets() -> SpecialCase:
+    """Two ends of a voxel ring whose sums touch along a face region (facets touching tangentially).
+
+    A: 8 voxels in the layer z = 1, ends (1,1,1) and (3,2,1) joined by (1,0)-(4,0)-(4,2);
+    B: the unit cube centred at the origin. The end cubes [0.5, 2.5] x [0.5, 2.5] and
+    [2.5, 4.5] x [1.5, 3.5] (z in [0.5, 2.5]) touch in the rectangle x = 2.5,
+    y in [1.5, 2.5], z in [0.5, 2.5]: their translated facets there are opposite conjoint
+    (situation (6), and (5) along the rim).
+
+    Exact sum: the contact rectangle is interior to the union (the wall vanishes: no face of
+    the result lies in it; its centre (2.5, 2, 1.5) is at depth 0.5 from the boundary), the
+    rim edges are ordinary reflex edges, and the inside of the ring is filled too: a
+    manifold genus-0 solid (Euler characteristic 2), no hole, volume 36.
+    """
+    ring = [(1, 0, 1), (2, 0, 1), (3, 0, 1), (4, 0, 1), (4, 1, 1), (4, 2, 1)]
+    occ = _cells((5, 5, 3), [(1, 1, 1), (3, 2, 1)] + ring)
+    return _voxel_case(
+        occ, box_points(1.0, 1.0, 1.0), n_holes=0, euler=2, manifold=True,
+        nonmanifold_length=0, pinch=np.zeros((0, 3)), volume=36,
+        interior_points=np.array([[2.5, 2.0, 1.5]]), interior_depth=0.5,
+    )
+
+
+def _bottle(shape, cavities) -> np.ndarray:
+    """A solid block with 3x3x3 cavities at the given corner voxels, each opened to the top
+    by a 1x1 channel above its centre."""
+    occ = np.ones(shape, dtype=bool)
+    for x, y, z in cavities:
+        occ[x : x + 3, y : y + 3, z : z + 3] = False
+        occ[x + 1, y + 1, z + 3 :] = False
+    return occ
+
+
+def one_hole() -> SpecialCase:
+    """A 5x5x5 bottle: a 3x3x3 cavity opened by a 1x1 channel, and a robot (a 2-cube) that
+    fits the cavity but not the channel.
+
+    A: one component, genus 0 (the cavity is connected to the outside). B: the cube of edge 2
+    centred at the origin (h = 1). The robot's free placements inside are the open cube
+    (2, 3)^3 (1 away from every cavity wall), cut off from the outside because the channel
+    (width 1 < 2) is closed by the neighbouring voxels' cubes.
+
+    Exhibits section 3.4, a polyhedral hole not reachable from the outer boundary. Exact sum:
+    the cube [-1, 6]^3 minus the hole [2, 3]^3: n_holes 1 (the hole shell is a sphere:
+    Euler characteristic 2 + 2 = 4), manifold, volume 7^3 - 1 = 342.
+    """
+    return _voxel_case(
+        _bottle((5, 5, 5), [(1, 1, 1)]), box_points(2.0, 2.0, 2.0), n_holes=1, euler=4,
+        manifold=True, nonmanifold_length=0, pinch=np.zeros((0, 3)), volume=342,
+        hole_points=np.array([[2.5, 2.5, 2.5]]),
+    )
+
+
+def two_holes() -> SpecialCase:
+    """A 5x9x5 bottle with two cavities (y in [1, 4] and [5, 8]), each with its own 1x1
+    channel, and the same 2-cube robot as :func:`one_hole`.
+
+    Exact sum: the box [-1, 6] x [-1, 10] x [-1, 6] minus the holes [2, 3]^3 and
+    [2, 3] x [6, 7] x [2, 3]: n_holes 2, Euler characteristic 6, manifold,
+    volume 7 * 11 * 7 - 2 = 537.
+    """
+    return _voxel_case(
+        _bottle((5, 9, 5), [(1, 1, 1), (1, 5, 1)]), box_points(2.0, 2.0, 2.0), n_holes=2,
+        euler=6, manifold=True, nonmanifold_length=0, pinch=np.zeros((0, 3)), volume=537,
+        hole_points=np.array([[2.5, 2.5, 2.5], [2.5, 6.5, 2.5]]),
+    )
+
+
+def genus_change() -> SpecialCase:
+    """The genus-3 plate (:func:`genus3`) and a box wider than its holes: the sum has genus 0.
+
+    B: the box [-0.75, 0.75]^2 x [-0.25, 0.25]. Each hole is a unit square between voxels whose
+    cubes grow by 0.75 towards it from both sides (1.5 > 1): every hole closes.
+
+    Exhibits the change of genus (section 4.2.1). Exact sum: the box
+    [-0.75, 7.75] x [-0.75, 3.75] x [-0.25, 1.25] (volume 8.5 * 4.5 * 1.5 = 57.375 = 459/8),
+    manifold, Euler characteristic 2, no hole.
+    """
+    return _voxel_case(
+        genus3_occupancy(), box_points(1.5, 1.5, 0.5), n_holes=0, euler=2, manifold=True,
+        nonmanifold_length=0, pinch=np.zeros((0, 3)), volume=Fraction(459, 8),
+    )
+
+
+def genus_kept() -> SpecialCase:
+    """The genus-3 plate and a box narrower than its holes (the contrast to genus_change).
+
+    B: the cube of edge 0.5 centred at the origin: each unit hole shrinks to a 0.5 x 0.5
+    square. Exact sum: genus 3 (Euler characteristic -4), manifold, no hole, volume
+    7.5 * 3.5 * 1.5 - 3 * 0.25 * 1.5 = 153/4.
+    """
+    return _voxel_case(
+        genus3_occupancy(), box_points(0.5, 0.5, 0.5), n_holes=0, euler=-4, manifold=True,
+        nonmanifold_length=0, pinch=np.zeros((0, 3)), volume=Fraction(153, 4),
+    )
+
+
+def coplanar_conjoint() -> SpecialCase:
+    """A 3-tooth comb (teeth at x in [0,1], [2,3], [4,5]; slots 1 wide) and a box 1.5 wide in x.
+
+    B: [-0.75, 0.75] x [-0.25, 0.25]^2. The top (and bottom) faces of neighbouring teeth
+    translated by B's top (bottom) vertices lie in one plane with the same orientation, and
+    after the edge and corner facets each covers x in [2i - 0.75, 2i + 1.75]: they overlap
+    in strips 0.5 wide over the slots (coplanar conjoint facets, merged by step 2). The slot
+    side faces' sums cross each other inside.
+
+    Exact sum: the slots fill (1.5 > 1): the box [-0.75, 5.75] x [-0.25, 3.25] x [-0.25, 1.25],
+    volume 6.5 * 3.5 * 1.5 = 273/8, manifold, Euler characteristic 2.
+    """
+    return _voxel_case(
+        comb_occupancy(3, 2), box_points(1.5, 0.5, 0.5), n_holes=0, euler=2, manifold=True,
+        nonmanifold_length=0, pinch=np.zeros((0, 3)), volume=Fraction(273, 8),
+    )
+
+
+def opposite_conjoint() -> SpecialCase:
+    """The 3-tooth comb and a box exactly as wide as its slots (1 in x).
+
+    B: [-0.5, 0.5] x [-0.25, 0.25]^2. The facing side faces of neighbouring teeth, moved by
+    +-0.5, coincide in the planes x = 1.5 and x = 3.5 with opposite orientations (opposite
+    conjoint facets, cancelled by the symmetric difference of step 2; situation (6)).
+
+    Exact sum: the slots close exactly; the walls at x = 1.5 and 3.5 are interior (no face
+    of the result lies there; the point (1.5, 1.5, 0.5) is at depth 0.75). The box
+    [-0.5, 5.5] x [-0.25, 3.25] x [-0.25, 1.25], volume 6 * 3.5 * 1.5 = 63/2, manifold,
+    Euler characteristic 2.
+    """
+    return _voxel_case(
+        comb_occupancy(3, 2), box_points(1.0, 0.5, 0.5), n_holes=0, euler=2, manifold=True,
+        nonmanifold_length=0, pinch=np.zeros((0, 3)), volume=Fraction(63, 2),
+        interior_points=np.array([[1.5, 1.5, 0.5], [3.5, 1.5, 0.5]]), interior_depth=0.75,
+    )
+
+
+def torus_icosphere() -> SpecialCase:
+    """The design notes' case: the 2304-triangle torus (major 1, minor 0.35) and a 320-facet
+    icosphere of radius 0.3.
+
+    Exhibits edge and corner facets in one plane with opposite orientations (where libigl's
+    winding-number trimming of the convolution kept coincident face pairs inside the sum)
+    and corner multiplicities +1 x 320 and -1 x 320 at saddle vertices. Exact sum: the
+    sphere (radius < 0.3) is smaller than the torus hole (inner radius about 0.65 - 0.3 >
+    0), so the sum stays a solid torus: manifold, genus 1 (Euler characteristic 0), no
+    hole; volume from the libigl reference only.
+    """
+    v, f = torus()
+    return SpecialCase(v, f, icosphere_points(2, radius=0.3), None, dict(
+        n_holes=0, euler=0, manifold=True, nonmanifold_length=0, pinch=np.zeros((0, 3)),
+    ))
+
+
+#: The special cases by name.
+SPECIAL_CASES = {
+    "double_vertex": double_vertex,
+    "nonmanifold_edge": nonmanifold_edge,
+    "tangent_facets": tangent_facets,
+    "one_hole": one_hole,
+    "two_holes": two_holes,
+    "genus_change": genus_change,
+    "genus_kept": genus_kept,
+    "coplanar_conjoint": coplanar_conjoint,
+    "opposite_conjoint": opposite_conjoint,
+    "torus_icosphere": torus_icosphere,
+}
