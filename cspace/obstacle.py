@@ -3,12 +3,14 @@
 Queries take translations of the robot's reference point as ``(k, 3)`` float64 arrays
 (``(3,)`` also accepted), in scene units, world frame.
 
-A :class:`CSpaceObstacle` holds one C-obstacle. This module implements the *convex path*:
-obstacle and robot convex, CO their exact Minkowski sum (:func:`cspace.convex_minkowski_sum`)
-stored as its exact facet planes ``n . k <= d`` (``n`` primitive int64, ``d`` a Python int,
-``k`` in grid units, ``x = step * k`` in scene units). Non-convex C-obstacles (issue #4,
-``cspace.minkowski_sum``) will plug in as another representation behind the same four queries
-(see :class:`CSpaceObstacle`).
+A :class:`CSpaceObstacle` holds one C-obstacle in one of two representations behind the same
+four queries. The *convex path* (``kind='convex'``, this module): obstacle and robot convex,
+CO their exact Minkowski sum (:func:`cspace.convex_minkowski_sum`) stored as its exact facet
+planes ``n . k <= d`` (``n`` primitive int64, ``d`` a Python int, ``k`` in grid units,
+``x = step * k`` in scene units). The *mesh path* (``kind='mesh'``, :mod:`cspace.meshquery`):
+a non-convex closed obstacle's C-obstacle ``cspace.minkowski_sum(O, R.reflected(c))``, or any
+closed triangle surface (:meth:`CSpaceObstacle.from_mesh`), queried exactly on its float64
+coordinates.
 
 Exactness
 ---------
@@ -84,9 +86,9 @@ class _ConvexCO:
 
     The interface a C-obstacle representation provides to :class:`CSpaceObstacle`, on
     validated ``(k, 3)`` float64 arrays: ``contains(q) -> (k,) bool``,
-    ``signed_distance(q) -> (k,) float64``, ``segments(q0, q1, want_t) -> (hit, t)``. A
-    non-convex representation (issue #4: the trimmed boundary mesh of
-    ``cspace.minkowski_sum``, or a union of convex pieces) implements the same three.
+    ``signed_distance(q) -> (k,) float64``, ``segments(q0, q1, want_t) -> (hit, t)``. The
+    non-convex representations (:class:`cspace.meshquery.MeshCO` for a closed surface, the
+    union of convex pieces in :mod:`cspace.surface`) implement the same three.
     """
 
     def __init__(self, poly: ConvexPolytope):
@@ -385,21 +387,28 @@ def _vertices_of(obj) -> np.ndarray:
 class CSpaceObstacle:
     """One translational C-obstacle ``CO = O ⊕ (-R)``, exact, with vectorised queries.
 
-    Build with :meth:`build`. The robot with its reference point at ``q`` meets the obstacle
-    (touching counts) exactly when ``q`` is in the closed set CO.
+    Build with :meth:`build` (or wrap a closed C-obstacle surface with :meth:`from_mesh`).
+    The robot with its reference point at ``q`` meets the obstacle (touching counts) exactly
+    when ``q`` is in the closed set CO.
 
     Attributes
     ----------
-    polytope : ConvexPolytope
-        The C-obstacle (convex path), exact grid vertices and primitive integer normals.
-    obstacle, robot : ConvexPolytope
-        The snapped operands (robot in its own frame, reference point not subtracted).
+    polytope : ConvexPolytope or None
+        The C-obstacle (convex path), exact grid vertices and primitive integer normals;
+        None on the mesh path.
+    obstacle : ConvexPolytope, ClosedMesh or None
+        The snapped obstacle (a ClosedMesh when non-convex).
+    robot : ConvexPolytope or None
+        The snapped robot (in its own frame, reference point not subtracted).
     reference_point : (3,) float64
         The robot's reference point, snapped to the grid.
     grid : Grid
-    kind : {'convex'}
-        The representation; non-convex C-obstacles (issue #4) will add another kind behind
-        the same queries.
+    kind : {'convex', 'mesh'}
+        The representation: exact facet planes, or a closed triangle surface
+        (:class:`cspace.meshquery.MeshCO`) for non-convex C-obstacles.
+    sum : SumPolyhedron or None
+        The ``cspace.minkowski_sum`` result a mesh C-obstacle was built from (provenance,
+        holes, non-manifold features), when built by :meth:`build`.
 
     Notes
     -----
@@ -440,19 +449,68 @@ class CSpaceObstacle:
         )
         self.grid = polytope.grid
         self.kind = "convex"
+        self.sum = None
         self._impl = _ConvexCO(polytope)
+
+    @classmethod
+    def from_mesh(
+        cls, vertices, faces, *, obstacle=None, robot=None, reference_point=(0.0, 0.0, 0.0),
+        grid: Grid | None = None, sum=None, name: str = "cobstacle",
+    ) -> "CSpaceObstacle":
+        """Wrap a closed triangle surface as a C-obstacle (``kind='mesh'``).
+
+        Parameters
+        ----------
+        vertices : (n, 3) float64
+        faces : (m, 3) int64
+            A closed 2-cycle (every directed edge balanced by its reverse), counter-clockwise
+            seen from outside; several shells (holes facing inwards) and non-manifold edges
+            are allowed. Queries are exact on these float64 coordinates.
+        obstacle, robot : optional
+            The operands it is the C-obstacle of (used by :func:`cspace.fcl_check.cross_check`).
+        reference_point : (3,) float64
+        grid : Grid, optional
+            Default ``Grid.for_points(vertices)`` (kept for reference; queries do not snap).
+        sum : SumPolyhedron, optional
+        name : str
+            Used in error messages.
+
+        Raises
+        ------
+        InvalidMeshError, OpenMeshError, NonFiniteError, EmptyMeshError
+            Bad arrays, named (see :class:`cspace.meshquery.MeshCO`).
+        """
+        from .meshquery import MeshCO
+
+        impl = MeshCO(vertices, faces, name=name)
+        self = cls.__new__(cls)
+        self.polytope = None
+        self.obstacle = obstacle
+        self.robot = robot
+        self.reference_point = np.asarray(reference_point, dtype=np.float64).reshape(3)
+        self.grid = grid if grid is not None else Grid.for_points(impl.vertices)
+        self.kind = "mesh"
+        self.sum = sum
+        self._impl = impl
+        return self
 
     @classmethod
     def build(
         cls, obstacle, robot, reference_point=(0.0, 0.0, 0.0), *, grid: Grid | None = None
     ) -> "CSpaceObstacle":
-        """Compute ``CO = O ⊕ (c - R)`` exactly (convex obstacle and robot).
+        """Compute ``CO = O ⊕ (c - R)`` exactly.
+
+        A convex obstacle gives a convex C-obstacle (``kind='convex'``, CVMS); a non-convex
+        closed mesh gives ``cspace.minkowski_sum(O, R.reflected(c))`` held as a closed
+        surface (``kind='mesh'``, exact queries by :mod:`cspace.meshquery`).
 
         Parameters
         ----------
-        obstacle, robot : ConvexPolytope, (n, 3) float64 points, or a closed convex mesh
-            Points are hulled; meshes must be convex (``ConvexPolytope.from_mesh``).
-            The robot is in its own frame.
+        obstacle : ConvexPolytope, (n, 3) float64 points, or a closed mesh
+            Points are hulled; a mesh (ClosedMesh, trimesh, ``(vertices, faces)``, path)
+            may be non-convex.
+        robot : ConvexPolytope, (n, 3) float64 points, or a closed convex mesh
+            In its own frame.
         reference_point : (3,) float64
             The robot point whose position ``q`` is planned (robot frame).
         grid : Grid, optional
@@ -465,9 +523,8 @@ class CSpaceObstacle:
         Raises
         ------
         NotConvexError
-            A mesh operand is not convex. Non-convex C-obstacles need
-            ``cspace.minkowski_sum`` (issue #4).
-        NonFiniteError, EmptyMeshError, DegenerateError
+            The robot mesh is not convex.
+        NonFiniteError, EmptyMeshError, DegenerateError, OpenMeshError
             Bad operands.
         """
         c = np.asarray(reference_point, dtype=np.float64).reshape(3)
@@ -475,25 +532,45 @@ class CSpaceObstacle:
             raise NonFiniteError(f"reference_point is not finite: {c.tolist()}")
         if grid is None:
             grid = Grid.for_points(_vertices_of(obstacle), _vertices_of(robot), c[None, :])
-        O = _as_convex(obstacle, grid, "obstacle")
         R = _as_convex(robot, grid, "robot")
+        c_snapped = grid.to_float(grid.snap(c))
+        try:
+            O = _as_convex(obstacle, grid, "obstacle")
+        except NotConvexError:
+            from .mesh import as_mesh
+            from .trim import minkowski_sum
+
+            O = as_mesh(obstacle, grid=grid, name="obstacle")
+            S = minkowski_sum(O, R.reflected(c))
+            return cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
+                                 reference_point=c_snapped, grid=grid, sum=S)
         co = convex_minkowski_sum(O, R.reflected(c)).polytope
-        return cls(co, obstacle=O, robot=R, reference_point=grid.to_float(grid.snap(c)))
+        return cls(co, obstacle=O, robot=R, reference_point=c_snapped)
 
     # ---- properties ---------------------------------------------------------------------
 
     @property
     def n_facets(self) -> int:
-        return self.polytope.n_facets
+        """Polygon facets (mesh path: of the SumPolyhedron if known, else triangles)."""
+        if self.polytope is not None:
+            return self.polytope.n_facets
+        if self.sum is not None and len(self.sum.face_facet):
+            return int(self.sum.face_facet.max()) + 1
+        return len(self._impl.faces)
 
     @property
     def vertices(self) -> np.ndarray:
-        """(n, 3) float64 exact vertices of the C-obstacle."""
+        """(n, 3) float64 vertices of the C-obstacle (exact on the convex path; the stored
+        float64 surface, on which queries are exact, on the mesh path)."""
+        if self.polytope is None:
+            return self._impl.vertices
         return self.polytope.vertices
 
     @property
     def faces(self) -> np.ndarray:
         """(m, 3) int64 triangles of the C-obstacle's boundary, counter-clockwise from outside."""
+        if self.polytope is None:
+            return self._impl.faces
         return self.polytope.faces
 
     @property
@@ -514,8 +591,10 @@ class CSpaceObstacle:
         """Is the robot at translation ``q`` in collision (``q`` in the closed CO)?
 
         Exact for every float64 ``q`` (no snapping, no tolerance); the boundary counts as
-        inside (touching is a collision). Cost: one ``(k, 4) x (4, f)`` product and a max;
-        rows within the filter's bound of a facet plane are decided with Python integers.
+        inside (touching is a collision). Convex path: one ``(k, 4) x (4, f)`` product and a
+        max; rows within the filter's bound of a facet plane are decided with Python integers.
+        Mesh path: on a triangle, or a non-zero winding number from a symbolically perturbed
+        ray (see :mod:`cspace.meshquery`).
 
         Parameters
         ----------
@@ -531,6 +610,8 @@ class CSpaceObstacle:
 
     def plane_signs(self, q) -> np.ndarray:
         """Exact ``(k, f)`` int8 side of each ``q`` against each facet plane (+1 outside it)."""
+        if self.kind != "convex":
+            raise TypeError(f"plane_signs is defined for a convex C-obstacle, not kind {self.kind!r}")
         q, _ = _translations(q)
         return self._impl.plane_signs(q)
 
@@ -546,7 +627,8 @@ class CSpaceObstacle:
         The magnitude is computed in float64 on coordinates centred on the CO: its error is
         a few ulps of ``r + |q - centre|`` (``r`` the CO's radius); the a-priori bound used
         in the tests is ``64 eps (r + |q - centre|)`` (checked against FCL, see
-        :mod:`cspace.fcl_check`).
+        :mod:`cspace.fcl_check`). Mesh path: the distance to the nearest triangle, outside
+        and inside alike (inside, the translational penetration depth of the C-obstacle).
 
         Parameters
         ----------
@@ -566,7 +648,9 @@ class CSpaceObstacle:
     def segment_free(self, q0, q1) -> np.ndarray | bool:
         """Does the straight translation from ``q0`` to ``q1`` stay out of CO?
 
-        An exact continuous check, no sampling: the closed segment misses the closed convex
+        An exact continuous check, no sampling. Mesh path: the closed segment meets CO iff it
+        meets a triangle (exact segment-triangle tests, coplanar and touching included) or
+        ``q0`` is inside. Convex path: the closed segment misses the closed convex
         CO iff no ``t`` in ``[0, 1]`` satisfies every facet inequality. The parameter interval
         is clipped facet by facet; each clip is a ratio of two plane values whose signs are
         exact (float filter), the interval test uses ratios with rigorous error bounds, and

@@ -1,0 +1,777 @@
+"""Exact queries on a closed triangle mesh: the non-convex C-obstacle representation.
+
+Works on a closed, oriented triangle surface given as float64 vertices ``(n, 3)`` and int64
+faces ``(m, 3)`` (scene units, world frame), e.g. the output of ``cspace.minkowski_sum``.
+The surface may have several shells (inner shells of holes face into the hole) and
+non-manifold edges and vertices: it must be a closed 2-cycle, every directed edge balanced by
+its reverse. Queries take validated ``(k, 3)`` float64 translations.
+
+:class:`MeshCO` provides the same three queries as the convex representation in
+:mod:`cspace.obstacle` (``contains``, ``signed_distance``, ``segments``), so a
+:class:`~cspace.obstacle.CSpace` mixes convex and mesh C-obstacles freely.
+
+Exactness
+---------
+Every decision is exact for the stored float64 vertices and float64 queries (both are dyadic
+rationals; nothing is snapped):
+
+- ``contains(q)``: ``q`` is on a triangle (exact point-in-closed-triangle test), or the
+  winding number of the surface around ``q`` is non-zero. The winding number counts the signed
+  crossings of the ray ``q + t e_x`` (``t > 0``). Rays through edges and vertices are resolved
+  by Simulation of Simplicity: the ray's ``(y, z)`` is perturbed by ``(eps, eps**2)``, so the
+  sign of a zero 2D orientation is read off the edge's direction; the perturbed ray meets no
+  edge, vertex or vertical triangle, and the shared edges of adjacent triangles get one
+  consistent answer, so the count is a winding number (for a closed 2-cycle it does not
+  depend on the ray).
+- ``segments``: the closed segment meets the closed solid iff it meets a triangle (exact
+  segment-triangle test: transversal crossings, touching, segments lying in a triangle's
+  plane, zero-length segments) or its start is inside.
+- First contact: the exact rational parameter of the first triangle met, rounded once.
+
+Each predicate (2D and 3D orientations on float64 differences) is evaluated in float64 with
+a rigorous semi-static error bound (Shewchuk's form, ``16 eps`` times the permanent, plus an
+absolute ``2**-1000`` for underflow); where the bound cannot certify the sign the query is
+redone with Python integers (each float is an integer times a power of two). No epsilon
+decides anything. The acceleration structures only prune: a ``(y, z)`` grid of triangle
+bounding boxes for the ray (exact comparisons; cell indices are monotone in the coordinate),
+and a bounding-volume hierarchy for segments and distances whose box test is conservative
+(its parameter interval is widened by more than its rounding error).
+
+Distances are float64: the distance to the nearest triangle (its sign from ``contains``),
+error a few ulps of the coordinates.
+
+Hot loops are numba-compiled (``cache=True``: the first call in a fresh environment compiles
+for a few seconds, later processes load the cache).
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numba as nb
+import numpy as np
+
+from .arrangement import _cross3 as _cross
+from .arrangement import _dot3 as _dot
+from .arrangement import _sub
+from .errors import EmptyMeshError, InvalidMeshError, NonFiniteError, OpenMeshError
+from .exact import _FILTER
+from .obstacle import _TINY, _dyadic
+
+__all__ = ["MeshCO"]
+
+# Leaf size of the bounding-volume hierarchy.
+_LEAF = 4
+# Relative widening of the BVH slab test's parameters: their rounding error is about
+# 3 eps (one subtraction, one division, and the rounding of p1 - p0); 1e-14 >> 3 eps.
+_SLAB = 1e-14
+
+_STATUS_OUT, _STATUS_IN, _STATUS_UNSURE = 0, 1, 2
+
+
+# --------------------------------------------------------------------------------------
+# float filters (numba): value and a rigorous bound on its rounding error
+
+
+@nb.njit(cache=True, inline="always")
+def _o2(au, av, bu, bv, pu, pv):
+    """``(b - a) x (p - a)`` in 2D, and its error bound."""
+    l = (bu - au) * (pv - av)
+    r = (bv - av) * (pu - au)
+    return l - r, _FILTER * (abs(l) + abs(r)) + _TINY
+
+
+@nb.njit(cache=True, inline="always")
+def _o3(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
+    """``det[a - d; b - d; c - d]`` (= ``n . (a - d)``, ``n = (b - a) x (c - a)``), error bound."""
+    adx, ady, adz = ax - dx, ay - dy, az - dz
+    bdx, bdy, bdz = bx - dx, by - dy, bz - dz
+    cdx, cdy, cdz = cx - dx, cy - dy, cz - dz
+    bdxcdy, cdxbdy = bdx * cdy, cdx * bdy
+    cdxady, adxcdy = cdx * ady, adx * cdy
+    adxbdy, bdxady = adx * bdy, bdx * ady
+    det = adz * (bdxcdy - cdxbdy) + bdz * (cdxady - adxcdy) + cdz * (adxbdy - bdxady)
+    perm = (
+        (abs(bdxcdy) + abs(cdxbdy)) * abs(adz)
+        + (abs(cdxady) + abs(adxcdy)) * abs(bdz)
+        + (abs(adxbdy) + abs(bdxady)) * abs(cdz)
+    )
+    return det, _FILTER * perm + _TINY
+
+
+@nb.njit(cache=True, inline="always")
+def _cell(v, v0, inv, n):
+    """Grid cell of coordinate ``v``: monotone non-decreasing in ``v`` (rounding is monotone)."""
+    f = (v - v0) * inv
+    if not f > 0.0:
+        return 0
+    if f >= n - 1:
+        return n - 1
+    return int(f)
+
+
+# --------------------------------------------------------------------------------------
+# membership (numba)
+
+
+@nb.njit(cache=True)
+def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny, nz, out):
+    """Per query: 0 outside, 1 inside, 2 undecided by the float filters (exact path)."""
+    for i in range(Q.shape[0]):
+        qx, qy, qz = Q[i, 0], Q[i, 1], Q[i, 2]
+        c = _cell(qy, y0, iy, ny) * nz + _cell(qz, z0, iz, nz)
+        w = 0
+        status = -1
+        for k in range(cstart[c], cstart[c + 1]):
+            t = ctris[k]
+            if qy < lo[t, 1] or qy > hi[t, 1] or qz < lo[t, 2] or qz > hi[t, 2] or qx > hi[t, 0]:
+                continue
+            inbox = qx >= lo[t, 0]
+            if degen[t]:
+                if inbox:
+                    status = _STATUS_UNSURE
+                    break
+                continue
+            ax, ay, az = T[t, 0], T[t, 1], T[t, 2]
+            bx, by, bz = T[t, 3], T[t, 4], T[t, 5]
+            cx, cy, cz = T[t, 6], T[t, 7], T[t, 8]
+            dsign = 0
+            if inbox:  # q may be on the triangle: its plane side must be certain
+                d, e = _o3(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz)
+                if not abs(d) > e:  # (also NaN / inf after overflow)
+                    status = _STATUS_UNSURE
+                    break
+                dsign = 1 if d > 0 else -1
+            s = sx[t]
+            if s == 0:
+                continue
+            v1, e1 = _o2(ay, az, by, bz, qy, qz)
+            v2, e2 = _o2(by, bz, cy, cz, qy, qz)
+            v3, e3 = _o2(cy, cz, ay, az, qy, qz)
+            # Certainly outside the projected triangle if one certain sign disagrees.
+            if (s > 0 and (v1 < -e1 or v2 < -e2 or v3 < -e3)) or (
+                s < 0 and (v1 > e1 or v2 > e2 or v3 > e3)
+            ):
+                continue
+            if not (abs(v1) > e1 and abs(v2) > e2 and abs(v3) > e3):
+                status = _STATUS_UNSURE
+                break
+            # Crossing ahead of q: the triangle lies beyond q, or q is behind its plane.
+            if not inbox or dsign == s:
+                w += s
+        if status == _STATUS_UNSURE:
+            out[i] = _STATUS_UNSURE
+        else:
+            out[i] = _STATUS_IN if w != 0 else _STATUS_OUT
+
+
+@nb.njit(cache=True)
+def _cell_candidates(q, lo, hi, cstart, ctris, y0, z0, iy, iz, ny, nz):
+    """Triangles whose closed box holds ``q``'s (y, z) and reaches ``x >= q_x``."""
+    qx, qy, qz = q[0], q[1], q[2]
+    c = _cell(qy, y0, iy, ny) * nz + _cell(qz, z0, iz, nz)
+    out = np.zeros(cstart[c + 1] - cstart[c], dtype=np.int64)
+    n = 0
+    for k in range(cstart[c], cstart[c + 1]):
+        t = ctris[k]
+        if qy < lo[t, 1] or qy > hi[t, 1] or qz < lo[t, 2] or qz > hi[t, 2] or qx > hi[t, 0]:
+            continue
+        out[n] = t
+        n += 1
+    return out[:n]
+
+
+@nb.njit(cache=True)
+def _build_cells(lo, hi, y0, z0, iy, iz, ny, nz):
+    """CSR lists of the triangles whose (y, z) box meets each cell (same cell function)."""
+    m = lo.shape[0]
+    count = np.zeros(ny * nz + 1, dtype=np.int64)
+    for t in range(m):
+        for a in range(_cell(lo[t, 1], y0, iy, ny), _cell(hi[t, 1], y0, iy, ny) + 1):
+            for b in range(_cell(lo[t, 2], z0, iz, nz), _cell(hi[t, 2], z0, iz, nz) + 1):
+                count[a * nz + b + 1] += 1
+    start = np.cumsum(count)
+    fill = start[:-1].copy()
+    tris = np.zeros(start[-1], dtype=np.int64)
+    for t in range(m):
+        for a in range(_cell(lo[t, 1], y0, iy, ny), _cell(hi[t, 1], y0, iy, ny) + 1):
+            for b in range(_cell(lo[t, 2], z0, iz, nz), _cell(hi[t, 2], z0, iz, nz) + 1):
+                tris[fill[a * nz + b]] = t
+                fill[a * nz + b] += 1
+    return start, tris
+
+
+# --------------------------------------------------------------------------------------
+# bounding-volume hierarchy: distances and segments (numba)
+
+
+@nb.njit(cache=True, inline="always")
+def _box_dist2(px, py, pz, lo, hi, n):
+    d = 0.0
+    for k, p in ((0, px), (1, py), (2, pz)):
+        if p < lo[n, k]:
+            d += (lo[n, k] - p) ** 2
+        elif p > hi[n, k]:
+            d += (p - hi[n, k]) ** 2
+    return d
+
+
+@nb.njit(cache=True, inline="always")
+def _seg_dist2(px, py, pz, ax, ay, az, bx, by, bz):
+    ex, ey, ez = bx - ax, by - ay, bz - az
+    wx, wy, wz = px - ax, py - ay, pz - az
+    ee = ex * ex + ey * ey + ez * ez
+    t = 0.0
+    if ee > 0.0:
+        t = min(1.0, max(0.0, (wx * ex + wy * ey + wz * ez) / ee))
+    rx, ry, rz = wx - t * ex, wy - t * ey, wz - t * ez
+    return rx * rx + ry * ry + rz * rz
+
+
+@nb.njit(cache=True)
+def _tri_dist2(px, py, pz, T, t):
+    """Squared distance from p to the closed triangle ``T[t]`` (Ericson's regions, float)."""
+    ax, ay, az = T[t, 0], T[t, 1], T[t, 2]
+    bx, by, bz = T[t, 3], T[t, 4], T[t, 5]
+    cx, cy, cz = T[t, 6], T[t, 7], T[t, 8]
+    abx, aby, abz = bx - ax, by - ay, bz - az
+    acx, acy, acz = cx - ax, cy - ay, cz - az
+    apx, apy, apz = px - ax, py - ay, pz - az
+    d1 = abx * apx + aby * apy + abz * apz
+    d2 = acx * apx + acy * apy + acz * apz
+    if d1 <= 0.0 and d2 <= 0.0:
+        return apx * apx + apy * apy + apz * apz
+    bpx, bpy, bpz = px - bx, py - by, pz - bz
+    d3 = abx * bpx + aby * bpy + abz * bpz
+    d4 = acx * bpx + acy * bpy + acz * bpz
+    if d3 >= 0.0 and d4 <= d3:
+        return bpx * bpx + bpy * bpy + bpz * bpz
+    cpx, cpy, cpz = px - cx, py - cy, pz - cz
+    d5 = abx * cpx + aby * cpy + abz * cpz
+    d6 = acx * cpx + acy * cpy + acz * cpz
+    if d6 >= 0.0 and d5 <= d6:
+        return cpx * cpx + cpy * cpy + cpz * cpz
+    vc = d1 * d4 - d3 * d2
+    vb = d5 * d2 - d1 * d6
+    va = d3 * d6 - d5 * d4
+    den = va + vb + vc
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0 or vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0 or (
+        va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0
+    ) or not den > 0.0:
+        # Closest point on an edge (also the fallback for needle-like triangles).
+        return min(
+            _seg_dist2(px, py, pz, ax, ay, az, bx, by, bz),
+            _seg_dist2(px, py, pz, bx, by, bz, cx, cy, cz),
+            _seg_dist2(px, py, pz, cx, cy, cz, ax, ay, az),
+        )
+    v, w = vb / den, vc / den
+    rx = apx - v * abx - w * acx
+    ry = apy - v * aby - w * acy
+    rz = apz - v * abz - w * acz
+    return rx * rx + ry * ry + rz * rz
+
+
+@nb.njit(cache=True)
+def _nearest_kernel(Q, T, nlo, nhi, left, right, start, count, out):
+    """Distance from each query to the nearest triangle (BVH, nearest child first)."""
+    stack = np.zeros(256, dtype=np.int64)
+    for i in range(Q.shape[0]):
+        px, py, pz = Q[i, 0], Q[i, 1], Q[i, 2]
+        best = np.inf
+        sp = 1
+        stack[0] = 0
+        while sp > 0:
+            sp -= 1
+            n = stack[sp]
+            if _box_dist2(px, py, pz, nlo, nhi, n) >= best:
+                continue
+            if left[n] < 0:
+                for t in range(start[n], start[n] + count[n]):
+                    d = _tri_dist2(px, py, pz, T, t)
+                    if d < best:
+                        best = d
+            else:
+                a, b = left[n], right[n]
+                da = _box_dist2(px, py, pz, nlo, nhi, a)
+                db = _box_dist2(px, py, pz, nlo, nhi, b)
+                if da < db:  # push the far child first: the near one is popped next
+                    a, b, da, db = b, a, db, da
+                if da < best:
+                    stack[sp] = a
+                    sp += 1
+                if db < best:
+                    stack[sp] = b
+                    sp += 1
+        out[i] = np.sqrt(best)
+
+
+@nb.njit(cache=True, inline="always")
+def _seg_box(p0x, p0y, p0z, dx, dy, dz, nlo, nhi, n):
+    """False only if the segment ``p0 + t d``, ``t in [0, 1]``, surely misses the closed box.
+
+    The slab parameters are widened by ``_SLAB`` relative (far more than their rounding), so
+    a segment touching the box is never pruned.
+    """
+    t0, t1 = 0.0, 1.0
+    if not (abs(dx) < np.inf and abs(dy) < np.inf and abs(dz) < np.inf):
+        return True  # p1 - p0 overflowed: no pruning
+    for k, p, d in ((0, p0x, dx), (1, p0y, dy), (2, p0z, dz)):
+        if d == 0.0:
+            if p < nlo[n, k] or p > nhi[n, k]:
+                return False
+        else:
+            ta = (nlo[n, k] - p) / d
+            tb = (nhi[n, k] - p) / d
+            if ta > tb:
+                ta, tb = tb, ta
+            ta = min(ta * (1.0 - _SLAB), ta * (1.0 + _SLAB)) - 1e-300
+            tb = max(tb * (1.0 - _SLAB), tb * (1.0 + _SLAB)) + 1e-300
+            if ta > t0:
+                t0 = ta
+            if tb < t1:
+                t1 = tb
+            if t0 > t1:
+                return False
+    return True
+
+
+@nb.njit(cache=True)
+def _segment_kernel(P0, P1, T, degen, nlo, nhi, left, right, start, count, first_only):
+    """Filtered segment-triangle tests over the BVH.
+
+    Returns ``status`` per segment (1: a certain hit, 2: no certain hit but undecided pairs,
+    0: surely meets no triangle) and the pairs ``(segment, triangle, t_lo, t_hi)`` of certain
+    hits (with an enclosure of the crossing parameter) and of undecided pairs (``t_lo = -1``).
+    With ``first_only`` the traversal stops at the first certain hit.
+    """
+    k = P0.shape[0]
+    status = np.zeros(k, dtype=np.int8)
+    cap = 1024
+    ps = np.zeros(cap, dtype=np.int64)
+    pt = np.zeros(cap, dtype=np.int64)
+    plo = np.zeros(cap)
+    phi = np.zeros(cap)
+    np_ = 0
+    stack = np.zeros(256, dtype=np.int64)
+    for i in range(k):
+        px, py, pz = P0[i, 0], P0[i, 1], P0[i, 2]
+        qx, qy, qz = P1[i, 0], P1[i, 1], P1[i, 2]
+        dx, dy, dz = qx - px, qy - py, qz - pz
+        st = 0
+        sp = 1
+        stack[0] = 0
+        while sp > 0:
+            sp -= 1
+            n = stack[sp]
+            if not _seg_box(px, py, pz, dx, dy, dz, nlo, nhi, n):
+                continue
+            if left[n] >= 0:
+                stack[sp] = left[n]
+                stack[sp + 1] = right[n]
+                sp += 2
+                continue
+            for t in range(start[n], start[n] + count[n]):
+                tlo, thi = -1.0, 1.0  # t_lo < 0 marks an undecided pair
+                certain = False
+                if not degen[t]:
+                    ax, ay, az = T[t, 0], T[t, 1], T[t, 2]
+                    bx, by, bz = T[t, 3], T[t, 4], T[t, 5]
+                    cx, cy, cz = T[t, 6], T[t, 7], T[t, 8]
+                    d0, e0 = _o3(ax, ay, az, bx, by, bz, cx, cy, cz, px, py, pz)
+                    d1, e1 = _o3(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz)
+                    if (d0 > e0 and d1 > e1) or (d0 < -e0 and d1 < -e1):
+                        continue  # both ends strictly on one side of the plane
+                    if abs(d0) > e0 and abs(d1) > e1:
+                        # Strict crossing of the plane: does the line pass through the triangle?
+                        o1, f1 = _o3(px, py, pz, qx, qy, qz, ax, ay, az, bx, by, bz)
+                        o2, f2 = _o3(px, py, pz, qx, qy, qz, bx, by, bz, cx, cy, cz)
+                        o3, f3 = _o3(px, py, pz, qx, qy, qz, cx, cy, cz, ax, ay, az)
+                        if (o1 > f1 or o2 > f2 or o3 > f3) and (o1 < -f1 or o2 < -f2 or o3 < -f3):
+                            continue  # certain opposite signs: the line misses
+                        if (o1 > f1 and o2 > f2 and o3 > f3) or (
+                            o1 < -f1 and o2 < -f2 and o3 < -f3
+                        ):
+                            certain = True
+                            a0, a1 = abs(d0), abs(d1)
+                            tlo = (a0 - e0) / (a0 + a1 + e0 + e1) * (1.0 - 8 * 2.0**-53)
+                            thi = min(1.0, (a0 + e0) / (a0 + a1 - e0 - e1) * (1.0 + 8 * 2.0**-53))
+                if np_ == cap:
+                    cap *= 2
+                    ps2 = np.zeros(cap, dtype=np.int64)
+                    pt2 = np.zeros(cap, dtype=np.int64)
+                    plo2, phi2 = np.zeros(cap), np.zeros(cap)
+                    ps2[:np_] = ps
+                    pt2[:np_] = pt
+                    plo2[:np_] = plo
+                    phi2[:np_] = phi
+                    ps, pt, plo, phi = ps2, pt2, plo2, phi2
+                ps[np_], pt[np_], plo[np_], phi[np_] = i, t, tlo, thi
+                np_ += 1
+                if certain:
+                    st = 1
+                    if first_only:
+                        break
+                elif st == 0:
+                    st = 2
+            if st == 1 and first_only:
+                break
+        status[i] = st
+    return status, ps[:np_], pt[:np_], plo[:np_], phi[:np_]
+
+
+# --------------------------------------------------------------------------------------
+# exact predicates (Python integers) for what the filters leave undecided
+
+
+def _on_segment(X, U, V) -> bool:
+    """Point X on the closed segment [U, V] (U == V allowed)."""
+    e = _sub(V, U)
+    if e == (0, 0, 0):
+        return X == U
+    w = _sub(X, U)
+    return _cross(e, w) == (0, 0, 0) and 0 <= _dot(w, e) <= _dot(e, e)
+
+
+def _entry_segment(P0, P1, U, V):
+    """Smallest t in [0, 1] with ``P0 + t (P1 - P0)`` on the closed segment [U, V], or None."""
+    d, e = _sub(P1, P0), _sub(V, U)
+    if d == (0, 0, 0):
+        return Fraction(0) if _on_segment(P0, U, V) else None
+    if e == (0, 0, 0):
+        if not _on_segment(U, P0, P1):
+            return None
+        return Fraction(_dot(_sub(U, P0), d), _dot(d, d))
+    w = _sub(P0, U)
+    c = _cross(d, e)
+    if c != (0, 0, 0):
+        if _dot(w, c) != 0:
+            return None  # skew lines
+        cc = _dot(c, c)
+        tn, sn = _dot(_cross(e, w), c), _dot(_cross(d, w), c)
+        if 0 <= tn <= cc and 0 <= sn <= cc:
+            return Fraction(tn, cc)
+        return None
+    if _cross(d, w) != (0, 0, 0):
+        return None  # parallel, not collinear
+    dd = _dot(d, d)
+    a, b = sorted((_dot(_sub(U, P0), d), _dot(_sub(V, P0), d)))
+    lo, hi = max(0, a), min(dd, b)
+    return Fraction(lo, dd) if lo <= hi else None
+
+
+def _entry_exact(p0, p1, tri):
+    """Exact first parameter in [0, 1] where the segment p0 -> p1 meets the closed triangle.
+
+    ``p0, p1`` float64 (3,), ``tri`` float64 (9,); returns a Fraction or None (no contact).
+    A zero-length segment gives 0 iff the point is on the triangle.
+    """
+    X, _ = _dyadic(list(p0) + list(p1) + list(tri))
+    P0, P1, A, B, C = (tuple(X[i : i + 3]) for i in range(0, 15, 3))
+    n = _cross(_sub(B, A), _sub(C, A))
+    if n == (0, 0, 0):
+        # A degenerate triangle is the segment between its extreme (collinear) corners.
+        U, _, V = sorted((A, B, C))
+        return _entry_segment(P0, P1, U, V)
+    D0, D1 = _dot(n, _sub(P0, A)), _dot(n, _sub(P1, A))
+    if (D0 > 0 and D1 > 0) or (D0 < 0 and D1 < 0):
+        return None
+    edges = ((A, B), (B, C), (C, A))
+    if D0 != 0 or D1 != 0:
+        # One crossing point X = P0 + t (P1 - P0), t = D0 / den; test den * X in the triangle.
+        den = D0 - D1
+        sgn = 1 if den > 0 else -1
+        Xd = tuple(P0[j] * den + D0 * (P1[j] - P0[j]) for j in range(3))
+        for U, V in edges:
+            Ud = (U[0] * den, U[1] * den, U[2] * den)
+            if sgn * _dot(_cross(_sub(V, U), _sub(Xd, Ud)), n) < 0:
+                return None
+        return Fraction(D0, den)
+    # The segment lies in the triangle's plane: clip [0, 1] by the three edge half-planes.
+    lo, hi = Fraction(0), Fraction(1)
+    for U, V in edges:
+        e = _sub(V, U)
+        g0, g1 = _dot(_cross(e, _sub(P0, U)), n), _dot(_cross(e, _sub(P1, U)), n)
+        if g0 < 0 and g1 < 0:
+            return None
+        if g0 < 0:
+            lo = max(lo, Fraction(-g0, g1 - g0))
+        elif g1 < 0:
+            hi = min(hi, Fraction(g0, g0 - g1))
+        if lo > hi:
+            return None
+    return lo
+
+
+def _perturbed_side(au, av, bu, bv, pu, pv) -> int:
+    """Sign of orient2d(a, b, p + (eps, eps**2)) in the (u, v) = (y, z) plane (a != b)."""
+    val = (bu - au) * (pv - av) - (bv - av) * (pu - au)
+    if val:
+        return 1 if val > 0 else -1
+    # d/d eps of the value is -(bv - av); then d/d eps**2 is (bu - au).
+    if bv != av:
+        return 1 if bv < av else -1
+    return 1 if bu > au else -1
+
+
+def _crossing_exact(q, tri, s: int) -> int:
+    """Signed crossing (``s`` or 0) of the perturbed ray ``q + t e_x`` with a triangle that
+    does not contain ``q``; ``s`` is the exact sign of the triangle's projected (y, z) area."""
+    X, _ = _dyadic(list(q) + list(tri))
+    Q, A, B, C = (tuple(X[i : i + 3]) for i in range(0, 12, 3))
+    for U, V in ((A, B), (B, C), (C, A)):
+        if _perturbed_side(U[1], U[2], V[1], V[2], Q[1], Q[2]) != s:
+            return 0
+    n = _cross(_sub(B, A), _sub(C, A))
+    D = _dot(n, _sub(A, Q))
+    # D != 0: q is off the triangle and inside its (closed) projection, so off its plane.
+    return s if (D > 0) == (s > 0) else 0
+
+
+# --------------------------------------------------------------------------------------
+# structure building
+
+
+def _exact_area_signs(T: np.ndarray) -> np.ndarray:
+    """(m, 3) int8 exact signs of the triangle normal's components (projected areas)."""
+    m = len(T)
+    A, B, C = T[:, 0:3], T[:, 3:6], T[:, 6:9]
+    out = np.zeros((m, 3), dtype=np.int8)
+    for k, (u, v) in enumerate(((1, 2), (2, 0), (0, 1))):
+        l = (B[:, u] - A[:, u]) * (C[:, v] - A[:, v])
+        r = (B[:, v] - A[:, v]) * (C[:, u] - A[:, u])
+        val = l - r
+        err = _FILTER * (np.abs(l) + np.abs(r)) + _TINY
+        out[:, k] = np.where(val > err, 1, np.where(val < -err, -1, 0))
+        for t in np.nonzero(~(np.abs(val) > err))[0].tolist():
+            X, _ = _dyadic(T[t].tolist())
+            a, b, c = X[0:3], X[3:6], X[6:9]
+            x = (b[u] - a[u]) * (c[v] - a[v]) - (b[v] - a[v]) * (c[u] - a[u])
+            out[t, k] = (x > 0) - (x < 0)
+    return out
+
+
+def _build_bvh(lo: np.ndarray, hi: np.ndarray):
+    """Median-split BVH over triangle boxes; leaves hold contiguous runs of ``order``."""
+    m = len(lo)
+    cent = (lo + hi) / 2.0
+    order = np.arange(m)
+    nlo, nhi, left, right, start, count = [], [], [], [], [], []
+
+    def new(s, e):
+        idx = order[s:e]
+        nlo.append(lo[idx].min(axis=0))
+        nhi.append(hi[idx].max(axis=0))
+        left.append(-1)
+        right.append(-1)
+        start.append(s)
+        count.append(e - s)
+        return len(nlo) - 1
+
+    todo = [(new(0, m), 0, m)]
+    while todo:
+        node, s, e = todo.pop()
+        if e - s <= _LEAF:
+            continue
+        c = cent[order[s:e]]
+        axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
+        mid = (s + e) // 2
+        part = np.argpartition(c[:, axis], mid - s)
+        order[s:e] = order[s:e][part]
+        a, b = new(s, mid), new(mid, e)
+        left[node], right[node] = a, b
+        count[node] = 0
+        todo += [(a, s, mid), (b, mid, e)]
+    as_i = lambda x: np.asarray(x, dtype=np.int64)  # noqa: E731
+    return (order, np.asarray(nlo), np.asarray(nhi), as_i(left), as_i(right), as_i(start),
+            as_i(count))
+
+
+def _closed_mesh_arrays(vertices, faces, name: str):
+    V = np.ascontiguousarray(vertices, dtype=np.float64)
+    F = np.asarray(faces)
+    if V.ndim != 2 or V.shape[1] != 3:
+        raise InvalidMeshError(f"{name}: vertices must be (n, 3), got shape {V.shape}")
+    if F.ndim != 2 or F.shape[1] != 3 or (F.size and F.dtype.kind not in "iu"):
+        raise InvalidMeshError(f"{name}: faces must be (m, 3) integers, got {F.dtype} {F.shape}")
+    F = np.ascontiguousarray(F, dtype=np.int64)
+    if len(F) == 0:
+        raise EmptyMeshError(f"{name}: no faces")
+    if F.min() < 0 or F.max() >= len(V):
+        row = int(np.nonzero(((F < 0) | (F >= len(V))).any(axis=1))[0][0])
+        raise InvalidMeshError(f"{name}: face {row} indexes a missing vertex: {F[row].tolist()}")
+    used = np.zeros(len(V), dtype=bool)
+    used[F.ravel()] = True
+    bad = used & ~np.isfinite(V).all(axis=1)
+    if bad.any():
+        row = int(np.nonzero(bad)[0][0])
+        raise NonFiniteError(f"{name}: vertex {row} is not finite: {V[row].tolist()}")
+    # Closed 2-cycle: each directed edge is balanced by its reverse (exact integer counts).
+    u = F.ravel()
+    v = np.roll(F, -1, axis=1).ravel()
+    n = np.int64(len(V))
+    key = np.concatenate([u * n + v, v * n + u])
+    sign = np.concatenate([np.ones(len(u), np.int64), -np.ones(len(u), np.int64)])
+    keys, inv = np.unique(key, return_inverse=True)
+    bal = np.bincount(inv.ravel(), weights=sign).astype(np.int64)
+    if (bal != 0).any():
+        k = int(keys[np.nonzero(bal)[0][0]])
+        raise OpenMeshError(
+            f"{name}: not a closed 2-cycle: edge {k // int(n)} -> {k % int(n)} is not balanced "
+            "by its reverse"
+        )
+    return V, F
+
+
+# --------------------------------------------------------------------------------------
+# the representation
+
+
+class MeshCO:
+    """Exact queries on a closed triangle surface (a non-convex C-obstacle).
+
+    Parameters
+    ----------
+    vertices : (n, 3) float64
+    faces : (m, 3) int64
+        A closed 2-cycle (every directed edge balanced by its reverse), counter-clockwise seen
+        from outside; several shells and non-manifold edges and vertices are allowed.
+    name : str
+        Used in error messages.
+
+    Notes
+    -----
+    Interface (as the convex representation), on validated ``(k, 3)`` float64 arrays:
+    ``contains(q) -> (k,) bool`` (closed set: the surface is inside), ``signed_distance(q)``,
+    ``segments(q0, q1, want_t) -> (hit (k,) bool, t (k,) float64)``. Membership is "winding
+    number non-zero or on the surface", so it is exact for any closed 2-cycle whose winding
+    number is 0 or 1 (a solid with holes).
+
+    Raises
+    ------
+    InvalidMeshError, EmptyMeshError, NonFiniteError, OpenMeshError
+        Bad arrays, an empty mesh, a non-finite vertex, an unbalanced edge (named).
+    """
+
+    def __init__(self, vertices, faces, *, name: str = "mesh"):
+        V, F = _closed_mesh_arrays(vertices, faces, name)
+        self.vertices, self.faces, self.name = V, F, name
+        T0 = V[F].reshape(-1, 9)
+        lo0 = np.minimum(np.minimum(T0[:, 0:3], T0[:, 3:6]), T0[:, 6:9])
+        hi0 = np.maximum(np.maximum(T0[:, 0:3], T0[:, 3:6]), T0[:, 6:9])
+        order, self.nlo, self.nhi, self.left, self.right, self.start, self.count = _build_bvh(
+            lo0, hi0
+        )
+        # Triangles in BVH leaf order (locality); self.order maps back to face indices.
+        self.order = order
+        self.T = np.ascontiguousarray(T0[order])
+        self.lo = np.ascontiguousarray(lo0[order])
+        self.hi = np.ascontiguousarray(hi0[order])
+        area = _exact_area_signs(self.T)
+        self.sx = np.ascontiguousarray(area[:, 0])
+        self.degen = np.ascontiguousarray((area == 0).all(axis=1))
+        # (y, z) grid for the +x rays: about two cells per triangle, square-ish cells.
+        m = len(F)
+        ylo, yhi = self.lo[:, 1].min(), self.hi[:, 1].max()
+        zlo, zhi = self.lo[:, 2].min(), self.hi[:, 2].max()
+        Ly, Lz = max(yhi - ylo, 1e-300), max(zhi - zlo, 1e-300)
+        cells = 2.0 * m
+        ny = int(np.clip(np.sqrt(cells * Ly / Lz), 1, 4096))
+        nz = int(np.clip(cells / ny, 1, 4096))
+        self._grid = (float(ylo), float(zlo), float(ny / Ly), float(nz / Lz), ny, nz)
+        self.cstart, self.ctris = _build_cells(self.lo, self.hi, *self._grid)
+
+    # ---- membership ---------------------------------------------------------------------
+
+    def contains(self, q: np.ndarray) -> np.ndarray:
+        """(k,) bool: ``q`` on the surface or inside (winding number non-zero), exact."""
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        status = np.zeros(len(q), dtype=np.int8)
+        _contains_kernel(q, self.T, self.lo, self.hi, self.sx, self.degen, self.cstart,
+                         self.ctris, *self._grid, status)
+        out = status == _STATUS_IN
+        for i in np.nonzero(status == _STATUS_UNSURE)[0].tolist():
+            out[i] = self._contains_exact(q[i])
+        return out
+
+    def _contains_exact(self, q: np.ndarray) -> bool:
+        cand = _cell_candidates(q, self.lo, self.hi, self.cstart, self.ctris, *self._grid)
+        ql = q.tolist()
+        w = 0
+        for t in cand.tolist():
+            tri = self.T[t].tolist()
+            if _entry_exact(ql, ql, tri) is not None:
+                return True  # on the surface
+            s = int(self.sx[t])
+            if s:
+                w += _crossing_exact(ql, tri, s)
+        return w != 0
+
+    # ---- distances ----------------------------------------------------------------------
+
+    def distance(self, q: np.ndarray) -> np.ndarray:
+        """(k,) float64 Euclidean distance to the nearest triangle (unsigned)."""
+        q = np.ascontiguousarray(q, dtype=np.float64)
+        out = np.zeros(len(q))
+        _nearest_kernel(q, self.T, self.nlo, self.nhi, self.left, self.right, self.start,
+                        self.count, out)
+        return out
+
+    def signed_distance(self, q: np.ndarray) -> np.ndarray:
+        """Distance to the surface, negative inside (sign exact; ``-0.0`` on the surface)."""
+        d = self.distance(q)
+        return np.where(self.contains(q), -d, d)
+
+    def depth(self, q: np.ndarray) -> np.ndarray:
+        """Penetration depth of inside points: the distance to the surface (float)."""
+        return self.distance(q)
+
+    distance_outside = distance
+
+    # ---- segments -----------------------------------------------------------------------
+
+    def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
+        """Exact hit test of the closed segments; entry parameters where asked.
+
+        Returns ``(hit (k,) bool, t (k,) float64)``; ``t`` is NaN where not hit or not asked.
+        """
+        q0 = np.ascontiguousarray(q0, dtype=np.float64)
+        q1 = np.ascontiguousarray(q1, dtype=np.float64)
+        k = len(q0)
+        tout = np.full(k, np.nan)
+        status, ps, pt, plo, phi = _segment_kernel(
+            q0, q1, self.T, self.degen, self.nlo, self.nhi, self.left, self.right, self.start,
+            self.count, not want_t,
+        )
+        if not want_t:
+            hit = status == 1
+            unsure = status == 2
+            if unsure.any():
+                sel = unsure[ps] & (plo < 0.0)
+                for i, t in zip(ps[sel].tolist(), pt[sel].tolist()):
+                    if not hit[i] and _entry_exact(q0[i].tolist(), q1[i].tolist(),
+                                                   self.T[t].tolist()) is not None:
+                        hit[i] = True
+            rest = np.nonzero(~hit)[0]
+            if rest.size:  # no surface contact: the whole segment is inside iff q0 is
+                hit[rest] = self.contains(q0[rest])
+            return hit, tout
+        inside0 = self.contains(q0)
+        tout[inside0] = 0.0
+        hit = inside0.copy()
+        # Group the pairs by segment; only pairs that can beat the best certain hit matter.
+        keep = ~inside0[ps]
+        ps, pt, plo, phi = ps[keep], pt[keep], plo[keep], phi[keep]
+        if len(ps):
+            cert = plo >= 0.0
+            best = np.full(k, np.inf)
+            np.minimum.at(best, ps[cert], phi[cert])
+            sel = plo <= best[ps]
+            entry: dict[int, Fraction] = {}
+            for i, t in zip(ps[sel].tolist(), pt[sel].tolist()):
+                e = _entry_exact(q0[i].tolist(), q1[i].tolist(), self.T[t].tolist())
+                if e is not None and (i not in entry or e < entry[i]):
+                    entry[i] = e
+            for i, e in entry.items():
+                hit[i] = True
+                tout[i] = float(e)
+        return hit, tout
