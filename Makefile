@@ -35,6 +35,7 @@ test-slow: $(STAMP)
 bench: $(STAMP)
 	$(PY) benchmarks/bench_cvms.py
 	$(PY) benchmarks/bench_superset.py
+	$(PY) benchmarks/bench_minkowski.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

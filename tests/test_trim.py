@@ -383,21 +383,12 @@ def test_special_case_topology(name):
 SHARED = ["bunny-128", "bumpy-528", "yoda-658", "Centaur-1000", "alphaobstacle", "trap"]
 
 
-def _shared_robots(extent):
-    s = 0.08 * extent
-    return {
-        "box": zoo.box_points(s, 0.8 * s, 0.6 * s),
-        "hull20": zoo.hull20(0, scale=(s / 2, 0.35 * s, 0.25 * s)),
-        "ico320": zoo.icosphere_points(2, radius=s / 2),
-    }
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("robot", ["box", "hull20", "ico320"])
 @pytest.mark.parametrize("mesh", SHARED)
 def test_shared_meshes(shared_data, mesh, robot):
     m = ClosedMesh.load(zoo.shared_closed_meshes(shared_data)[mesh])
-    b = _shared_robots(float(np.ptp(m.vertices, axis=0).max()))[robot]
+    b = zoo.scaled_robots(float(np.ptp(m.vertices, axis=0).max()))[robot]
     c = Case(f"{mesh}+{robot}", m.vertices, m.faces, b)
     check_output_is_closed_and_oriented(c)
     check_membership_and_distance_match_fcl(c)

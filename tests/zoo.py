@@ -38,6 +38,7 @@ __all__ = [
     "zoo_meshes",
     "SHARED_CLOSED_MESHES",
     "shared_closed_meshes",
+    "scaled_robots",
     "box_points",
     "icosphere_points",
     "hull20",
@@ -493,6 +494,17 @@ def shared_closed_meshes(shared_data_path) -> dict[str, Path]:
 
 # --------------------------------------------------------------------------------------
 # convex robots B (point sets)
+
+
+def scaled_robots(extent: float) -> dict[str, np.ndarray]:
+    """The benchmark robots for a mesh of the given extent: a box, a 20-facet hull and a
+    320-facet icosphere, each about 8% of ``extent`` across (as in bench_superset)."""
+    s = 0.08 * float(extent)
+    return {
+        "box": box_points(s, 0.8 * s, 0.6 * s),
+        "hull20": hull20(0, scale=(s / 2, 0.35 * s, 0.25 * s)),
+        "ico320": icosphere_points(2, radius=s / 2),
+    }
 
 
 def box_points(sx: float, sy: float, sz: float) -> np.ndarray:

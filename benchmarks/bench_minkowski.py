@@ -1,0 +1,271 @@
+"""Benchmark: the exact Minkowski sum A ⊕ B (NCC-CVMS, ``cspace.trim.minkowski_sum``) against
+manifold3d's ``Manifold.minkowski_sum`` on the same snapped operands, one run each.
+
+Cases (issue #4's suite): torus (2304 triangles) ⊕ icosphere (320 facets), torus ⊕ box,
+star ⊕ icosphere, comb ⊕ box, and the closed meshes of ``../shared/data`` ⊕ {box, 20-facet
+hull, 320-facet icosphere} (robots scaled to 8% of the mesh), plus one case whose superset has
+about 40k triangles for the peak-memory line.
+
+Every timed call is the first call of its kind in a fresh subprocess (``--child``), after one
+warm-up subprocess has filled the on-disk JIT caches; the child reports its time, the sizes,
+cspace's per-stage times (``result.stats``, like the paper's Table I), its volume and its peak
+resident set size (``resource.getrusage``). Both tools get the operands snapped to the cspace
+grid (manifold3d through ``Mesh64``, float64). manifold3d is a speed peer, not a reference: its
+volume error is reported against our exact volume. The machine load (``os.getloadavg``) is
+written into the report: other jobs share the cores.
+
+Usage: ``python benchmarks/bench_minkowski.py [--quick] [--out PATH]``; writes
+``benchmarks/reports/minkowski.md`` (``--quick``: three small cases, report to stdout only
+unless ``--out`` is given).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))  # the zoo lives with the tests
+
+import zoo  # noqa: E402
+
+REPORT = ROOT / "benchmarks" / "reports" / "minkowski.md"
+SHARED = ROOT.parent / "shared" / "data"
+TIMEOUT = 900  # seconds per child
+# cspace's stages (result.stats) in pipeline order, with the paper's Table I columns they
+# correspond to: SC superset, MST merge/cancel/triangulate, BI+TI boxes and triangle
+# intersections, AC arrangements, BT traversal (+ our exact membership), TR output.
+STAGES = ["superset", "planes", "intersections", "arrangements", "traversal", "membership", "output"]
+
+
+def case_names(quick: bool) -> list[str]:
+    if quick:
+        return ["comb ⊕ box", "star ⊕ ico80", "l_shape ⊕ hull20"]
+    names = ["torus ⊕ ico320", "torus ⊕ box", "star ⊕ ico320", "comb ⊕ box"]
+    for mesh in zoo.SHARED_CLOSED_MESHES:
+        if (SHARED / zoo.SHARED_CLOSED_MESHES[mesh]).exists():
+            names += [f"{mesh} ⊕ {r}" for r in ("box", "hull20", "ico320")]
+    return names + ["torus(25600) ⊕ ico320"]
+
+
+def operands(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A's vertices and faces and B's points for a case name."""
+    a, b = name.split(" ⊕ ")
+    fixed = {
+        "torus ⊕ ico320": (zoo.torus, zoo.icosphere_points(2, radius=0.3)),
+        "torus ⊕ box": (zoo.torus, zoo.box_points(0.3, 0.25, 0.2)),
+        "star ⊕ ico320": (zoo.star, zoo.icosphere_points(2, radius=0.3)),
+        "star ⊕ ico80": (zoo.star, zoo.icosphere_points(1, radius=0.3)),
+        "comb ⊕ box": (zoo.comb, zoo.box_points(0.5, 0.5, 0.5)),
+        "l_shape ⊕ hull20": (zoo.l_shape, zoo.hull20(0, scale=(0.5, 0.35, 0.25))),
+        "torus(25600) ⊕ ico320": (lambda: zoo.torus(sections=160, ring=80), zoo.icosphere_points(2, radius=0.3)),
+    }
+    if name in fixed:
+        build, bp = fixed[name]
+        v, f = build()
+        return v, f, bp
+    from cspace.mesh import ClosedMesh
+
+    m = ClosedMesh.load(SHARED / zoo.SHARED_CLOSED_MESHES[a])
+    return m.vertices, m.faces, zoo.scaled_robots(float(np.ptp(m.vertices, axis=0).max()))[b]
+
+
+# --------------------------------------------------------------------------------------
+# child: one timed call in a fresh process
+
+
+def child(tool: str, name: str) -> dict:
+    import resource
+
+    from cspace.convex import ConvexPolytope
+    from cspace.exact import Grid
+    from cspace.mesh import ClosedMesh
+
+    v, f, b = operands(name)
+    grid = Grid.for_points(v, b)
+    A = ClosedMesh.from_arrays(v, f, grid=grid, name=name)
+    B = ConvexPolytope.from_points(b, grid=grid, name="B")
+    out: dict = {"tool": tool, "case": name, "a_tris": int(len(A.faces)), "b_facets": int(B.n_facets)}
+    if tool == "cspace":
+        from cspace.trim import minkowski_sum
+
+        t = time.perf_counter()
+        S = minkowski_sum(A, B)
+        out["time"] = time.perf_counter() - t
+        out["tris"] = int(len(S.faces))
+        out["volume"] = str(S.volume_exact)  # exact Fraction, as text
+        out["stats"] = {k: (float(v) if isinstance(v, (float, np.floating)) else int(v)) for k, v in S.stats.items()}
+        out["n_holes"] = S.n_holes
+        out["manifold"] = bool(S.is_manifold)
+        out["rounding_self_intersections"] = int(len(S.rounding_self_intersections))
+    elif tool == "manifold3d":
+        import manifold3d
+
+        # Writable copies: the binding rejects cspace's read-only arrays.
+        mesh = manifold3d.Mesh64(
+            vert_properties=np.array(A.vertices, dtype=np.float64, order="C"),
+            tri_verts=np.array(A.faces, dtype=np.uint64, order="C"),
+        )
+        MA = manifold3d.Manifold(mesh)
+        MB = manifold3d.Manifold.hull_points(np.array(B.vertices, dtype=np.float64, order="C"))
+        t = time.perf_counter()
+        MS = MA.minkowski_sum(MB)
+        n = MS.num_tri()  # forces the lazy result
+        out["time"] = time.perf_counter() - t
+        out["tris"] = int(n)
+        out["volume"] = repr(float(MS.volume()))
+        out["status"] = str(MS.status())
+    elif tool == "warmup":
+        from cspace.trim import minkowski_sum
+
+        minkowski_sum(A, B)
+    else:
+        raise SystemExit(f"unknown tool {tool!r}")
+    out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    return out
+
+
+def run_child(tool: str, name: str) -> dict:
+    cmd = [sys.executable, str(Path(__file__).resolve()), "--child", tool, name]
+    try:
+        p = subprocess.run(cmd, capture_output=True, text=True, timeout=TIMEOUT)
+    except subprocess.TimeoutExpired:
+        return {"tool": tool, "case": name, "error": f"timeout after {TIMEOUT} s"}
+    if p.returncode != 0:
+        last = (p.stderr.strip().splitlines() or ["?"])[-1]
+        return {"tool": tool, "case": name, "error": f"exit {p.returncode}: {last}"}
+    return json.loads(p.stdout.strip().splitlines()[-1])
+
+
+# --------------------------------------------------------------------------------------
+# report
+
+
+def _fmt_t(x) -> str:
+    return "—" if x is None else (f"{x * 1e3:.0f} ms" if x < 1 else f"{x:.2f} s")
+
+
+def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
+    import cspace
+
+    try:
+        import manifold3d  # noqa: F401
+        from importlib.metadata import version
+
+        mver = version("manifold3d")
+    except Exception:  # pragma: no cover
+        mver = "?"
+    lines = [
+        "# Exact Minkowski sum A ⊕ B (NCC-CVMS) against manifold3d",
+        "",
+        f"Generated by `python benchmarks/bench_minkowski.py{' --quick' if quick else ''}` with cspace "
+        f"{cspace.__version__}, manifold3d {mver}, numpy {np.__version__}, Python {platform.python_version()}, "
+        f"{os.cpu_count()} cores shared with other jobs. Machine load (1/5/15 min) at the start "
+        f"{load0[0]:.2f} / {load0[1]:.2f} / {load0[2]:.2f}, at the end {load1[0]:.2f} / {load1[1]:.2f} / {load1[2]:.2f}.",
+        "",
+        "- Each time is the first call in a fresh subprocess (JIT caches on disk warmed by one earlier "
+        "subprocess), operands snapped to the cspace grid for both tools (manifold3d via `Mesh64`).",
+        "- *ratio* = manifold3d time / cspace time (> 1: cspace faster). *superset*: triangles after the "
+        "plane grouping; *out*: output triangles. *RSS*: peak resident set of the subprocess (imports included).",
+        "- *vol err*: manifold3d's volume relative to our exact volume (manifold3d is not a reference).",
+        "",
+        "| case | A tris | B facets | superset tris | cspace out | manifold3d out | cspace | manifold3d | ratio | "
+        "cspace RSS MB | manifold3d RSS MB | holes | manifold | manifold3d vol err |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    ratios = []
+    for c, m in rows:
+        name = c.get("case") or m.get("case")
+        if "error" in c:
+            lines.append(f"| {name} | | | | cspace failed: {c['error']} | | | | | | | | | |")
+            continue
+        st = c["stats"]
+        mt = m.get("time")
+        ratio = (mt / c["time"]) if mt else None
+        if ratio:
+            ratios.append(ratio)
+        from fractions import Fraction
+
+        vexact = float(Fraction(c["volume"]))
+        verr = f"{float(m['volume']) / vexact - 1:+.2e}" if "volume" in m else m.get("error", "—")
+        lines.append(
+            f"| {name} | {c['a_tris']} | {c['b_facets']} | {st.get('superset_triangles', '')} | {c['tris']} | "
+            f"{m.get('tris', '—')} | {_fmt_t(c['time'])} | {_fmt_t(mt)} | {'' if ratio is None else f'{ratio:.2f}'} | "
+            f"{c['peak_rss_mb']:.0f} | {m.get('peak_rss_mb', float('nan')):.0f} | {c['n_holes']} | "
+            f"{'yes' if c['manifold'] else 'no'} | {verr} |"
+        )
+    gm = math.exp(sum(map(math.log, ratios)) / len(ratios)) if ratios else float("nan")
+    lines += [
+        "",
+        f"Geometric-mean ratio (manifold3d / cspace) over {len(ratios)} cases: **{gm:.2f}**; "
+        f"slowest relative case {min(ratios) if ratios else float('nan'):.2f}.",
+        f"Issue #4's bar — geomean ≥ 5 and no case below 0.5: **{'met' if ratios and gm >= 5 and min(ratios) >= 0.5 else 'not met'}**.",
+        "",
+        "## cspace per-stage times (seconds; like the paper's Table I)",
+        "",
+        "Stages: *superset* (step 1, SC), *planes* (step 2–3: exact plane groups, merge/cancel, MST), "
+        "*intersections* (steps 4–5: boxes and exact triangle pairs, BI+TI), *arrangements* (step 6, AC), "
+        "*traversal* (steps 7–16: shells, BT), *membership* (exact classification of cells), *output* (step 17–18 and "
+        "the rounding check, TR). *planes* is the total minus the other stages (`result.stats['planes']` holds the "
+        "number of planes).",
+        "",
+        "| case | " + " | ".join(STAGES) + " | total | candidate pairs | cut pairs | sub-facets | shells |",
+        "|---|" + "---|" * (len(STAGES) + 5),
+    ]
+    for c, _ in rows:
+        if "error" in c:
+            continue
+        st = dict(c["stats"])
+        # result.stats stores the plane-group count under "planes" too (overwriting that
+        # stage's seconds): recover the stage as the rest of the total.
+        if not isinstance(st.get("planes"), float):
+            st["planes"] = st["total"] - sum(st.get(k, 0.0) for k in STAGES if k != "planes")
+        cells = " | ".join(f"{st[k]:.3f}" if k in st else "" for k in STAGES)
+        lines.append(
+            f"| {c['case']} | {cells} | {st.get('total', c['time']):.3f} | {st.get('candidate_pairs', '')} | "
+            f"{st.get('cut_pairs', '')} | {st.get('subfacets', '')} | {st.get('shells', '')} |"
+        )
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--quick", action="store_true", help="three small cases (smoke run)")
+    ap.add_argument("--out", type=Path, default=None, help=f"report path (default {REPORT}, or none with --quick)")
+    ap.add_argument("--child", nargs=2, metavar=("TOOL", "CASE"), help=argparse.SUPPRESS)
+    args = ap.parse_args()
+    if args.child:
+        print(json.dumps(child(*args.child)))
+        return
+    load0 = os.getloadavg()
+    names = case_names(args.quick)
+    run_child("warmup", names[0])  # fills the on-disk JIT caches
+    rows = []
+    for name in names:
+        c = run_child("cspace", name)
+        m = run_child("manifold3d", name)
+        rows.append((c, m))
+        ct, mt = c.get("time"), m.get("time")
+        print(f"{name:32s} cspace {_fmt_t(ct):>10s} ({c.get('peak_rss_mb', 0):.0f} MB) "
+              f"manifold3d {_fmt_t(mt):>10s} {c.get('error', '')} {m.get('error', '')}", flush=True)
+    text = report(rows, load0, os.getloadavg(), args.quick)
+    out = args.out if args.out is not None else (None if args.quick else REPORT)
+    if out is None:
+        print(text)
+    else:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        out.write_text(text)
+        print(f"wrote {out}")
+
+
+if __name__ == "__main__":
+    main()
