@@ -182,16 +182,23 @@ class FclOracle:
     convex : bool, optional
         Whether the obstacle is convex (then an ``fcl.Convex``, solid); default: decided by
         :meth:`cspace.ConvexPolytope.from_mesh`.
+    surface : bool, default False
+        Surface semantics instead (an open mesh, ``kind='surface'`` C-obstacles): FCL's plain
+        mesh collision, no containment test.
     """
 
     def __init__(self, obstacle_vertices, obstacle_faces, robot_vertices, robot_faces,
-                 reference_point=(0.0, 0.0, 0.0), *, convex: bool | None = None):
+                 reference_point=(0.0, 0.0, 0.0), *, convex: bool | None = None,
+                 surface: bool = False):
         fcl = self._fcl = _fcl()
         self.obstacle_vertices = np.ascontiguousarray(obstacle_vertices, dtype=np.float64)
         self.obstacle_faces = np.ascontiguousarray(obstacle_faces, dtype=np.int64)
         c = np.asarray(reference_point, dtype=np.float64).reshape(3)
         self.robot_vertices = np.ascontiguousarray(robot_vertices, dtype=np.float64) - c
         self.robot_faces = np.ascontiguousarray(robot_faces, dtype=np.int64)
+        self.surface = bool(surface)
+        if self.surface:
+            convex = False
         if convex is None:
             from .convex import ConvexPolytope
             from .errors import InvalidMeshError
@@ -232,7 +239,7 @@ class FclOracle:
         for i in range(len(q)):
             rob.setTranslation(q[i])  # float64 row (lists raise in python-fcl)
             out[i] = fcl.collide(rob, obs, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
-        if not self.convex and (~out).any():
+        if not self.convex and not self.surface and (~out).any():
             free = np.nonzero(~out)[0]
             out[free] = winding_number(self.obstacle_vertices, self.obstacle_faces,
                                        self.robot_vertices[0] + q[free]) > 0.5
@@ -327,7 +334,8 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         if o.obstacle is None or o.robot is None:
             raise ValueError("cross_check needs C-obstacles built with CSpaceObstacle.build")
         oracles.append(FclOracle(o.obstacle.vertices, o.obstacle.faces, o.robot.vertices,
-                                 o.robot.faces, o.reference_point, convex=o.kind == "convex"))
+                                 o.robot.faces, o.reference_point, convex=o.kind == "convex",
+                                 surface=o.kind == "surface"))
     t0 = time.perf_counter()
     fcl_in = np.zeros(len(q), dtype=bool)
     fcl_d = np.full(len(q), np.inf)
@@ -372,22 +380,9 @@ def co_collider(co):
     semantics). Surface C-obstacles (``kind='surface'``, open meshes): FCL's plain mesh
     collision against the surface, no containment.
     """
-    fcl = _fcl()
-    orc = FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices, co.robot.faces,
-                    co.reference_point, convex=co.kind == "convex")
-    if co.kind != "surface":
-        return orc.collides
-
-    def collides(q) -> np.ndarray:
-        q = orc._q(q)
-        out = np.zeros(len(q), dtype=bool)
-        for i in range(len(q)):
-            orc._robot.setTranslation(q[i])
-            out[i] = fcl.collide(orc._robot, orc._obs, fcl.CollisionRequest(),
-                                 fcl.CollisionResult()) > 0
-        return out
-
-    return collides
+    return FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices,
+                     co.robot.faces, co.reference_point, convex=co.kind == "convex",
+                     surface=co.kind == "surface").collides
 
 
 def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray, int]:

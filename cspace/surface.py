@@ -246,27 +246,46 @@ class _UnionCO:
         inside = self.contains(q)
         out = np.zeros(len(q))
         if inside.any():
-            rows, js = self.candidates(q[inside])
-            depth = np.zeros(int(inside.sum()))
-            for r, j in zip(rows.tolist(), js.tolist()):
-                p = q[inside][r : r + 1]
-                if self.impl[j].contains(p)[0]:
-                    depth[r] = max(depth[r], float(self.impl[j].depth(p)[0]))
+            qi = q[inside]
+            rows, js = self.candidates(qi)
+            depth = np.zeros(len(qi))
+            for j, r in self._by_piece(rows, js):
+                hit = self.impl[j].contains(qi[r])
+                if hit.any():
+                    depth[r[hit]] = np.maximum(depth[r[hit]], self.impl[j].depth(qi[r[hit]]))
             # The deepest containing piece: a lower bound on the union's depth.
             out[inside] = -depth
-        for i in np.nonzero(~inside)[0].tolist():
-            out[i] = self._distance_outside(q[i])
+        if (~inside).any():
+            out[~inside] = self._distance_outside(q[~inside])
         return out
 
-    def _distance_outside(self, p: np.ndarray) -> float:
-        """Distance to the nearest piece, visiting pieces by increasing box distance."""
-        box = np.linalg.norm(np.maximum(np.maximum(self.lo - p, p - self.hi), 0.0), axis=1)
-        order = np.argsort(box)
-        best = np.inf
-        for j in order.tolist():
-            if box[j] > best:
-                break
-            best = min(best, float(self.impl[j].distance_outside(p[None])[0]))
+    @staticmethod
+    def _by_piece(rows: np.ndarray, js: np.ndarray):
+        """``(piece, rows)`` groups of candidate pairs."""
+        order = np.argsort(js, kind="stable")
+        rows, js = rows[order], js[order]
+        cuts = np.flatnonzero(np.r_[True, js[1:] != js[:-1], True])
+        for s, e in zip(cuts[:-1], cuts[1:]):
+            yield int(js[s]), rows[s:e]
+
+    def _distance_outside(self, p: np.ndarray) -> np.ndarray:
+        """Distance to the nearest piece (points outside every piece), vectorised per piece:
+        the nearest box's piece gives an upper bound, then only pieces whose box is nearer
+        than the bound are evaluated."""
+        best = np.full(len(p), np.inf)
+        step = max(1, (1 << 20) // len(self.lo))
+        for lo in range(0, len(p), step):
+            q = p[lo : lo + step]
+            gap = np.maximum(np.maximum(self.lo[None] - q[:, None], q[:, None] - self.hi[None]), 0)
+            box = np.sqrt(np.einsum("kpj,kpj->kp", gap, gap))
+            b = best[lo : lo + len(q)]
+            first = box.argmin(axis=1)
+            for j, r in self._by_piece(np.arange(len(q)), first):
+                b[r] = self.impl[j].distance_outside(q[r])
+            rows, js = np.nonzero(box < b[:, None])
+            for j, r in self._by_piece(rows, js):
+                b[r] = np.minimum(b[r], self.impl[j].distance_outside(q[r]))
+            best[lo : lo + len(q)] = b
         return best
 
 
