@@ -17,6 +17,7 @@ import trimesh
 from cspace import CSpace, CSpaceObstacle, load_scene
 from cspace.cache import COCache, cache_dir
 from cspace.errors import BuildError
+from cspace.fcl_check import co_collider
 from cspace.model import model_scene
 from cspace.scene import Body, Scene
 
@@ -43,25 +44,6 @@ def sheet(z=0.0, size=1.0):
     s = size / 2
     V = np.array([[-s, -s, z], [s, -s, z], [s, s, z], [-s, s, z]], float)
     return V, np.array([[0, 1, 2], [0, 2, 3]])
-
-
-def fcl_mesh_collides(V, F, robot_vertices, robot_faces, Q):
-    """FCL's own mesh semantics: the convex robot at each q against a BVH of (V, F)."""
-    import fcl
-
-    from cspace.fcl_check import fcl_convex
-
-    bvh = fcl.BVHModel()
-    bvh.beginModel(len(F), len(V))
-    bvh.addSubModel(np.asarray(V, float), np.asarray(F, np.int64))
-    bvh.endModel()
-    obs = fcl.CollisionObject(bvh, fcl.Transform())
-    rob = fcl.CollisionObject(fcl_convex(robot_vertices, robot_faces), fcl.Transform())
-    out = np.zeros(len(Q), bool)
-    for i, q in enumerate(Q):
-        rob.setTranslation(np.asarray(q, float))
-        out[i] = fcl.collide(rob, obs, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
-    return out
 
 
 # --------------------------------------------------------------------------------------
@@ -173,8 +155,7 @@ def test_surface_co_agrees_with_fcl_mesh_collision_and_with_its_pieces():
     for piece in co._impl.impl:
         brute |= piece.contains(Q)
     np.testing.assert_array_equal(ours, brute)
-    fcl_hit = fcl_mesh_collides(co.obstacle.vertices, co.obstacle.faces, m.robot.vertices,
-                                m.robot.faces, Q)
+    fcl_hit = co_collider(co)(Q)  # FCL's plain mesh collision (FclOracle(surface=True))
     assert 300 < ours.sum() < 2700
     assert (ours != fcl_hit).sum() == 0
     # Segments: exact against the pieces one by one.
@@ -449,8 +430,6 @@ def test_parasol_solid_builds_and_agrees_with_fcl(shared_data, tmp_path, rel):
 
     r = cross_check(cs, n=4000, seed=0, band=1e-9)
     assert r["n_disagree"] == 0, r["disagreements"][:5]
-    from cspace.fcl_check import co_collider
-
     fcl_hit = co_collider(cs.obstacles[0])(np.stack([scene.start, scene.goal]))
     ours = cs.contains(np.stack([scene.start, scene.goal]))
     np.testing.assert_array_equal(ours, fcl_hit)
