@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import itertools
 import time
+from fractions import Fraction
 
 import fcl
 import numpy as np
@@ -491,3 +492,67 @@ def test_zoo_helpers_used_by_name():
             assert hasattr(mod, name), (mod.__name__, name)
     assert set(zoo.zoo_meshes()) == set(zoo.ZOO)
     assert list(itertools.islice(zoo.SHARED_CLOSED_MESHES, 1)) == ["bunny-128"]
+
+
+# --------------------------------------------------------------------------------------
+# exact A ⊕ B references (libigl union of convex pieces; voxel ⊕ box)
+
+
+def _on_grid(v, b):
+    grid = Grid.for_points(v, b)
+    return grid.to_float(grid.snap(v)), grid.to_float(grid.snap(b))
+
+
+@pytest.mark.parametrize(
+    "arm, hand",
+    [
+        # voxels (0..arm, 0) and (0, 1..arm), one layer, grown by 0.25 on every side: an
+        # (arm + 1.5) x 1.5 strip plus a 1.5 x arm strip, 1.5 thick
+        (1, Fraction(63, 8)),  # (3.75 + 1.5) * 1.5
+        pytest.param(2, Fraction(99, 8), marks=pytest.mark.slow),  # (5.25 + 3) * 1.5; ~15 s
+    ],
+)
+def test_exact_sum_volume_l_shape_box_by_hand(arm, hand):
+    v, f = zoo.l_shape(arm)
+    b = zoo.box_points(0.5, 0.5, 0.5)
+    assert oracles.exact_sum_volume(v, f, b) == pytest.approx(float(hand), rel=1e-14)
+    occ = np.zeros((arm + 1, arm + 1, 1), dtype=bool)
+    occ[:, 0] = occ[0, :] = True
+    ref = oracles.voxel_box_sum(occ, b.min(0), b.max(0))
+    assert ref.volume == hand and ref.n_holes == 0 and ref.euler == 2
+
+
+def test_exact_sum_volume_convex_pair_matches_cvms():
+    v = zoo.icosphere_points(0)  # 20 triangles: a few seconds of CGAL
+    b = zoo.cube_rotated(0.4, size=0.5)
+    v, b = _on_grid(v, b)
+    grid = Grid.for_points(v, b)
+    A = ConvexPolytope.from_points(v, grid=grid)
+    B = ConvexPolytope.from_points(b, grid=grid)
+    P = convex_minkowski_sum(A, B).polytope
+    exact = float(Fraction(P.volume6()) / 6 * Fraction(grid.step) ** 3)
+    assert oracles.exact_sum_volume(A.vertices, A.faces, B.vertices) == pytest.approx(exact, rel=1e-12)
+
+
+def test_exact_sum_mesh_refuses_off_grid_coordinates():
+    v, f = zoo.l_shape()
+    with pytest.raises(ValueError, match="grid"):
+        oracles.exact_sum_mesh(v + 1e-12, f, zoo.box_points(0.5, 0.5, 0.5))
+
+
+def test_voxel_box_sum_known_answers():
+    one = np.ones((1, 1, 1), dtype=bool)
+    r = oracles.voxel_box_sum(one, [-0.25, -0.5, 0.0], [0.25, 0.5, 1.0])
+    assert r.volume == Fraction(3, 2) * 2 * 2 and r.n_holes == 0 and r.euler == 2
+    # hollow 3x3x3 with a 0.25 cube: the 1-voxel cavity shrinks to a 0.75 cube (a hole)
+    occ = np.ones((3, 3, 3), dtype=bool)
+    occ[1, 1, 1] = False
+    r = oracles.voxel_box_sum(occ, [-0.125] * 3, [0.125] * 3)
+    assert r.n_holes == 1 and r.euler == 4
+    assert r.volume == Fraction(13, 4) ** 3 - Fraction(3, 4) ** 3
+    # two voxels touching diagonally after the sum: one pinch, at the touching corner
+    two = np.zeros((3, 3, 3), dtype=bool)
+    two[0, 0, 0] = two[2, 2, 2] = True
+    r = oracles.voxel_box_sum(two, [-0.5] * 3, [0.5] * 3)
+    assert r.pinch_vertices.tolist() == [[1.5, 1.5, 1.5]] and r.nonmanifold_length == 0
+    assert r.volume == 16
