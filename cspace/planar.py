@@ -171,6 +171,8 @@ def _hom(p) -> tuple[int, int, int]:
 def _hpoint(p) -> tuple[int, int, int]:
     """Canonical homogeneous triple of any point :func:`to_point` accepts (no Fractions made
     for integer pairs and integer triples)."""
+    if type(p) is tuple and len(p) == 3 and type(p[0]) is int and type(p[1]) is int and type(p[2]) is int:
+        return _hnorm(*p) if p[2] != 1 else p
     p = tuple(p)
     if all(isinstance(c, (int, np.integer)) for c in p):
         if len(p) == 2:
@@ -419,9 +421,18 @@ class Arrangement2D:
                 key = (a, b) if a < b else (b, a)
                 pieces.setdefault(key, set()).add(labels[i])
 
-        order = sorted(vertex_set, key=lambda h: (Fraction(h[0], h[2]), Fraction(h[1], h[2])))
+        # One common denominator L: scaled integer points compare and orient exactly like
+        # the rational ones (a similarity), without Fractions.
+        L = 1
+        for h in vertex_set:
+            if L % h[2]:
+                L = L * h[2] // gcd(L, h[2])
+        scaled = {h: (h[0] * (L // h[2]), h[1] * (L // h[2])) for h in vertex_set}
+        order = sorted(vertex_set, key=scaled.__getitem__)
         self._H = order
-        self.vertices = [(Fraction(h[0], h[2]), Fraction(h[1], h[2])) for h in order]
+        self._L = L
+        self._S = [scaled[h] for h in order]
+        self._vertices = None
         index = {h: n for n, h in enumerate(order)}
         self._index = index
         self.vertex_labels = {index[x]: s for x, s in point_label.items()}
@@ -431,8 +442,15 @@ class Arrangement2D:
         self.edge_labels = [lab for _, lab in keyed]
         self._trace()
 
+    @property
+    def vertices(self) -> list:
+        """Distinct points as Fraction pairs, sorted lexicographically (made on first use)."""
+        if self._vertices is None:
+            self._vertices = [(Fraction(h[0], h[2]), Fraction(h[1], h[2])) for h in self._H]
+        return self._vertices
+
     def _trace(self):
-        V = self.vertices
+        V = self._S  # scaled integer points (same order and orientations)
         E = self.edges.tolist()
         nh = 2 * len(E)
         origin = [0] * nh
@@ -548,7 +566,8 @@ class Arrangement2D:
         for f in self.faces:
             f._owner = self
         if V:
-            self.unbounded.sample = (V[0][0] - 1, V[0][1])
+            h0 = self._H[0]
+            self.unbounded.sample = (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))
         else:
             self.unbounded.sample = (Fraction(0), Fraction(0))
 
@@ -635,6 +654,7 @@ class Arrangement2D:
         x = _hom(p)
         if x in self._index or self.on_edge(p) is not None:
             return None
+        p = (p[0] * self._L, p[1] * self._L)  # the scale of the stored boxes
         for c in self._positive:
             b = self._bbox[c]
             if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
