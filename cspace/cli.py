@@ -179,7 +179,7 @@ def _plan(args: argparse.Namespace) -> int:
     scene = m.scene
     cs = m.cspace()
     r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner=args.planner,
-             time=args.time, seed=args.seed)
+             time=args.time, seed=args.seed, sampler=args.sampler)
     status = "solved" if r.solved else "NOT solved (approximate path)"
     print(f"{scene.name}: {args.planner} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
           f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
@@ -307,6 +307,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=None, help="OMPL random seed")
     p.add_argument("-o", "--output", help="write the path (n x 3 text)")
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
+    p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),
+                   help="valid-state sampler of PRM-like planners: 'narrow' draws half its "
+                        "samples from gaps between C-obstacles (narrow passages)")
     p.add_argument("--fcl-check", action="store_true",
                    help="re-check the path with FCL sampled every 1e-3 of the scene size")
     p.add_argument("--result", help="write a JSON summary (model, plan, path, checks)")

@@ -33,9 +33,12 @@ __all__ = [
     "planner_names",
     "plan",
     "verify_path",
+    "SAMPLERS",
+    "narrow_passage_samples",
 ]
 
 MOTIONS = ("exact", "discrete")
+SAMPLERS = ("uniform", "narrow")
 
 
 def _ompl():
@@ -241,6 +244,83 @@ def verify_path(cspace: CSpace, path, bounds=None) -> dict:
 
 
 # --------------------------------------------------------------------------------------
+# narrow passages
+
+
+def narrow_passage_samples(cspace: CSpace, bounds=None, *, per_obstacle: int = 40000,
+                           gap: float = 0.01, seed: int | None = 0) -> np.ndarray:
+    """Free translations in narrow gaps between C-obstacles, found on their boundaries.
+
+    Points are drawn on each C-obstacle's boundary triangles (area-weighted) and moved out
+    along the triangle's normal by ``1e-4`` of the bounds' diagonal. A point is kept when it
+    is in the bounds and free, and the point ``gap`` times the diagonal further along the
+    normal is in collision: it lies in a gap narrower than that (a window, a slot, a cavity's
+    entrance). Both tests are the exact :meth:`CSpace.contains`; only the positions are float.
+
+    Parameters
+    ----------
+    cspace : CSpace
+    bounds : (2, 3) float64, optional
+        Default ``cspace.bounds``.
+    per_obstacle : int
+        Boundary points drawn per C-obstacle.
+    gap : float
+        Widest gap kept, as a fraction of the bounds' diagonal.
+    seed : int, optional
+
+    Returns
+    -------
+    (k, 3) float64
+        Valid states (exactly collision-free, in bounds); possibly none.
+    """
+    b = _bounds(cspace.bounds if bounds is None else bounds)
+    rng = np.random.default_rng(seed)
+    diag = float(np.linalg.norm(b[1] - b[0]))
+    out = []
+    for o in cspace.obstacles:
+        T = o.vertices[o.faces]
+        normal = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+        area = np.linalg.norm(normal, axis=1)
+        ok = area > 0
+        if not ok.any():
+            continue
+        T, normal, area = T[ok], normal[ok] / area[ok, None], area[ok]
+        pick = rng.choice(len(T), per_obstacle, p=area / area.sum())
+        w = rng.dirichlet(np.ones(3), per_obstacle)
+        P = np.einsum("ki,kij->kj", w, T[pick]) + 1e-4 * diag * normal[pick]
+        keep = _in_bounds(P, b)
+        P, n = P[keep], normal[pick][keep]
+        free = ~cspace.contains(P)
+        P, n = P[free], n[free]
+        out.append(P[cspace.contains(P + gap * diag * n)])
+    return np.vstack(out) if out else np.zeros((0, 3))
+
+
+def _pool_sampler(si, pool: np.ndarray, seed: int | None):
+    """A ValidStateSampler: half the time a pool state, else OMPL's uniform valid sampler."""
+    ob, _, _ = _ompl()
+    rng = np.random.default_rng(seed)
+    rows = pool.tolist()
+
+    class PoolSampler(ob.ValidStateSampler):
+        def __init__(self, si_):
+            super().__init__(si_)
+            self.uniform = ob.UniformValidStateSampler(si_)
+
+        def sample(self, state) -> bool:
+            if rows and rng.random() < 0.5:
+                x, y, z = rows[int(rng.integers(len(rows)))]
+                state[0], state[1], state[2] = x, y, z
+                return True
+            return bool(self.uniform.sample(state))
+
+        def sampleNear(self, state, near, distance) -> bool:
+            return bool(self.uniform.sampleNear(state, near, distance))
+
+    return PoolSampler(si)
+
+
+# --------------------------------------------------------------------------------------
 # planning
 
 
@@ -329,7 +409,8 @@ def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
 def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
          time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
-         planner_range: float | None = None, cache=None) -> PlanResult:
+         planner_range: float | None = None, cache=None,
+         sampler: str = "uniform") -> PlanResult:
     """Plan a collision-free translation with OMPL, checked exactly.
 
     Parameters
@@ -366,6 +447,11 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
     cache : COCache, path, True, or None
         For a scene: the disk cache its C-obstacles are built through
         (:func:`cspace.model.model_scene`); None: no cache.
+    sampler : {'uniform', 'narrow'}, default 'uniform'
+        The valid-state sampler of planners that draw valid states (PRM, PRMstar, ...):
+        OMPL's uniform one, or ``'narrow'``: half the samples from
+        :func:`narrow_passage_samples` (computed once, exact), half uniform. Planners that
+        sample unchecked states (RRT, RRTConnect, ...) ignore it.
 
     Returns
     -------
@@ -383,6 +469,9 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
     names = planner_names()
     if planner not in names:
         raise ValueError(f"{planner!r} is not a valid planner, must be one of {', '.join(names)}")
+    if sampler not in SAMPLERS:
+        raise ValueError(f"{sampler!r} is not a valid sampler, must be one of "
+                         f"{', '.join(SAMPLERS)}")
     if motion not in MOTIONS:
         raise ValueError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
     if not (time > 0):
@@ -420,6 +509,16 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         si.setMotionValidator(mv)  # keep the Python reference (mv) alive until the end
     else:
         si.setStateValidityCheckingResolution(float(resolution))
+    samplers = []  # keep the Python samplers alive while OMPL uses them
+    if sampler == "narrow":
+        pool = narrow_passage_samples(cs, b, seed=seed)
+
+        def allocate(si_):
+            stream = None if seed is None else seed + len(samplers)
+            samplers.append(_pool_sampler(si_, pool, stream))
+            return samplers[-1]
+
+        si.setValidStateSamplerAllocator(allocate)
     si.setup()
 
     s0 = si.allocState()
