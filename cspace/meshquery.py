@@ -537,12 +537,15 @@ def _exact_area_signs(T: np.ndarray) -> np.ndarray:
     A, B, C = T[:, 0:3], T[:, 3:6], T[:, 6:9]
     out = np.zeros((m, 3), dtype=np.int8)
     for k, (u, v) in enumerate(((1, 2), (2, 0), (0, 1))):
-        l = (B[:, u] - A[:, u]) * (C[:, v] - A[:, v])
-        r = (B[:, v] - A[:, v]) * (C[:, u] - A[:, u])
+        bu, cv, bv, cu = B[:, u] - A[:, u], C[:, v] - A[:, v], B[:, v] - A[:, v], C[:, u] - A[:, u]
+        l, r = bu * cv, bv * cu
         val = l - r
         err = _FILTER * (np.abs(l) + np.abs(r)) + _TINY
         out[:, k] = np.where(val > err, 1, np.where(val < -err, -1, 0))
-        for t in np.nonzero(~(np.abs(val) > err))[0].tolist():
+        # A float difference is 0 exactly when its operands are equal: both products are then
+        # exactly 0 (axis-parallel triangles), no exact re-evaluation needed.
+        zero = ((bu == 0) | (cv == 0)) & ((bv == 0) | (cu == 0))
+        for t in np.nonzero(~(np.abs(val) > err) & ~zero)[0].tolist():
             X, _ = _dyadic(T[t].tolist())
             a, b, c = X[0:3], X[3:6], X[6:9]
             x = (b[u] - a[u]) * (c[v] - a[v]) - (b[v] - a[v]) * (c[u] - a[u])
