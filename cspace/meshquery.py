@@ -66,7 +66,7 @@ _LEAF = 4
 # 3 eps (one subtraction, one division, and the rounding of p1 - p0); 1e-14 >> 3 eps.
 _SLAB = 1e-14
 
-_STATUS_OUT, _STATUS_IN, _STATUS_UNSURE = 0, 1, 2
+_STATUS_UNSURE = 2
 
 
 # --------------------------------------------------------------------------------------
@@ -115,8 +115,10 @@ def _cell(v, v0, inv, n):
 
 
 @nb.njit(cache=True)
-def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny, nz, out):
-    """Per query: 0 outside, 1 inside, 2 undecided by the float filters (exact path)."""
+def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny, nz, out, unsure):
+    """``out[i]``: inside by the float filters; ``unsure[i]``: undecided (exact path).
+    Returns the number of undecided queries."""
+    n_unsure = 0
     for i in range(Q.shape[0]):
         qx, qy, qz = Q[i, 0], Q[i, 1], Q[i, 2]
         c = _cell(qy, y0, iy, ny) * nz + _cell(qz, z0, iz, nz)
@@ -160,9 +162,11 @@ def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny,
             if not inbox or dsign == s:
                 w += s
         if status == _STATUS_UNSURE:
-            out[i] = _STATUS_UNSURE
+            unsure[i] = True
+            n_unsure += 1
         else:
-            out[i] = _STATUS_IN if w != 0 else _STATUS_OUT
+            out[i] = w != 0
+    return n_unsure
 
 
 @nb.njit(cache=True)
@@ -688,12 +692,12 @@ class MeshCO:
     def contains(self, q: np.ndarray) -> np.ndarray:
         """(k,) bool: ``q`` on the surface or inside (winding number non-zero), exact."""
         q = np.ascontiguousarray(q, dtype=np.float64)
-        status = np.zeros(len(q), dtype=np.int8)
-        _contains_kernel(q, self.T, self.lo, self.hi, self.sx, self.degen, self.cstart,
-                         self.ctris, *self._grid, status)
-        out = status == _STATUS_IN
-        for i in np.nonzero(status == _STATUS_UNSURE)[0].tolist():
-            out[i] = self._contains_exact(q[i])
+        out = np.zeros(len(q), dtype=np.bool_)
+        unsure = np.zeros(len(q), dtype=np.bool_)
+        if _contains_kernel(q, self.T, self.lo, self.hi, self.sx, self.degen, self.cstart,
+                            self.ctris, *self._grid, out, unsure):
+            for i in np.nonzero(unsure)[0].tolist():
+                out[i] = self._contains_exact(q[i])
         return out
 
     def _contains_exact(self, q: np.ndarray) -> bool:
