@@ -412,15 +412,8 @@ class Arrangement2D:
                 bi = boxes[i]
                 if bi[0] <= xi <= bi[1] and bi[2] <= yi <= bi[3] and _hon_segment(x, *H[i]):
                     on[i].add(x)
-        pieces = {}
         for i in proper:
-            ax = axis[i]
-            pts = sorted(on[i], key=cmp_to_key(lambda a, b: _hcmp(a, b, ax)))
-            vertex_set.update(pts)
-            for a, b in zip(pts, pts[1:]):
-                key = (a, b) if a < b else (b, a)
-                pieces.setdefault(key, set()).add(labels[i])
-
+            vertex_set.update(on[i])
         # One common denominator L: scaled integer points compare and orient exactly like
         # the rational ones (a similarity), without Fractions.
         L = 1
@@ -428,6 +421,14 @@ class Arrangement2D:
             if L % h[2]:
                 L = L * h[2] // gcd(L, h[2])
         scaled = {h: (h[0] * (L // h[2]), h[1] * (L // h[2])) for h in vertex_set}
+        pieces = {}
+        for i in proper:
+            ax = axis[i]
+            pts = sorted(on[i], key=lambda h: scaled[h][ax])
+            for a, b in zip(pts, pts[1:]):
+                key = (a, b) if a < b else (b, a)
+                pieces.setdefault(key, set()).add(labels[i])
+
         order = sorted(vertex_set, key=scaled.__getitem__)
         self._H = order
         self._L = L

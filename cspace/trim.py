@@ -441,6 +441,8 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex
     inc_face, inc_edge, inc_sign = [], [], []
     arrangements, global_ids = [], []
     F = planes.faces
+    corners_of = ints[F].tolist()  # Python ints: the loop below reads them per triangle
+    weights_of = planes.weight.tolist()
     n_planes = len(planes.keys)
     face_tri = []
     for p in range(n_planes):
@@ -451,8 +453,8 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex
             # A lone uncut triangle is its own sub-facet (no arrangement needed).
             t = int(tris[0])
             ccw = int(planes.sign[t]) * int(planes.sigma[p])
-            corners = F[t] if ccw > 0 else F[t][::-1]
-            g = [vid.setdefault((*ints[c].tolist(), 1), len(vid)) for c in corners.tolist()]
+            cs = corners_of[t] if ccw > 0 else corners_of[t][::-1]
+            g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
             fid = len(face_plane)
             face_plane.append(p)
             face_local.append(-1)
@@ -466,8 +468,9 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex
             arrangements.append(None)
             global_ids.append(None)
             continue
-        polys = [[(c[a], c[b], 1) for c in ints[F[t]].tolist()] for t in tris]
-        weights = planes.weight[tris].tolist()
+        tl = tris.tolist()
+        polys = [[(c[a], c[b], 1) for c in corners_of[t]] for t in tl]
+        weights = [weights_of[t] for t in tl]
         segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in cuts.segments[p]]
         cov = polygon_coverage(polys, weights, segs)
         arr = cov.arrangement
@@ -905,6 +908,8 @@ def _source_facet(cx: _Complex, planes: _Planes, f: int) -> int:
     if cx.face_tri[f] is not None:
         return int(planes.facet[cx.face_tri[f][0]])
     p = int(cx.face_plane[f])
+    if len(planes.members[p]) == 1:
+        return int(planes.facet[planes.members[p][0]])
     arr = cx.arrangements[p]
     x, y = arr.faces[int(cx.face_local[f])].sample
     ax = int(planes.axis[p])
