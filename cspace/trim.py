@@ -443,28 +443,30 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex
     F = planes.faces
     corners_of = ints[F].tolist()  # Python ints: the loop below reads them per triangle
     weights_of = planes.weight.tolist()
+    facet_of = planes.facet.tolist()
     n_planes = len(planes.keys)
     face_tri = []
     for p in range(n_planes):
         ax = int(planes.axis[p])
         a, b = (ax + 1) % 3, (ax + 2) % 3
         tris = planes.members[p]
-        if len(tris) == 1 and not cuts.segments[p]:
-            # A lone uncut triangle is its own sub-facet (no arrangement needed).
-            t = int(tris[0])
-            ccw = int(planes.sign[t]) * int(planes.sigma[p])
-            cs = corners_of[t] if ccw > 0 else corners_of[t][::-1]
-            g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
-            fid = len(face_plane)
-            face_plane.append(p)
-            face_local.append(-1)
-            face_cov.append(ccw * int(planes.weight[t]))
-            face_tri.append((t, g))
-            for k in range(3):
-                gu, gv = g[k], g[(k + 1) % 3]
-                inc_face.append(fid)
-                inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
-                inc_sign.append(1 if gu < gv else -1)
+        if not cuts.segments[p] and (len(tris) == 1 or len(set(facet_of[t] for t in tris.tolist())) == 1):
+            # Uncut triangles of one superset facet (a fan of a convex polygon: they do not
+            # overlap) are sub-facets as they are; no arrangement needed.
+            for t in tris.tolist():
+                ccw = int(planes.sign[t]) * int(planes.sigma[p])
+                cs = corners_of[t] if ccw > 0 else corners_of[t][::-1]
+                g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
+                fid = len(face_plane)
+                face_plane.append(p)
+                face_local.append(-1)
+                face_cov.append(ccw * weights_of[t])
+                face_tri.append((t, g))
+                for k in range(3):
+                    gu, gv = g[k], g[(k + 1) % 3]
+                    inc_face.append(fid)
+                    inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
+                    inc_sign.append(1 if gu < gv else -1)
             arrangements.append(None)
             global_ids.append(None)
             continue
