@@ -13,9 +13,12 @@ Public API
 - :func:`convex_minkowski_sum` → :class:`MinkowskiSum` — CVMS, convex ⊕ convex.
 - :func:`minkowski_superset` → :class:`Superset` — NCC-CVMS step 1: the convolution of a
   closed mesh and a convex polytope, an oriented 2-cycle with signed corner multiplicities.
+- :func:`minkowski_sum` → :class:`SumPolyhedron` — the exact sum of a closed (non-convex)
+  polyhedron and a convex one: NCC-CVMS (superset, exact trimming, holes, non-manifold
+  contacts), CVMS when both are convex.
 - :class:`CSpaceObstacle`, :class:`CSpace` — C-obstacles and exact queries over translations
-  (``contains``, ``signed_distance``, ``segment_free``, ``first_contact``); convex bodies
-  today, non-convex ones once trimming lands. FCL cross-checks: :mod:`cspace.fcl_check`.
+  (``contains``, ``signed_distance``, ``segment_free``, ``first_contact``). FCL cross-checks:
+  :mod:`cspace.fcl_check`.
 - :func:`load_scene` → :class:`Scene` — scene files: our TOML, OMPL.app ``.cfg``, Parasol
   ``.env``/``.query``.
 - the errors of :mod:`cspace.errors`.
@@ -32,6 +35,7 @@ from .mesh import ClosedMesh, as_mesh
 from .obstacle import CSpace, CSpaceObstacle
 from .scene import Body, Scene, load_scene
 from .superset import SUPERSET_KINDS, Superset, minkowski_superset
+from .trim import SumPolyhedron, minkowski_sum
 
 __version__ = "0.1.0"
 
@@ -47,6 +51,8 @@ __all__ = [
     "Superset",
     "SUPERSET_KINDS",
     "minkowski_superset",
+    "minkowski_sum",
+    "SumPolyhedron",
     "Body",
     "Scene",
     "load_scene",

@@ -9,9 +9,10 @@ import cspace
 PUBLIC = {
     "__version__", "Grid", "ClosedMesh", "as_mesh", "ConvexPolytope", "MinkowskiSum",
     "FACET_KINDS", "convex_minkowski_sum", "Superset", "SUPERSET_KINDS", "minkowski_superset",
+    "minkowski_sum", "SumPolyhedron",
     "Body", "Scene", "load_scene", "SceneError", "CSpaceObstacle", "CSpace", "CspaceError", "InvalidMeshError", "EmptyMeshError",
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
-    "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError",
+    "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError", "BuildError",
 }
 
 
@@ -27,7 +28,7 @@ def test_public_callables_are_documented():
         if inspect.isclass(obj) or inspect.isfunction(obj):
             assert inspect.getdoc(obj), f"{name} has no docstring"
     for fn in (cspace.convex_minkowski_sum, cspace.ConvexPolytope.from_points, cspace.Grid.snap,
-               cspace.minkowski_superset):
+               cspace.minkowski_superset, cspace.minkowski_sum):
         doc = inspect.getdoc(fn)
         assert "Parameters" in doc and "Returns" in doc, fn.__qualname__
 
