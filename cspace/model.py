@@ -421,7 +421,11 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                     b.co = _build(b, robot, c, grid, sub if b.kind == "surface" else None)
                     b.cache = "off" if store is None else "miss"
                     if store is not None:
-                        store.store(key, _to_arrays(b.co))
+                        try:
+                            store.store(key, _to_arrays(b.co))
+                        except OSError as exc:  # an unwritable cache must not fail the build
+                            warnings.warn(f"C-obstacle cache: cannot write {store.path(key)}: "
+                                          f"{exc}", UserWarning, stacklevel=2)
             except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
                 b.error = f"{type(exc).__name__}: {exc}"
                 b.cache = "off" if store is None else "miss"

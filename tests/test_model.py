@@ -248,6 +248,16 @@ def test_corrupt_and_partial_cache_files_are_rebuilt(tmp_path):
     assert not list((tmp_path / "cache").rglob("*.tmp"))
 
 
+def test_an_unwritable_cache_warns_and_still_builds(tmp_path):
+    blocker = tmp_path / "not-a-folder"
+    blocker.write_text("a file where the cache folder should be")
+    scene = make_scene([box_body("box", (1, 0, 0))])
+    with pytest.warns(UserWarning, match="cannot write"):
+        m = model_scene(scene, cache=blocker / "cache")
+    assert m.bodies[0].cache == "miss" and not m.bodies[0].error
+    assert len(m.cspace()) == 1
+
+
 def test_cache_key_follows_the_inputs_and_location_follows_the_environment(tmp_path,
                                                                           monkeypatch):
     monkeypatch.setenv("CSPACE_CACHE", str(tmp_path / "env-cache"))
