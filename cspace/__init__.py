@@ -21,6 +21,9 @@ Public API
   :mod:`cspace.fcl_check`.
 - :func:`load_scene` → :class:`Scene` — scene files: our TOML, OMPL.app ``.cfg``, Parasol
   ``.env``/``.query``.
+- :func:`model_scene` → :class:`SceneModel` — what a scene needs: bodies split, duplicates
+  dropped, each body convex / solid / surface / dropped with its reason, C-obstacles built
+  through the disk cache (:mod:`cspace.cache`).
 - the errors of :mod:`cspace.errors`.
 
 Drawing lives in :mod:`cspace.viz` (meshcat ``SceneView``, offline HTML, screenshots); it
@@ -32,6 +35,7 @@ from . import errors
 from .errors import *  # noqa: F403 (the error classes are public)
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
+from .model import SceneModel, model_scene
 from .obstacle import CSpace, CSpaceObstacle
 from .scene import Body, Scene, load_scene
 from .superset import SUPERSET_KINDS, Superset, minkowski_superset
@@ -58,4 +62,6 @@ __all__ = [
     "load_scene",
     "CSpaceObstacle",
     "CSpace",
+    "model_scene",
+    "SceneModel",
 ] + list(errors.__all__)
