@@ -36,6 +36,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_cvms.py
 	$(PY) benchmarks/bench_superset.py
 	$(PY) benchmarks/bench_minkowski.py
+	$(PY) benchmarks/bench_queries.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
