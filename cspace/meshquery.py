@@ -29,8 +29,8 @@ rationals; nothing is snapped):
 - First contact: the exact rational parameter of the first triangle met, rounded once.
 
 Each predicate (2D and 3D orientations on float64 differences) is evaluated in float64 with
-a rigorous semi-static error bound (Shewchuk's form, ``16 eps`` times the permanent, plus an
-absolute ``2**-1000`` for underflow); where the bound cannot certify the sign the query is
+a rigorous semi-static error bound (Shewchuk's form, ``16 eps`` times the permanent, plus
+absolute terms for underflow); overflow (inf or NaN) counts as undecided; where the bound cannot certify the sign the query is
 redone with Python integers (each float is an integer times a power of two). No epsilon
 decides anything. The acceleration structures only prune: a ``(y, z)`` grid of triangle
 bounding boxes for the ray (exact comparisons; cell indices are monotone in the coordinate),
@@ -96,7 +96,10 @@ def _o3(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
         + (abs(cdxady) + abs(adxcdy)) * abs(bdz)
         + (abs(adxbdy) + abs(bdxady)) * abs(cdz)
     )
-    return det, _FILTER * perm + _TINY
+    # Underflow: a 2x2 product term may lose up to 2**-1074 absolutely, then scaled by the
+    # third factor; 2**-1070 per unit of that factor covers the sum of such losses.
+    tiny = (abs(adz) + abs(bdz) + abs(cdz)) * 2.0**-1070 + _TINY
+    return det, _FILTER * perm + tiny
 
 
 @nb.njit(cache=True, inline="always")

@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 
 import zoo
+from cspace.convex import ConvexPolytope
 from cspace.errors import InvalidMeshError, NonFiniteError, OpenMeshError
 from cspace.fcl_check import FclOracle, _near_surface, cross_check, winding_number
 from cspace.mesh import ClosedMesh
@@ -380,7 +381,7 @@ def _segments_against_sampling(V, F, n, samples, seed):
     # A sampled collision beyond the band is a collision for the exact check too.
     deep = hit & (np.abs(co.signed_distance(P)).reshape(n, samples) >= BAND)
     missed = deep.any(axis=1) & free
-    assert not missed.any(), f"exact check free where FCL samples collide: {np.nonzero(missed)[0][:5]}"
+    assert not missed.any(), f"free, yet FCL samples collide: {np.nonzero(missed)[0][:5]}"
     # Exact collisions that sampling misses: FCL confirms contact at the exact first contact.
     only_exact = ~free & ~sampled
     if only_exact.any():
@@ -420,8 +421,6 @@ def test_thin_plate_caught_where_ompl_discrete_validation_misses():
     occ[0] = occ[2] = True
     V, F = zoo.voxel_solid(occ)
     plate = np.array(list(itertools.product((1.5, 1.501), (0.0, 1.0), (0.0, 1.0))))
-    from cspace.convex import ConvexPolytope
-
     P = ConvexPolytope.from_points(plate)
     Vp, Fp = P.vertices, P.faces
     V2 = np.vstack([V, Vp])
