@@ -26,7 +26,7 @@ import pytest
 
 import zoo
 from cspace.convex import ConvexPolytope
-from cspace.errors import InvalidMeshError, NonFiniteError, OpenMeshError
+from cspace.errors import InvalidMeshError, NonFiniteError, NotConvexError, OpenMeshError
 from cspace.fcl_check import FclOracle, _near_surface, cross_check, winding_number
 from cspace.mesh import ClosedMesh
 from cspace.obstacle import CSpace, CSpaceObstacle
@@ -587,3 +587,24 @@ def test_minkowski_sum_shared_cobstacle_against_fcl(name, robot, shared_data):
 @pytest.mark.parametrize("name", ZOO_NAMES + SHARED_NAMES)
 def test_minkowski_sum_cobstacle_against_fcl_1e5(name, robot, shared_data):
     _check_sum_against_fcl(name, robot, shared_data, 100_000, seed=6)
+
+
+def test_build_takes_the_mesh_path_for_a_non_convex_obstacle():
+    V, F = zoo.comb()
+    robot = zoo.box_points(0.5, 0.5, 0.5)
+    try:
+        co = CSpaceObstacle.build((V, F), robot)
+    except NotImplementedError as exc:
+        pytest.skip(f"non-convex minkowski_sum not available yet (NotImplementedError: {exc})")
+    assert co.kind == "mesh" and isinstance(co.obstacle, ClosedMesh) and co.sum is not None
+    assert co.polytope is None and co.n_facets == int(co.sum.face_facet.max()) + 1
+    np.testing.assert_array_equal(co.faces, co.sum.faces)
+    # The comb grown by the half-width 0.25 of the robot on every side (exact here).
+    np.testing.assert_array_equal(co.bounds, [[-0.25, -0.25, -0.25], [9.25, 3.25, 1.25]])
+    # A slot of the comb is 1 wide: a 0.5 robot fits (the slot's centre is free) ...
+    assert co.contains([1.5, 2.5, 0.5]) is False
+    # ... and touches a tooth exactly at 0.25 from it.
+    assert co.contains([1.25, 2.5, 0.5]) is True
+    assert co.contains([np.nextafter(1.25, 2), 2.5, 0.5]) is False
+    with pytest.raises(NotConvexError):
+        CSpaceObstacle.build(robot, (V, F))
