@@ -189,6 +189,17 @@ def _cell_candidates(q, lo, hi, cstart, ctris, y0, z0, iy, iz, ny, nz):
 
 
 @nb.njit(cache=True)
+def _cell_entries(lo, hi, y0, z0, iy, iz, ny, nz):
+    """Total number of (cell, triangle) entries :func:`_build_cells` would make."""
+    total = 0
+    for t in range(lo.shape[0]):
+        a = _cell(hi[t, 1], y0, iy, ny) - _cell(lo[t, 1], y0, iy, ny) + 1
+        b = _cell(hi[t, 2], z0, iz, nz) - _cell(lo[t, 2], z0, iz, nz) + 1
+        total += a * b
+    return total
+
+
+@nb.njit(cache=True)
 def _build_cells(lo, hi, y0, z0, iy, iz, ny, nz):
     """CSR lists of the triangles whose (y, z) box meets each cell (same cell function)."""
     m = lo.shape[0]
@@ -679,15 +690,20 @@ class MeshCO:
         area = _exact_area_signs(self.T)
         self.sx = np.ascontiguousarray(area[:, 0])
         self.degen = np.ascontiguousarray((area == 0).all(axis=1))
-        # (y, z) grid for the +x rays: about two cells per triangle, square-ish cells.
+        # (y, z) grid for the +x rays: about two cells per triangle, square-ish cells, fewer
+        # if large triangles would make the cell lists long (at most 32 entries per triangle).
         m = len(F)
         ylo, yhi = self.lo[:, 1].min(), self.hi[:, 1].max()
         zlo, zhi = self.lo[:, 2].min(), self.hi[:, 2].max()
         Ly, Lz = max(yhi - ylo, 1e-300), max(zhi - zlo, 1e-300)
         cells = 2.0 * m
-        ny = int(np.clip(np.sqrt(cells * Ly / Lz), 1, 4096))
-        nz = int(np.clip(cells / ny, 1, 4096))
-        self._grid = (float(ylo), float(zlo), float(ny / Ly), float(nz / Lz), ny, nz)
+        while True:
+            ny = int(np.clip(np.sqrt(cells * Ly / Lz), 1, 4096))
+            nz = int(np.clip(cells / ny, 1, 4096))
+            self._grid = (float(ylo), float(zlo), float(ny / Ly), float(nz / Lz), ny, nz)
+            if ny * nz == 1 or _cell_entries(self.lo, self.hi, *self._grid) <= 32 * m:
+                break
+            cells = ny * nz / 4.0
         self.cstart, self.ctris = _build_cells(self.lo, self.hi, *self._grid)
 
     # ---- membership ---------------------------------------------------------------------
