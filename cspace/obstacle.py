@@ -433,7 +433,9 @@ class CSpaceObstacle:
     about 6e6 queries/s (7.7e4/s when every query is exactly on the boundary, all exact
     fallback); ``signed_distance`` 1.5e5/s; ``segment_free`` 5.5e5 segments/s, about 40 us
     for one segment per call (numpy call overhead; 30 us on a box CO); ``first_contact``
-    3.7e5/s; one ``contains`` per call about 20 us.
+    3.7e5/s; one ``contains`` per call about 20 us. Mesh path (12848 and 3816 triangles,
+    ``benchmarks/reports/queries.md``): ``contains`` 6e6 to 8.7e6/s, ``signed_distance``
+    2.8e5 to 3.9e5/s, ``segment_free`` 1e6 to 1.5e6/s, one ``contains`` call about 4 us.
     """
 
     def __init__(
