@@ -168,6 +168,14 @@ def _hom(p) -> tuple[int, int, int]:
     return (x.numerator * (w // b), y.numerator * (w // d), w)
 
 
+def _float_key(h) -> tuple:
+    """Order-exact comparison keys of a homogeneous point's coordinates: ``(float, Fraction)``
+    per coordinate. Rounding is monotone, so the floats never reverse an order; the
+    Fractions decide when they tie."""
+    x, y = Fraction(h[0], h[2]), Fraction(h[1], h[2])
+    return ((float(x), x), (float(y), y))
+
+
 def _hpoint(p) -> tuple[int, int, int]:
     """Canonical homogeneous triple of any point :func:`to_point` accepts (no Fractions made
     for integer pairs and integer triples)."""
@@ -288,6 +296,54 @@ class Face:
         self._sample = value
 
 
+# Largest common denominator (in bits) used to put an arrangement's points on one integer
+# scale; beyond it the points are kept as Fractions.
+_MAX_SCALE_BITS = 1024
+# Below this many segments the plain double loop over pairs is cheaper than numpy.
+_SWEEP_FROM = 48
+
+
+def _box_candidates(ids: list, boxes: dict):
+    """Pairs ``(i, j)`` (``i`` before ``j`` in ``ids``) whose closed integer boxes
+    ``(x0, x1, y0, y1)`` meet: a double loop for few segments, a sort-and-sweep otherwise."""
+    n = len(ids)
+    if n < _SWEEP_FROM:
+        for a in range(n):
+            bi = boxes[ids[a]]
+            for b in range(a + 1, n):
+                bj = boxes[ids[b]]
+                if bi[1] < bj[0] or bj[1] < bi[0] or bi[3] < bj[2] or bj[3] < bi[2]:
+                    continue
+                yield ids[a], ids[b]
+        return
+    B = np.array([boxes[i] for i in ids], dtype=object).reshape(-1, 4)
+    try:
+        B = B.astype(np.int64)
+    except OverflowError:  # pragma: no cover - coordinates beyond int64: stay exact, stay slow
+        yield from _box_candidates_slow(ids, boxes)
+        return
+    order = np.argsort(B[:, 0], kind="stable")
+    x0 = B[order, 0]
+    end = np.searchsorted(x0, B[order, 1], side="right")
+    start = np.arange(1, n + 1)
+    count = np.maximum(end - start, 0)
+    rows = np.repeat(np.arange(n), count)
+    cols = np.repeat(start - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
+    a, b = order[rows], order[cols]
+    keep = (B[a, 2] <= B[b, 3]) & (B[b, 2] <= B[a, 3])
+    a, b = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
+    for x, y in zip(a.tolist(), b.tolist()):
+        yield ids[x], ids[y]
+
+
+def _box_candidates_slow(ids, boxes):
+    for a in range(len(ids)):
+        for b in range(a + 1, len(ids)):
+            bi, bj = boxes[ids[a]], boxes[ids[b]]
+            if not (bi[1] < bj[0] or bj[1] < bi[0] or bi[3] < bj[2] or bj[3] < bi[2]):
+                yield ids[a], ids[b]
+
+
 class Arrangement2D:
     """Exact planar subdivision induced by a set of segments with rational endpoints.
 
@@ -367,50 +423,48 @@ class Arrangement2D:
             xa, xb = sorted((p[0] // p[2], q[0] // q[2]))
             ya, yb = sorted((p[1] // p[2], q[1] // q[2]))
             boxes[i] = (xa, xb + 1, ya, yb + 1)
-        for ii, i in enumerate(proper):
+        for i, j in _box_candidates(proper, boxes):
             p, q = H[i]
-            bi = boxes[i]
-            for j in proper[ii + 1:]:
-                bj = boxes[j]
-                if bi[1] < bj[0] or bj[1] < bi[0] or bi[3] < bj[2] or bj[3] < bi[2]:
-                    continue
-                r, s = H[j]
-                o1, o2 = _horient(p, q, r), _horient(p, q, s)
-                if o1 == 0 and o2 == 0:  # collinear: overlap or touch
-                    for x in (r, s):
-                        if _hbetween(p, q, x, axis[i]):
-                            on[i].add(x)
-                    for x in (p, q):
-                        if _hbetween(r, s, x, axis[j]):
-                            on[j].add(x)
-                    continue
-                if o1 * o2 > 0:
-                    continue
-                o3, o4 = _horient(r, s, p), _horient(r, s, q)
-                if o3 * o4 > 0:
-                    continue
-                if o1 == 0:
-                    x = r
-                elif o2 == 0:
-                    x = s
-                elif o3 == 0:
-                    x = p
-                elif o4 == 0:
-                    x = q
-                else:
-                    x = _hnorm(*_hcross3(lines[i], lines[j]))
-                on[i].add(x)
-                on[j].add(x)
+            r, s = H[j]
+            o1, o2 = _horient(p, q, r), _horient(p, q, s)
+            if o1 == 0 and o2 == 0:  # collinear: overlap or touch
+                for x in (r, s):
+                    if _hbetween(p, q, x, axis[i]):
+                        on[i].add(x)
+                for x in (p, q):
+                    if _hbetween(r, s, x, axis[j]):
+                        on[j].add(x)
+                continue
+            if o1 * o2 > 0:
+                continue
+            o3, o4 = _horient(r, s, p), _horient(r, s, q)
+            if o3 * o4 > 0:
+                continue
+            if o1 == 0:
+                x = r
+            elif o2 == 0:
+                x = s
+            elif o3 == 0:
+                x = p
+            elif o4 == 0:
+                x = q
+            else:
+                x = _hnorm(*_hcross3(lines[i], lines[j]))
+            on[i].add(x)
+            on[j].add(x)
         vertex_set = set()
         point_label = {}
+        if points_only:
+            B = np.array([boxes[i] for i in proper], dtype=object).reshape(-1, 4)
         for k in points_only:
             x = H[k][0]
             vertex_set.add(x)
             point_label.setdefault(x, set()).add(labels[k])
             xi, yi = x[0] // x[2], x[1] // x[2]
-            for i in proper:
-                bi = boxes[i]
-                if bi[0] <= xi <= bi[1] and bi[2] <= yi <= bi[3] and _hon_segment(x, *H[i]):
+            near = np.nonzero((B[:, 0] <= xi) & (xi <= B[:, 1]) & (B[:, 2] <= yi) & (yi <= B[:, 3]))[0]
+            for n in near.tolist():
+                i = proper[n]
+                if _hon_segment(x, *H[i]):
                     on[i].add(x)
         for i in proper:
             vertex_set.update(on[i])
@@ -420,7 +474,14 @@ class Arrangement2D:
         for h in vertex_set:
             if L % h[2]:
                 L = L * h[2] // gcd(L, h[2])
-        scaled = {h: (h[0] * (L // h[2]), h[1] * (L // h[2])) for h in vertex_set}
+                if L.bit_length() > _MAX_SCALE_BITS:
+                    break
+        if L.bit_length() > _MAX_SCALE_BITS:
+            # many unrelated denominators: exact Fractions are cheaper than one huge scale
+            L = 0
+            scaled = {h: _float_key(h) for h in vertex_set}
+        else:
+            scaled = {h: (h[0] * (L // h[2]), h[1] * (L // h[2])) for h in vertex_set}
         pieces = {}
         for i in proper:
             ax = axis[i]
@@ -655,7 +716,8 @@ class Arrangement2D:
         x = _hom(p)
         if x in self._index or self.on_edge(p) is not None:
             return None
-        p = (p[0] * self._L, p[1] * self._L)  # the scale of the stored boxes
+        # the form of the stored boxes: scaled integers, or float-then-exact keys
+        p = (p[0] * self._L, p[1] * self._L) if self._L else _float_key(_hom(p))
         for c in self._positive:
             b = self._bbox[c]
             if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):

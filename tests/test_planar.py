@@ -271,6 +271,23 @@ def test_random_segments(segs):
     check_arrangement(arr, segs)
 
 
+@given(st.lists(seg, min_size=2, max_size=12))
+def test_sweep_finds_the_pairs_of_the_double_loop(segs):
+    """The sort-and-sweep used for many segments gives the same arrangement."""
+    import cspace.planar as planar
+
+    slow = Arrangement2D(segs)
+    old = planar._SWEEP_FROM
+    planar._SWEEP_FROM = 0
+    try:
+        fast = Arrangement2D(segs)
+    finally:
+        planar._SWEEP_FROM = old
+    check_arrangement(fast, segs)
+    assert fast.vertices == slow.vertices
+    assert fast.edges.tolist() == slow.edges.tolist() and fast.edge_labels == slow.edge_labels
+
+
 hom = st.tuples(st.integers(-6, 6), st.integers(-6, 6), st.integers(1, 3))
 
 
