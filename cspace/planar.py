@@ -27,6 +27,8 @@ from numbers import Integral, Rational, Real
 
 import numpy as np
 
+from .arrangement import box_pairs
+
 __all__ = [
     "Face",
     "Arrangement2D",
@@ -307,32 +309,14 @@ def _box_candidates(ids: list, boxes: dict):
     """Pairs ``(i, j)`` (``i`` before ``j`` in ``ids``) whose closed integer boxes
     ``(x0, x1, y0, y1)`` meet: a double loop for few segments, a sort-and-sweep otherwise."""
     n = len(ids)
-    if n < _SWEEP_FROM:
-        for a in range(n):
-            bi = boxes[ids[a]]
-            for b in range(a + 1, n):
-                bj = boxes[ids[b]]
-                if bi[1] < bj[0] or bj[1] < bi[0] or bi[3] < bj[2] or bj[3] < bi[2]:
-                    continue
-                yield ids[a], ids[b]
-        return
     B = np.array([boxes[i] for i in ids], dtype=object).reshape(-1, 4)
-    try:
-        B = B.astype(np.int64)
-    except OverflowError:  # pragma: no cover - coordinates beyond int64: stay exact, stay slow
-        yield from _box_candidates_slow(ids, boxes)
+    if n < max(_SWEEP_FROM, 2) or max(abs(int(B.min())), abs(int(B.max()))) >= 2**28:
+        yield from _box_candidates_slow(ids, boxes)  # few segments, or beyond the grid's range
         return
-    order = np.argsort(B[:, 0], kind="stable")
-    x0 = B[order, 0]
-    end = np.searchsorted(x0, B[order, 1], side="right")
-    start = np.arange(1, n + 1)
-    count = np.maximum(end - start, 0)
-    rows = np.repeat(np.arange(n), count)
-    cols = np.repeat(start - np.cumsum(count) + count, count) + np.arange(int(count.sum()))
-    a, b = order[rows], order[cols]
-    keep = (B[a, 2] <= B[b, 3]) & (B[b, 2] <= B[a, 3])
-    a, b = np.minimum(a[keep], b[keep]), np.maximum(a[keep], b[keep])
-    for x, y in zip(a.tolist(), b.tolist()):
+    B = B.astype(np.int64)
+    zero = np.zeros((n, 1), dtype=np.int64)
+    pairs = box_pairs(np.hstack([B[:, [0, 2]], zero]), np.hstack([B[:, [1, 3]], zero]))
+    for x, y in pairs.tolist():
         yield ids[x], ids[y]
 
 
