@@ -556,3 +556,16 @@ def test_voxel_box_sum_known_answers():
     r = oracles.voxel_box_sum(two, [-0.5] * 3, [0.5] * 3)
     assert r.pinch_vertices.tolist() == [[1.5, 1.5, 1.5]] and r.nonmanifold_length == 0
     assert r.volume == 16
+
+
+def test_brute_force_sum_distance_box_plus_box():
+    # [0, 1]^3 ⊕ [-0.25, 0.25]^3 = [-0.25, 1.25]^3: distances of outside points are analytic.
+    A = zoo.voxel_solid(np.ones((1, 1, 1), dtype=bool))
+    B = ConvexPolytope.from_points(zoo.box_points(0.5, 0.5, 0.5))
+    rng = np.random.default_rng(RNG_SEED)
+    q = rng.uniform(-2, 3, (300, 3))
+    gap = np.maximum(np.maximum(-0.25 - q, q - 1.25), 0.0)
+    out = np.linalg.norm(gap, axis=1) > 0
+    want = np.linalg.norm(gap[out], axis=1)
+    got = oracles.brute_force_sum_distance(*A, B.vertices, B.faces, q[out])
+    assert np.abs(got - want).max() < 1e-14
