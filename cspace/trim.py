@@ -913,10 +913,28 @@ def _source_facet(cx: _Complex, planes: _Planes, f: int) -> int:
     if len(planes.members[p]) == 1:
         return int(planes.facet[planes.members[p][0]])
     arr = cx.arrangements[p]
-    x, y = arr.faces[int(cx.face_local[f])].sample
     ax = int(planes.axis[p])
     a, b = (ax + 1) % 3, (ax + 2) % 3
-    for t in planes.members[p].tolist():
+    members = planes.members[p].tolist()
+    face = arr.faces[int(cx.face_local[f])]
+    H, origin = arr._H, arr.half_edge_origin
+    # A triangle with an edge along the face's boundary, on the face's side of it, covers
+    # the face (the face is a cell of an arrangement containing that triangle's edges).
+    for h in face.outer:
+        for i, j in arr.edge_labels[h // 2]:
+            if i < 0:
+                continue
+            t = members[i]
+            c = planes.ints[planes.faces[t]].tolist()
+            u, v = c[j], c[(j + 1) % 3]
+            d_tri = (v[a] - u[a], v[b] - u[b])
+            p0, p1 = H[origin[h]], H[origin[h ^ 1]]
+            d_face = (p1[0] * p0[2] - p0[0] * p1[2], p1[1] * p0[2] - p0[1] * p1[2])
+            same = d_tri[0] * d_face[0] + d_tri[1] * d_face[1] > 0
+            if same == (int(planes.sign[t]) * int(planes.sigma[p]) > 0):
+                return int(planes.facet[t])
+    x, y = face.sample
+    for t in members:
         corners = [(c[a], c[b]) for c in planes.ints[planes.faces[t]].tolist()]
         if winding_number(corners, (x, y)) != 0:
             return int(planes.facet[t])

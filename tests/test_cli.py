@@ -47,6 +47,24 @@ def test_superset_of_a_torus(tmp_path, capsys):
     assert (tmp_path / "s.ply").exists()
 
 
+def test_sum_of_a_torus_matches_the_python_api(tmp_path, capsys):
+    import cspace
+
+    a, b = tmp_path / "torus.stl", tmp_path / "box.stl"
+    trimesh.creation.torus(1.0, 0.3, major_sections=16, minor_sections=8).export(a)
+    trimesh.creation.box((0.2, 0.2, 0.2)).export(b)
+    out_path = tmp_path / "sum.stl"
+    assert main(["sum", str(a), str(b), "--reflect-b", "0", "0", "0", "-o", str(out_path), "--stats", "-q"]) == 0
+    out = capsys.readouterr().out
+    assert "NCC-CVMS" in out and "0 hole(s)" in out and "arrangements:" in out
+    written = trimesh.load(out_path, process=False)
+    A = cspace.ClosedMesh.load(a)
+    B = trimesh.load(b).vertices
+    r = cspace.minkowski_sum(A, -B)
+    assert len(written.faces) == len(r.faces)
+    assert f"volume {r.volume:.9g}" in out
+
+
 def test_superset_reports_an_open_mesh(tmp_path, capsys):
     box = trimesh.creation.box()
     open_box = trimesh.Trimesh(box.vertices, box.faces[:-1], process=False)

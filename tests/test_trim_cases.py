@@ -100,3 +100,43 @@ def test_rounding_check_predicates():
     assert _improper(V, [0, 1, 2], [4, 5, 6])  # pierced
     assert _improper(V, [0, 1, 2], [0, 3, 4])  # shared vertex, edge 0-3 runs inside the corner
     assert not _improper(V, [0, 1, 2], [0, 7, 5])  # shared vertex only
+
+
+def test_provenance_matches_the_facet_normals():
+    """Each output facet's normal is the normal of the feature it claims to come from:
+    A's face (translated), B's facet (corner), or orthogonal to both edges (edge)."""
+    from cspace import ConvexPolytope, SUPERSET_KINDS
+    from cspace.superset import minkowski_superset
+    from zoo import torus
+
+    V, F = torus(sections=16, ring=8)
+    B = box_points(0.3, 0.2, 0.25)
+    r = minkowski_sum((V, F), B)
+    S = minkowski_superset((V, F), B)  # same operands, same grid: same feature indices
+    Bp = ConvexPolytope.from_points(B, grid=r.grid)
+    A_ints = np.round(V / r.grid.step).astype(np.int64)
+    P = r.vertices[r.faces]
+    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    n /= np.linalg.norm(n, axis=1)[:, None]
+    fk = r.facet_kind[r.face_facet]
+    sa, sb = r.facet_source_a[r.face_facet], r.facet_source_b[r.face_facet]
+    seen = set()
+    for k, name in enumerate(SUPERSET_KINDS):
+        rows = np.nonzero(fk == k)[0]
+        seen.add(name) if len(rows) else None
+        for i in rows:
+            if name == "translated":
+                a = A_ints[F[sa[i, 1]]].astype(float)
+                m = np.cross(a[1] - a[0], a[2] - a[0])
+                assert np.dot(m / np.linalg.norm(m), n[i]) > 1 - 1e-9
+            elif name == "corner":
+                m = Bp.normals[sb[i, 1]].astype(float)
+                assert abs(np.dot(m / np.linalg.norm(m), n[i])) > 1 - 1e-9
+            else:
+                ea = S.a_edges[sa[i, 1]]
+                da = A_ints[ea[1]] - A_ints[ea[0]]
+                eb = Bp.edges[sb[i, 1]]
+                db = Bp.ints[eb[1]] - Bp.ints[eb[0]]
+                assert abs(np.dot(da / np.linalg.norm(da), n[i])) < 1e-9
+                assert abs(np.dot(db / np.linalg.norm(db), n[i])) < 1e-9
+    assert seen == set(SUPERSET_KINDS)
