@@ -258,13 +258,13 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress) -> SumPolyhedro
     def lap(name: str, since: float) -> float:
         now = time.perf_counter()
         stats[name] = now - since
+        report(name, 1.0)
         return now
 
     t = time.perf_counter()
     S = minkowski_superset(A, B)
     A, B = _common_operands(A, B, S.grid)
     t = lap("superset", t)
-    report("superset", 1.0)
     stats["superset_facets"] = S.n_facets
 
     planes = _plane_groups(S)
@@ -292,8 +292,9 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress) -> SumPolyhedro
     out = _output(cx, shells, inside, anchor, planes, S)
     lap("output", t)
     stats["total"] = time.perf_counter() - t0
-    report("done", 1.0)
-    return _result(out, S, stats)
+    result = _result(out, S, stats)
+    report("rounding_check", 1.0)
+    return result
 
 
 def _common_operands(A: ClosedMesh, B: ConvexPolytope, grid: Grid):
