@@ -344,7 +344,9 @@ def _check_against_fcl(V, F, n, seed):
     assert r["n"] == n
     assert r["ok"], (f"{r['n_disagree']} membership disagreements beyond the band, e.g. "
                      f"{r['disagreements'][:3]}")
-    assert r["max_distance_error"] <= 1e-9 * r["scene_size"], r["max_distance_error"]
+    # Distances against FCL's BVH-vs-BVH distance (FclOracle's Convex robot is off by up to
+    # 1.8e-6 x size on the trap mesh with 1e5 samples, see _fcl_meshes).
+    _check_distances(co, n, seed, "mesh")
     # Not vacuous: both sides of the surface sampled, most points decided away from the band.
     assert 0.1 * n < r["n_inside"] < 0.9 * n
     assert r["n_in_band"] < 0.05 * n
@@ -529,12 +531,17 @@ def _check_sum_against_fcl(name, robot, shared_data, n, seed):
             f"{name} ⊕ {robot}: {int(wrong.sum())} of {len(qd)} disagreements confirmed by the "
             f"BVH oracle, e.g. q={qd[wrong][:2].tolist()}, ours inside={ours[wrong][:2]}, "
             f"our signed distance {co.signed_distance(qd[wrong][:2])}")
-    # Distances (cross_check's max_distance_error uses FCL's Convex robot, see above): the
-    # same kind of samples, outside for both.
+    _check_distances(co, n, seed, f"{name} ⊕ {robot}")
+
+
+def _check_distances(co: CSpaceObstacle, n: int, seed: int, what: str) -> None:
+    """Distance error <= 1e-9 x size against FCL (BVH vs BVH, see :func:`_fcl_meshes`; not
+    cross_check's max_distance_error, which uses FCL's Convex robot), on cross_check's kind
+    of samples (uniform in the grown bounds and near the surface), outside for both."""
     rng = np.random.default_rng(seed)
     lo, hi = co.bounds
-    size = r["scene_size"]
     pad = 0.1 * (hi - lo)
+    size = float(np.linalg.norm(hi - lo + 2 * pad))
     q = np.vstack([rng.uniform(lo - pad, hi + pad, (n // 2, 3)),
                    _near_surface(co, n - n // 2, rng, size)])
     d = co.signed_distance(q)
@@ -547,7 +554,7 @@ def _check_sum_against_fcl(name, robot, shared_data, n, seed):
     err = np.abs(d[out][ok] - fd[ok])
     assert ok.sum() > 0.3 * n
     j = int(err.argmax())
-    assert err.max() <= 1e-9 * size, (f"{name} ⊕ {robot}: distance error {err.max():.3g} at "
+    assert err.max() <= 1e-9 * size, (f"{what}: distance error {err.max():.3g} at "
                                       f"q={q[out][ok][j].tolist()!r}: ours {d[out][ok][j]!r}, "
                                       f"FCL {fd[ok][j]!r}")
 
