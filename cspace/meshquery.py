@@ -248,45 +248,44 @@ def _seg_dist2(px, py, pz, ax, ay, az, bx, by, bz):
 
 @nb.njit(cache=True)
 def _tri_dist2(px, py, pz, T, t):
-    """Squared distance from p to the closed triangle ``T[t]`` (Ericson's regions, float)."""
+    """Squared distance from p to the closed triangle ``T[t]`` (float).
+
+    The minimum of the three edge distances and, when p projects inside the triangle, the
+    distance to its plane. "Inside" is decided by the signs of ``((v - u) x (p - u)) . n``
+    for each edge ``u -> v``: each uses local differences, so needle-shaped triangles (common
+    among the sum's edge facets) are not sent to the wrong Voronoi region, as the textbook
+    region tests do (they lost 2.5e-7 on a 0.64 x 0.008 needle). A wrong sign can only occur
+    within rounding of an edge, where both answers agree to rounding.
+    """
     ax, ay, az = T[t, 0], T[t, 1], T[t, 2]
     bx, by, bz = T[t, 3], T[t, 4], T[t, 5]
     cx, cy, cz = T[t, 6], T[t, 7], T[t, 8]
+    best = min(
+        _seg_dist2(px, py, pz, ax, ay, az, bx, by, bz),
+        _seg_dist2(px, py, pz, bx, by, bz, cx, cy, cz),
+        _seg_dist2(px, py, pz, cx, cy, cz, ax, ay, az),
+    )
     abx, aby, abz = bx - ax, by - ay, bz - az
     acx, acy, acz = cx - ax, cy - ay, cz - az
-    apx, apy, apz = px - ax, py - ay, pz - az
-    d1 = abx * apx + aby * apy + abz * apz
-    d2 = acx * apx + acy * apy + acz * apz
-    if d1 <= 0.0 and d2 <= 0.0:
-        return apx * apx + apy * apy + apz * apz
-    bpx, bpy, bpz = px - bx, py - by, pz - bz
-    d3 = abx * bpx + aby * bpy + abz * bpz
-    d4 = acx * bpx + acy * bpy + acz * bpz
-    if d3 >= 0.0 and d4 <= d3:
-        return bpx * bpx + bpy * bpy + bpz * bpz
-    cpx, cpy, cpz = px - cx, py - cy, pz - cz
-    d5 = abx * cpx + aby * cpy + abz * cpz
-    d6 = acx * cpx + acy * cpy + acz * cpz
-    if d6 >= 0.0 and d5 <= d6:
-        return cpx * cpx + cpy * cpy + cpz * cpz
-    vc = d1 * d4 - d3 * d2
-    vb = d5 * d2 - d1 * d6
-    va = d3 * d6 - d5 * d4
-    den = va + vb + vc
-    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0 or vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0 or (
-        va <= 0.0 and d4 - d3 >= 0.0 and d5 - d6 >= 0.0
-    ) or not den > 0.0:
-        # Closest point on an edge (also the fallback for needle-like triangles).
-        return min(
-            _seg_dist2(px, py, pz, ax, ay, az, bx, by, bz),
-            _seg_dist2(px, py, pz, bx, by, bz, cx, cy, cz),
-            _seg_dist2(px, py, pz, cx, cy, cz, ax, ay, az),
-        )
-    v, w = vb / den, vc / den
-    rx = apx - v * abx - w * acx
-    ry = apy - v * aby - w * acy
-    rz = apz - v * abz - w * acz
-    return rx * rx + ry * ry + rz * rz
+    nx, ny, nz = aby * acz - abz * acy, abz * acx - abx * acz, abx * acy - aby * acx
+    nn = nx * nx + ny * ny + nz * nz
+    if not nn > 0.0:
+        return best
+    s0 = _edge_side(ax, ay, az, bx, by, bz, px, py, pz, nx, ny, nz)
+    s1 = _edge_side(bx, by, bz, cx, cy, cz, px, py, pz, nx, ny, nz)
+    s2 = _edge_side(cx, cy, cz, ax, ay, az, px, py, pz, nx, ny, nz)
+    if s0 >= 0.0 and s1 >= 0.0 and s2 >= 0.0:
+        h = (px - ax) * nx + (py - ay) * ny + (pz - az) * nz
+        best = min(best, h * h / nn)
+    return best
+
+
+@nb.njit(cache=True)
+def _edge_side(ux, uy, uz, vx, vy, vz, px, py, pz, nx, ny, nz):
+    """``((v - u) x (p - u)) . n``: positive when p projects to the left of u -> v."""
+    ex, ey, ez = vx - ux, vy - uy, vz - uz
+    wx, wy, wz = px - ux, py - uy, pz - uz
+    return (ey * wz - ez * wy) * nx + (ez * wx - ex * wz) * ny + (ex * wy - ey * wx) * nz
 
 
 @nb.njit(cache=True)
