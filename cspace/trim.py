@@ -719,13 +719,33 @@ class _PieceTest:
         be = B.ints[B.edges[:, 1]] - B.ints[B.edges[:, 0]]
         self.eB = be.astype(np.int64)
         self.Bo = B.ints.astype(object)
+        # the normals of the two facets at each edge of B (its Gauss arc)
+        self.n1 = self.nB[B.edge_facets[:, 0]].astype(np.float64)
+        self.n2 = self.nB[B.edge_facets[:, 1]].astype(np.float64)
 
     def axes(self, t: int) -> np.ndarray:
+        """Candidate separating axes of ``t ⊕ B``: ``±n_t``, B's facet normals, and the cross
+        products ``±(e_t x e_B)`` whose direction lies in the normal cone of ``e_B`` (only
+        then is it a facet normal of ``t ⊕ B``). The cone test is a float filter that only
+        drops an axis when it is certainly outside the cone; extra axes are harmless."""
         a, b, c = self.T[t]
         et = np.stack([b - a, c - b, a - c])
         nt = np.cross(b - a, c - a)
-        cr = np.cross(et[:, None, :], self.eB[None, :, :]).reshape(-1, 3)
-        U = np.concatenate([nt[None], -nt[None], self.nB, cr, -cr])
+        cr = np.cross(et[:, None, :], self.eB[None, :, :])  # (3, e, 3)
+        u = cr.astype(np.float64)
+        e = self.eB.astype(np.float64)[None]
+        n1, n2 = self.n1[None], self.n2[None]
+        s1 = np.einsum("kij,kij->ki", np.cross(n1, u), e)
+        s2 = np.einsum("kij,kij->ki", np.cross(u, n2), e)
+        s0 = np.einsum("kij,kij->ki", np.cross(n1, n2), e)
+        mag = np.einsum("kij,kij->ki", np.abs(n1) + np.abs(n2), np.abs(u)) * np.abs(e).sum(axis=2)
+        tol = _FILTER * 4 * mag  # each s is a sum of 6 products of 3 float factors
+        sure_pos = ((s1 * np.sign(s0) > tol) | (s2 * np.sign(s0) > tol)) & (np.abs(s0) > tol)
+        sure_neg = ((s1 * np.sign(s0) < -tol) | (s2 * np.sign(s0) < -tol)) & (np.abs(s0) > tol)
+        # +u is outside the cone when one sign is surely negative; -u when one is surely positive
+        keep_plus = ~sure_neg
+        keep_minus = ~sure_pos
+        U = np.concatenate([nt[None], -nt[None], self.nB, cr[keep_plus], -cr[keep_minus]])
         return U[np.any(U != 0, axis=1)]
 
     def inside_a(self, P4: tuple) -> bool:
