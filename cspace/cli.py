@@ -297,6 +297,18 @@ def _model_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
 
 
+def _operand_arguments(p: argparse.ArgumentParser, a_help: str, output_help: str) -> None:
+    """The operands A and B, ``-o``, ``--reflect-b`` and ``--grid-bits`` of the sum commands."""
+    p.add_argument("a", help=a_help)
+    p.add_argument("b", help="mesh file of B (its convex hull is used)")
+    p.add_argument("-o", "--output", help=output_help)
+    p.add_argument(
+        "--reflect-b", nargs=3, type=float, metavar=("X", "Y", "Z"),
+        help="use -(B - c) for this reference point c: the C-obstacle of robot B around obstacle A",
+    )
+    p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
     from .errors import BuildError
@@ -304,30 +316,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("convex-sum", help="exact Minkowski sum of two convex shapes (CVMS)")
-    p.add_argument("a", help="mesh file of A (its convex hull is used)")
-    p.add_argument("b", help="mesh file of B (its convex hull is used)")
-    p.add_argument("-o", "--output", help="write the sum as a mesh file (any format trimesh exports)")
-    p.add_argument(
-        "--reflect-b", nargs=3, type=float, metavar=("X", "Y", "Z"),
-        help="use -(B - c) for this reference point c: the C-obstacle of robot B around obstacle A",
-    )
-    p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
+    _operand_arguments(p, "mesh file of A (its convex hull is used)", "write the sum as a mesh file")
     p.set_defaults(func=_convex_sum)
     p = sub.add_parser("superset", help="NCC-CVMS superset (convolution) of a closed mesh and a convex shape")
-    p.add_argument("a", help="closed mesh file of A (validated)")
-    p.add_argument("b", help="mesh file of B (its convex hull is used)")
-    p.add_argument("-o", "--output", help="write the superset's triangles as a mesh file")
-    p.add_argument("--reflect-b", nargs=3, type=float, metavar=("X", "Y", "Z"),
-                   help="use -(B - c): the superset of the C-obstacle of robot B around A")
-    p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
+    _operand_arguments(p, "closed mesh file of A (validated)", "write the superset's triangles as a mesh file")
     p.set_defaults(func=_superset)
     p = sub.add_parser("sum", help="exact Minkowski sum of a closed (non-convex) mesh and a convex shape")
-    p.add_argument("a", help="closed mesh file of A (validated; any genus, non-convex)")
-    p.add_argument("b", help="mesh file of B (its convex hull is used)")
-    p.add_argument("-o", "--output", help="write the sum as a mesh file (any format trimesh exports)")
-    p.add_argument("--reflect-b", nargs=3, type=float, metavar=("X", "Y", "Z"),
-                   help="use -(B - c): the C-obstacle of robot B around obstacle A")
-    p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
+    _operand_arguments(p, "closed mesh file of A (validated; any genus, non-convex)",
+                       "write the sum as a mesh file (any format trimesh exports)")
     p.add_argument("--stats", action="store_true", help="print the time of each stage")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=_sum)

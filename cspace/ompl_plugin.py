@@ -27,6 +27,7 @@ from .obstacle import CSpace
 
 __all__ = [
     "MOTIONS",
+    "state_space",
     "PlanResult",
     "CSpaceValidityChecker",
     "CSpaceMotionValidator",
@@ -212,6 +213,20 @@ def __getattr__(name: str):
 
 # --------------------------------------------------------------------------------------
 # exact path verification
+
+
+def state_space(bounds):
+    """An OMPL ``RealVectorStateSpace(3)`` of translations bounded by ``(2, 3)`` ``bounds``
+    (scene units): the space the checker and motion validator work on."""
+    ob = _ompl()[0]
+    b = _bounds(bounds)
+    space = ob.RealVectorStateSpace(3)
+    rb = ob.RealVectorBounds(3)
+    for k in range(3):
+        rb.setLow(k, float(b[0, k]))
+        rb.setHigh(k, float(b[1, k]))
+    space.setBounds(rb)
+    return space
 
 
 def verify_path(cspace: CSpace, path, bounds=None) -> dict:
@@ -493,12 +508,7 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         ou.setLogLevel(ou.LOG_NONE)
         ou.RNG.setSeed(int(seed))
         ou.setLogLevel(ou.LOG_ERROR)
-    space = ob.RealVectorStateSpace(3)
-    rb = ob.RealVectorBounds(3)
-    for k in range(3):
-        rb.setLow(k, float(b[0, k]))
-        rb.setHigh(k, float(b[1, k]))
-    space.setBounds(rb)
+    space = state_space(b)
     si = ob.SpaceInformation(space)
     classes = _classes()
     checker = classes["CSpaceValidityChecker"](si, cs, bounds=b)

@@ -16,7 +16,7 @@ import numpy as np
 from ompl import base as ob, geometric as og, util as ou
 
 import cspace
-from cspace.ompl_plugin import CSpaceMotionValidator, CSpaceValidityChecker
+from cspace.ompl_plugin import CSpaceMotionValidator, CSpaceValidityChecker, state_space
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -27,12 +27,7 @@ def main() -> int:
     scene = cspace.load_scene(ROOT / "scenes" / "comb.toml")
     cs = cspace.CSpace.from_scene(scene)  # exact C-obstacles of the bodies the robot can reach
 
-    space = ob.RealVectorStateSpace(3)
-    bounds = ob.RealVectorBounds(3)
-    for k in range(3):
-        bounds.setLow(k, float(scene.bounds[0, k]))
-        bounds.setHigh(k, float(scene.bounds[1, k]))
-    space.setBounds(bounds)
+    space = state_space(scene.bounds)  # RealVectorStateSpace(3) with the scene's bounds
     ss = og.SimpleSetup(space)
     si = ss.getSpaceInformation()
     checker = CSpaceValidityChecker(si, cs, bounds=scene.bounds)

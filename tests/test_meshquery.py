@@ -417,7 +417,7 @@ def test_thin_plate_caught_where_ompl_discrete_validation_misses():
     steps over it, the exact check does not."""
     from ompl import base as ob
 
-    from cspace.ompl_plugin import CSpaceValidityChecker
+    from cspace.ompl_plugin import CSpaceValidityChecker, state_space
 
     occ = np.zeros((3, 1, 1), dtype=bool)
     occ[0] = occ[2] = True
@@ -431,12 +431,7 @@ def test_thin_plate_caught_where_ompl_discrete_validation_misses():
     cs = CSpace([co], bounds=[[-0.5, -0.5, -0.5], [3.5, 1.5, 1.5]])
     q0, q1 = np.array([1.05, 0.5, 0.5]), np.array([1.95, 0.5, 0.5])
 
-    space = ob.RealVectorStateSpace(3)
-    rb = ob.RealVectorBounds(3)
-    for k in range(3):
-        rb.setLow(k, float(cs.bounds[0, k]))
-        rb.setHigh(k, float(cs.bounds[1, k]))
-    space.setBounds(rb)
+    space = state_space(cs.bounds)
     si = ob.SpaceInformation(space)
     checker = CSpaceValidityChecker(si, cs)
     si.setStateValidityChecker(checker)
