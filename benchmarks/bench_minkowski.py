@@ -44,7 +44,8 @@ TIMEOUT = 900  # seconds per child
 # cspace's stages (result.stats) in pipeline order, with the paper's Table I columns they
 # correspond to: SC superset, MST merge/cancel/triangulate, BI+TI boxes and triangle
 # intersections, AC arrangements, BT traversal (+ our exact membership), TR output.
-STAGES = ["superset", "planes", "intersections", "arrangements", "traversal", "membership", "output"]
+STAGES = ["superset", "planes", "intersections", "arrangements", "traversal", "membership", "output",
+          "rounding_check"]
 
 
 def case_names(quick: bool) -> list[str]:
@@ -219,11 +220,11 @@ def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
         "",
         "## cspace per-stage times (seconds; like the paper's Table I)",
         "",
-        "Stages: *superset* (step 1, SC), *planes* (step 2–3: exact plane groups, merge/cancel, MST), "
-        "*intersections* (steps 4–5: boxes and exact triangle pairs, BI+TI), *arrangements* (step 6, AC), "
-        "*traversal* (steps 7–16: shells, BT), *membership* (exact classification of cells), *output* (step 17–18 and "
-        "the rounding check, TR). *planes* is the total minus the other stages (`result.stats['planes']` holds the "
-        "number of planes).",
+        "Stages: *superset* (step 1, SC), *planes* (exact plane groups), *intersections* (steps 4–5: boxes and "
+        "exact triangle pairs, BI+TI), *arrangements* (steps 2, 3 and 6 in one exact arrangement per plane: merge, "
+        "cancel and cut, AC), *traversal* (steps 7–16: shells of sub-facet sides, BT), *membership* (exact "
+        "classification of cells), *output* (steps 17–18: facets, triangulation, TR), *rounding_check* (exact "
+        "re-check of the float64 output).",
         "",
         "| case | " + " | ".join(STAGES) + " | total | candidate pairs | cut pairs | sub-facets | shells |",
         "|---|" + "---|" * (len(STAGES) + 5),
@@ -232,10 +233,6 @@ def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
         if "error" in c:
             continue
         st = dict(c["stats"])
-        # result.stats stores the plane-group count under "planes" too (overwriting that
-        # stage's seconds): recover the stage as the rest of the total.
-        if not isinstance(st.get("planes"), float):
-            st["planes"] = st["total"] - sum(st.get(k, 0.0) for k in STAGES if k != "planes")
         cells = " | ".join(f"{st[k]:.3f}" if k in st else "" for k in STAGES)
         lines.append(
             f"| {c['case']} | {cells} | {st.get('total', c['time']):.3f} | {st.get('candidate_pairs', '')} | "

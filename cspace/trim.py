@@ -78,8 +78,10 @@ class SumPolyhedron:
     convex : bool
         True when both operands were convex and CVMS produced the result.
     stats : dict
-        Seconds per stage and sizes (``superset``, ``merge``, ``pairs``, ``cuts``,
-        ``arrangements``, ``traversal``, ``output``, ``total``, counts).
+        Seconds per stage (``superset``, ``planes``, ``intersections``, ``arrangements``,
+        ``traversal``, ``membership``, ``output``, ``rounding_check``, ``total``) and sizes
+        (``superset_facets``, ``superset_triangles``, ``n_planes``, ``candidate_pairs``,
+        ``cut_pairs``, ``subfacets``, ``shells``, ``membership_tests``, ``output_triangles``).
     """
 
     vertices: np.ndarray
@@ -270,7 +272,7 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress) -> SumPolyhedro
     planes = _plane_groups(S)
     t = lap("planes", t)
     stats["superset_triangles"] = len(planes.faces)
-    stats["planes"] = len(planes.keys)
+    stats["n_planes"] = len(planes.keys)
 
     cuts = _cuts(S.ints, planes)
     t = lap("intersections", t)
