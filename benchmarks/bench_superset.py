@@ -47,15 +47,6 @@ REPORT = ROOT / "benchmarks" / "reports" / "superset.md"
 SHARED = ROOT.parent / "shared" / "data"
 
 
-def robots(extent: float) -> dict[str, np.ndarray]:
-    s = 0.08 * extent
-    return {
-        "box": zoo.box_points(s, 0.8 * s, 0.6 * s),
-        "hull20": zoo.hull20(0, scale=(s / 2, 0.35 * s, 0.25 * s)),
-        "ico320": zoo.icosphere_points(2, radius=s / 2),
-    }
-
-
 def cases(quick: bool):
     zoo_cases = {
         "torus": zoo.torus(),
@@ -68,12 +59,12 @@ def cases(quick: bool):
         "stairs": zoo.stairs(),
     }
     for name, (v, f) in zoo_cases.items():
-        for rname, r in robots(float(np.ptp(v, axis=0).max())).items():
+        for rname, r in zoo.scaled_robots(float(np.ptp(v, axis=0).max())).items():
             yield f"{name} ⊕ {rname}", v, f, r
     if SHARED.is_dir():
         for name, path in zoo.shared_closed_meshes(SHARED).items():
             m = ClosedMesh.load(path)
-            for rname, r in robots(float(np.ptp(m.vertices, axis=0).max())).items():
+            for rname, r in zoo.scaled_robots(float(np.ptp(m.vertices, axis=0).max())).items():
                 yield f"{name} ⊕ {rname}", m.vertices, m.faces, r
     if not quick:
         v, f = zoo.torus(sections=100, ring=50)

@@ -104,12 +104,12 @@ def test_winding_number_blocking_invariance():
 def test_winding_number_matches_voxel_occupancy(name):
     """Voxel solids have exact membership: the occupancy of the cell holding the point."""
     occupancy = {
-        "grate": lambda: _grate_occ(3),
-        "cup": lambda: _cup_occ(),
-        "hollow_box": lambda: _hollow_occ(),
-        "stairs": lambda: _stairs_occ(5, 3),
-        "comb": lambda: _comb_occ(5, 2),
-        "genus3": lambda: _genus3_occ(),
+        "grate": lambda: zoo.grate_occupancy(3),
+        "cup": zoo.cup_occupancy,
+        "hollow_box": zoo.hollow_box_occupancy,
+        "stairs": lambda: zoo.stairs_occupancy(5, 3),
+        "comb": lambda: zoo.comb_occupancy(5, 2),
+        "genus3": zoo.genus3_occupancy,
         "l_shape": lambda: _l_occ(2, 1),
     }[name]()
     V, F = zoo.voxel_solid(occupancy)
@@ -122,44 +122,6 @@ def test_winding_number_matches_voxel_occupancy(name):
     truth = padded[tuple((cells + 1).T)]
     w = winding_number(V, F, P)
     assert np.abs(w - truth).max() < 1e-9
-
-
-def _grate_occ(n):
-    occ = np.ones((2 * n + 1, 2 * n + 1, 1), dtype=bool)
-    occ[1::2, 1::2] = False
-    return occ
-
-
-def _cup_occ():
-    occ = np.ones((3, 3, 3), dtype=bool)
-    occ[1, 1, 1:] = False
-    return occ
-
-
-def _hollow_occ():
-    occ = np.ones((3, 3, 3), dtype=bool)
-    occ[1, 1, 1] = False
-    return occ
-
-
-def _stairs_occ(steps, width):
-    occ = np.zeros((steps, width, steps), dtype=bool)
-    for i in range(steps):
-        occ[i, :, : i + 1] = True
-    return occ
-
-
-def _comb_occ(teeth, length):
-    occ = np.zeros((2 * teeth - 1, 1 + length, 1), dtype=bool)
-    occ[:, 0, 0] = True
-    occ[::2, 1:, 0] = True
-    return occ
-
-
-def _genus3_occ():
-    occ = np.ones((7, 3, 1), dtype=bool)
-    occ[1::2, 1] = False
-    return occ
 
 
 def _l_occ(arm, depth):
@@ -263,7 +225,7 @@ def _box_voxel_truth(occ, q, h):
 
 @pytest.mark.parametrize("name", ["grate", "hollow_box", "cup"])
 def test_fcl_solid_matches_exact_box_geometry(name):
-    occ = {"grate": _grate_occ(2), "hollow_box": _hollow_occ(), "cup": _cup_occ()}[name]
+    occ = {"grate": zoo.grate_occupancy(2), "hollow_box": zoo.hollow_box_occupancy(), "cup": zoo.cup_occupancy()}[name]
     V, F = zoo.voxel_solid(occ)
     h = 0.1875  # dyadic: the snapped robot is exactly [-h, h]^3
     rv, rf = box_robot(2 * h)
