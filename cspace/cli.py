@@ -44,6 +44,15 @@ def _operands(args: argparse.Namespace, a_points):
     return grid, B
 
 
+def _closed_operands(args: argparse.Namespace):
+    """A (a validated closed mesh), the grid and B for the subcommands on a closed mesh A."""
+    from .mesh import ClosedMesh
+
+    A0 = ClosedMesh.load(args.a)
+    grid, B = _operands(args, A0.vertices)
+    return A0.on_grid(grid), grid, B
+
+
 def _timed(fn, *operands, **options):
     t = time.perf_counter()
     out = fn(*operands, **options)
@@ -74,12 +83,9 @@ def _convex_sum(args: argparse.Namespace) -> int:
 
 
 def _sum(args: argparse.Namespace) -> int:
-    from .mesh import ClosedMesh
     from .trim import minkowski_sum
 
-    A0 = ClosedMesh.load(args.a)
-    grid, B = _operands(args, A0.vertices)
-    A = A0.on_grid(grid)
+    A, grid, B = _closed_operands(args)
 
     def progress(stage: str, fraction: float) -> None:
         if not args.quiet:
@@ -106,12 +112,9 @@ def _sum(args: argparse.Namespace) -> int:
 def _superset(args: argparse.Namespace) -> int:
     import trimesh
 
-    from .mesh import ClosedMesh
     from .superset import SUPERSET_KINDS, minkowski_superset
 
-    A0 = ClosedMesh.load(args.a)
-    grid, B = _operands(args, A0.vertices)
-    A = A0.on_grid(grid)
+    A, grid, B = _closed_operands(args)
     S, dt = _timed(minkowski_superset, A, B)
     kinds = ", ".join(f"{int((S.kind == k).sum())} {name}" for k, name in enumerate(SUPERSET_KINDS))
     corner = S.multiplicity[S.kind == SUPERSET_KINDS.index("corner")]
