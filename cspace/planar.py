@@ -309,9 +309,12 @@ def _box_candidates(ids: list, boxes: dict):
     """Pairs ``(i, j)`` (``i`` before ``j`` in ``ids``) whose closed integer boxes
     ``(x0, x1, y0, y1)`` meet: a double loop for few segments, a sort-and-sweep otherwise."""
     n = len(ids)
+    if n < max(_SWEEP_FROM, 2):
+        yield from _box_candidates_slow(ids, boxes)
+        return
     B = np.array([boxes[i] for i in ids], dtype=object).reshape(-1, 4)
-    if n < max(_SWEEP_FROM, 2) or max(abs(int(B.min())), abs(int(B.max()))) >= 2**28:
-        yield from _box_candidates_slow(ids, boxes)  # few segments, or beyond the grid's range
+    if max(abs(int(B.min())), abs(int(B.max()))) >= 2**28:
+        yield from _box_candidates_slow(ids, boxes)  # beyond the grid's range: stay exact
         return
     B = B.astype(np.int64)
     zero = np.zeros((n, 1), dtype=np.int64)
