@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 from functools import cached_property, cmp_to_key
 from math import gcd
+from pathlib import Path
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -213,13 +214,50 @@ def minkowski_sum(A, B, *, progress=None) -> SumPolyhedron:
         Bad operands (open, non-manifold, NaN, ...), or B not convex (``NotConvexError``).
     """
     t0 = time.perf_counter()
-    Bc = _convex_operand(B, "B")
+    A, B = _loaded(A), _loaded(B)
+    # Snap both operands once, on one grid for both (snapping on separate grids and then
+    # re-snapping onto the common one would move points twice, beyond the stated bound).
+    grid = _shared_grid(A, B)
+    Bc = _convex_operand(B, "B", grid)
     if Bc is None:
         raise NotConvexError("B must be convex (the robot of a translational C-obstacle)")
-    Ac = _convex_operand(A, "A")
+    Ac = _convex_operand(A, "A", grid)
     if Ac is not None:
         return _from_convex(Ac, Bc, t0)
-    return _trim(as_mesh(A, name=getattr(A, "name", None) or "A"), Bc, t0, progress)
+    return _trim(as_mesh(A, grid=grid, name=getattr(A, "name", None) or "A"), Bc, t0, progress)
+
+
+def _loaded(obj):
+    """A mesh file path loaded (trimesh, no processing); anything else unchanged."""
+    if isinstance(obj, (str, Path)):
+        import trimesh
+
+        mesh = trimesh.load(obj, force="mesh", process=False)
+        mesh.metadata["name"] = Path(obj).name
+        return mesh
+    return obj
+
+
+def _raw_points(obj) -> np.ndarray | None:
+    """Unsnapped float vertices of an operand, or None when it already lives on a grid."""
+    if isinstance(obj, (ClosedMesh, ConvexPolytope)):
+        return None
+    if isinstance(obj, np.ndarray):
+        return obj
+    if isinstance(obj, (tuple, list)) and len(obj) == 2:
+        return np.asarray(obj[0], dtype=np.float64)
+    if hasattr(obj, "vertices"):
+        return np.asarray(obj.vertices, dtype=np.float64)
+    return None
+
+
+def _shared_grid(A, B) -> Grid | None:
+    """One grid for two unsnapped operands (None: let the operands' own grids decide)."""
+    a, b = _raw_points(A), _raw_points(B)
+    if a is None or b is None:
+        return None
+    return Grid.for_points(np.asarray(a, dtype=np.float64).reshape(-1, 3),
+                           np.asarray(b, dtype=np.float64).reshape(-1, 3))
 
 
 # --------------------------------------------------------------------------------------------
