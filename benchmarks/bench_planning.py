@@ -90,12 +90,9 @@ def _fcl_checker_class():
 def _setup(cs, bounds, checker_kind):
     from ompl import base as ob
 
-    space = ob.RealVectorStateSpace(3)
-    rb = ob.RealVectorBounds(3)
-    for k in range(3):
-        rb.setLow(k, float(bounds[0][k]))
-        rb.setHigh(k, float(bounds[1][k]))
-    space.setBounds(rb)
+    from cspace.ompl_plugin import state_space
+
+    space = state_space(bounds)
     si = ob.SpaceInformation(space)
     if checker_kind == "ours":
         chk = _classes()["CSpaceValidityChecker"](si, cs, bounds=bounds)

@@ -569,7 +569,6 @@ class _Shells:
 
     of: np.ndarray
     n: int
-    nonmanifold: np.ndarray  # edges with more than two incident half-planes
 
 
 def _cross(a, b):
@@ -668,7 +667,7 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     n_nodes = 2 * len(cx.face_plane)
     g = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n_nodes, n_nodes))
     n, of = connected_components(g, directed=False)
-    return _Shells(of=of.astype(np.int64), n=int(n), nonmanifold=many)
+    return _Shells(of=of.astype(np.int64), n=int(n))
 
 
 def _anchor(cx: _Complex, planes: _Planes, S: Superset, B: ConvexPolytope) -> int:

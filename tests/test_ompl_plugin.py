@@ -138,12 +138,9 @@ def test_window_discrete_validation_clips_exact_does_not(scenes, capsys):
 def _si(cs, bounds):
     from ompl import base as ob
 
-    space = ob.RealVectorStateSpace(3)
-    rb = ob.RealVectorBounds(3)
-    for k in range(3):
-        rb.setLow(k, float(bounds[0][k]))
-        rb.setHigh(k, float(bounds[1][k]))
-    space.setBounds(rb)
+    from cspace.ompl_plugin import state_space
+
+    space = state_space(bounds)
     return ob.SpaceInformation(space)
 
 

@@ -10,6 +10,7 @@ Both use ``axes=False``: meshcat's axes are red/green/blue lines whose hues over
 from __future__ import annotations
 
 import base64
+import importlib.util
 import colorsys
 import os
 import re
@@ -30,10 +31,12 @@ from cspace import viz
 from cspace.superset import SUPERSET_KINDS, minkowski_superset
 
 SIZE = (1024, 768)
-REFERENCE = np.array([0.1, 0.0, 0.0])
-PATH = np.array([
-    [-2.2, 0.6, 0.3], [-1.6, -1.5, 0.6], [0.0, -1.9, 0.7], [1.6, -1.5, 0.6], [2.2, 0.6, 0.3],
-])
+# The example's own scene (examples/view_convex.py): the test draws exactly what users see.
+_spec = importlib.util.spec_from_file_location(
+    "view_convex", Path(__file__).resolve().parents[1] / "examples" / "view_convex.py")
+_example = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(_example)
+REFERENCE, PATH, outside_convex = _example.REFERENCE, _example.PATH, _example.outside_convex
 
 
 # --------------------------------------------------------------------------------------
@@ -41,23 +44,8 @@ PATH = np.array([
 
 
 def demo_parts():
-    """Rotated box O, ellipsoid-like robot R, CO = O ⊕ (−(R − c)), and a path outside CO."""
-    rng = np.random.default_rng(1)
-    rot = trimesh.transformations.random_rotation_matrix(rng.random(3))[:3, :3]
-    obstacle_pts = trimesh.creation.box((2.0, 1.0, 0.5)).vertices @ rot.T
-    sphere = trimesh.creation.icosphere(subdivisions=1, radius=0.3).vertices
-    robot_pts = sphere * [1.0, 0.6, 1.4] + REFERENCE
-    grid = cspace.Grid.for_points(obstacle_pts, robot_pts)
-    O = cspace.ConvexPolytope.from_points(obstacle_pts, grid=grid, name="box")
-    R = cspace.ConvexPolytope.from_points(robot_pts, grid=grid, name="robot")
-    CO = cspace.convex_minkowski_sum(O, R.reflected(REFERENCE))
-    return O, R, CO
-
-
-def outside_convex(vertices, faces, points):
-    a, b, c = (vertices[faces[:, i]] for i in range(3))
-    n = np.cross(b - a, c - a)
-    return ((points @ n.T - (n * a).sum(axis=1)) > 1e-9 * np.abs(n).sum(axis=1)).any(axis=1)
+    """Rotated box O, ellipsoid-like robot R, CO = O ⊕ (−(R − c)) (the example's scene)."""
+    return _example.demo_scene()[:3]
 
 
 def demo_view() -> viz.SceneView:
