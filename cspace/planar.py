@@ -35,6 +35,7 @@ __all__ = [
     "Coverage",
     "MergeResult",
     "polygon_coverage",
+    "sampled_coverage",
     "merge_coplanar",
     "to_point",
     "project_homogeneous",
@@ -170,12 +171,39 @@ def _hom(p) -> tuple[int, int, int]:
     return (x.numerator * (w // b), y.numerator * (w // d), w)
 
 
+class _Ratio:
+    """The exact number ``n / d`` (``d > 0``), compared by cross-multiplication: the tie-breaker
+    of :func:`_float_key`, cheaper than a :class:`Fraction` (no gcd on construction)."""
+
+    __slots__ = ("n", "d")
+
+    def __init__(self, n: int, d: int):
+        self.n, self.d = n, d
+
+    def __lt__(self, o) -> bool:
+        return self.n * o.d < o.n * self.d
+
+    def __gt__(self, o) -> bool:
+        return self.n * o.d > o.n * self.d
+
+    def __le__(self, o) -> bool:
+        return self.n * o.d <= o.n * self.d
+
+    def __ge__(self, o) -> bool:
+        return self.n * o.d >= o.n * self.d
+
+    def __eq__(self, o) -> bool:
+        return self.n * o.d == o.n * self.d
+
+    __hash__ = None
+
+
 def _float_key(h) -> tuple:
-    """Order-exact comparison keys of a homogeneous point's coordinates: ``(float, Fraction)``
-    per coordinate. Rounding is monotone, so the floats never reverse an order; the
-    Fractions decide when they tie."""
-    x, y = Fraction(h[0], h[2]), Fraction(h[1], h[2])
-    return ((float(x), x), (float(y), y))
+    """Order-exact comparison keys of a homogeneous point's coordinates: ``(float, exact)``
+    per coordinate. Python's int division is correctly rounded, hence monotone: the floats
+    never reverse an order, and the exact parts decide when they tie."""
+    X, Y, W = h
+    return ((X / W, _Ratio(X, W)), (Y / W, _Ratio(Y, W)))
 
 
 def _hpoint(p) -> tuple[int, int, int]:
@@ -673,6 +701,28 @@ class Arrangement2D:
                 return ((xa + xb) / 2, ym)
         raise AssertionError("no interior sample found")  # pragma: no cover
 
+    def _inner_point(self, face: Face) -> tuple[int, int, int]:
+        """Homogeneous integer point in the open face (possibly an isolated vertex): the
+        centroid of a strictly convex corner's triangle when the face is convex without holes,
+        else :attr:`Face.sample`."""
+        if not face.holes:
+            H, origin = self._H, self.half_edge_origin
+            cyc = [H[origin[h]] for h in face.outer]
+            n = len(cyc)
+            best = None
+            for k in range(n):
+                o = _horient(cyc[k - 1], cyc[k], cyc[(k + 1) % n])
+                if o < 0:
+                    break
+                if o > 0 and best is None:
+                    best = k
+            else:
+                if best is not None:
+                    (xa, ya, wa), (xb, yb, wb), (xc, yc, wc) = cyc[best - 1], cyc[best], cyc[(best + 1) % n]
+                    return _hnorm(xa * wb * wc + xb * wa * wc + xc * wa * wb,
+                                  ya * wb * wc + yb * wa * wc + yc * wa * wb, 3 * wa * wb * wc)
+        return _hom(face.sample)
+
     # ---------------------------------------------------------------- queries
 
     def cycle_vertices(self, cycle) -> list:
@@ -849,9 +899,12 @@ def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
         delta = total = 0
         for lab in arr.edge_labels[k]:
             if lab[0] >= 0:
-                step = weights[lab[0]] * (1 if _dot(dirs[lab], d) > 0 else -1)
-                delta += step
-                total += abs(step) * turn[lab[0]] * (1 if step > 0 else -1)
+                along = 1 if _dot(dirs[lab], d) > 0 else -1
+                w = weights[lab[0]]
+                delta += w * along
+                # entering the polygon (its inside is on the left: counter-clockwise and
+                # crossed along, or clockwise and crossed against) adds |w|
+                total += abs(w) * turn[lab[0]] * along
         left, right = arr.edge_faces[k]
         left, right = int(left), int(right)
         adj.setdefault(right, []).append((left, delta, total))
@@ -868,6 +921,82 @@ def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
             elif cov[g] != (c + d, a + t):  # pragma: no cover - impossible for closed polylines
                 raise AssertionError("inconsistent coverage propagation")
     return Coverage(arr, [cov[f][0] for f in range(nf)], [cov[f][1] for f in range(nf)])
+
+
+def _pushed_side(a, b, X: int, Y: int, W: int) -> int:
+    """Side of the point ``(X/W, Y/W) + eps * (1, eps)`` (eps -> 0+) of the directed line
+    ``a -> b`` (integer points, ``a != b``): +1 left, -1 right, never 0."""
+    ux, uy = b[0] - a[0], b[1] - a[1]
+    d = ux * (Y - a[1] * W) - uy * (X - a[0] * W)
+    if d:
+        return 1 if d > 0 else -1
+    # on the line: the push (1, eps) decides, first along x, then along y
+    return -1 if uy > 0 else (1 if uy < 0 else (1 if ux > 0 else -1))
+
+
+def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
+    """Net and unsigned coverage of the faces of the arrangement of ``segments`` by convex
+    oriented polygons, read at one point per face.
+
+    Unlike :func:`polygon_coverage` the polygon edges are not in the arrangement, so its faces
+    are not cut by them. The result is right only when the coverage is constant on every
+    face, i.e. when ``segments`` contain every point where the net or the unsigned coverage
+    changes: the caller's invariant (:mod:`cspace.trim` derives it from the closedness of the
+    superset). It is certified in part: the integral of the coverage over the faces must equal
+    ``sum_i weights[i] * signed_area(polygon_i)``, else :class:`ValueError`.
+
+    Parameters
+    ----------
+    polygons : sequence of sequences of integer pairs
+        Convex polygons (counter-clockwise ones count positively), at least three distinct
+        vertices each, integer coordinates.
+    weights : sequence of int
+        Integer weight per polygon.
+    segments, labels
+        As for :class:`Arrangement2D`.
+
+    Returns
+    -------
+    Coverage
+        ``coverage[f] = sum_i weights[i] * winding(polygon_i, q_f)`` and ``support[f] =
+        sum_i |weights[i] * winding(polygon_i, q_f)|`` at ``q_f = sample_f + eps * (1, eps)``
+        (the push moves a sample lying on a polygon edge off it, into the face).
+    """
+    polys = [[(int(p[0]), int(p[1])) for p in poly] for poly in polygons]
+    weights = [int(w) for w in weights]
+    if len(weights) != len(polys):
+        raise ValueError("weights must have one entry per polygon")
+    arr = Arrangement2D(segments, labels)
+    turn = []
+    box = np.empty((len(polys), 4), dtype=np.float64)
+    for i, poly in enumerate(polys):
+        turn.append(_hturn([(x, y, 1) for x, y in poly]))
+        xs, ys = [p[0] for p in poly], [p[1] for p in poly]
+        box[i] = (min(xs), max(xs), min(ys), max(ys))
+    nf = len(arr.faces)
+    coverage, support = [0] * nf, [0] * nf
+    integral = 0
+    for f, face in enumerate(arr.faces):
+        X, Y, w = arr._inner_point(face)
+        xf, yf = X / w, Y / w
+        # conservative box filter: floats are within an ulp; integer boxes, margin 1
+        near = np.nonzero((box[:, 0] <= xf + 1) & (xf - 1 <= box[:, 1])
+                          & (box[:, 2] <= yf + 1) & (yf - 1 <= box[:, 3]))[0]
+        c = s = 0
+        for i in near.tolist():
+            poly, t = polys[i], turn[i]
+            n = len(poly)
+            if all(_pushed_side(poly[k], poly[(k + 1) % n], X, Y, w) == t for k in range(n)):
+                c += weights[i] * t
+                s += abs(weights[i])
+        coverage[f], support[f] = c, s
+        integral += c * face.area
+    expected = sum(wi * _signed_area([(Fraction(p[0]), Fraction(p[1])) for p in poly])
+                   for wi, poly in zip(weights, polys))
+    if integral != expected:
+        raise ValueError("the coverage is not constant on the faces: the segments miss a place "
+                         "where it changes")
+    return Coverage(arr, coverage, support)
 
 
 def merge_coplanar(polygons, weights=None) -> MergeResult:
@@ -939,14 +1068,15 @@ def _in_cone(d, a, b) -> bool:
 
 
 def _proper_cross(a, b, c, d) -> bool:
-    """Do the open segments ``ab`` and ``cd`` cross at a single interior point of both."""
-    o1, o2 = _orient(a, b, c), _orient(a, b, d)
-    o3, o4 = _orient(c, d, a), _orient(c, d, b)
+    """Do the open segments ``ab`` and ``cd`` (homogeneous points) cross at a single interior
+    point of both."""
+    o1, o2 = _horient(a, b, c), _horient(a, b, d)
+    o3, o4 = _horient(c, d, a), _horient(c, d, b)
     return o1 * o2 < 0 and o3 * o4 < 0
 
 
 def _in_closed_triangle(p, a, b, c) -> bool:
-    return _orient(a, b, p) >= 0 and _orient(b, c, p) >= 0 and _orient(c, a, p) >= 0
+    return _horient(a, b, p) >= 0 and _horient(b, c, p) >= 0 and _horient(c, a, p) >= 0
 
 
 def _bridge_ok(P, i, H, j, others) -> bool:
@@ -954,17 +1084,17 @@ def _bridge_ok(P, i, H, j, others) -> bool:
     o, h = P[i], H[j]
     if o == h:
         return False
-    d = _sub(h, o)
-    if not _in_cone(d, _sub(P[(i + 1) % len(P)], o), _sub(P[i - 1], o)):
+    d = _hdir(o, h)
+    if not _in_cone(d, _hdir(o, P[(i + 1) % len(P)]), _hdir(o, P[i - 1])):
         return False
-    e = _sub(o, h)
-    if not _in_cone(e, _sub(H[(j + 1) % len(H)], h), _sub(H[j - 1], h)):
+    e = _hdir(h, o)
+    if not _in_cone(e, _hdir(h, H[(j + 1) % len(H)]), _hdir(h, H[j - 1])):
         return False
     for ring in others:
         n = len(ring)
         for k in range(n):
             a, b = ring[k], ring[(k + 1) % n]
-            if a != o and a != h and point_on_segment(a, o, h):
+            if a != o and a != h and _hon_segment(a, o, h):
                 return False
             if _proper_cross(a, b, o, h):
                 return False
@@ -972,16 +1102,17 @@ def _bridge_ok(P, i, H, j, others) -> bool:
 
 
 def _ear_ok(poly, i) -> bool:
+    """The general ear test (repeated vertices allowed, e.g. after bridging holes)."""
     n = len(poly)
     p, v, q = poly[i - 1], poly[i], poly[(i + 1) % n]
-    if _orient(p, v, q) <= 0:
+    if _horient(p, v, q) <= 0:
         return False
     corners = (p, v, q)
     ears = {(i - 1) % n, i}  # edge k joins poly[k] -> poly[k + 1]
     cones = {
-        v: (_sub(q, v), _sub(p, v)),
-        p: (_sub(v, p), _sub(q, p)),
-        q: (_sub(p, q), _sub(v, q)),
+        v: (_hdir(v, q), _hdir(v, p)),
+        p: (_hdir(p, v), _hdir(p, q)),
+        q: (_hdir(q, p), _hdir(q, v)),
     }
     for k in range(n):
         a, b = poly[k], poly[(k + 1) % n]
@@ -994,21 +1125,115 @@ def _ear_ok(poly, i) -> bool:
         for s, t in ((a, b), (b, a)):
             if s in cones and t != s:
                 lo, hi = cones[s]
-                d = _sub(t, s)
+                d = _hdir(s, t)
                 if _cross(lo, d) > 0 and _cross(d, hi) > 0:
                     return False
     return True
 
 
-def _common_scale(arr: Arrangement2D, ids) -> dict:
-    """Integer points of the vertices ``ids``: their homogeneous coordinates over one common
-    denominator (a similarity of the plane, so every orientation sign is kept)."""
-    H = arr._H
-    den = 1
-    for v in set(ids):
-        w = H[v][2]
-        den = den * w // gcd(den, w)
-    return {v: (H[v][0] * (den // H[v][2]), H[v][1] * (den // H[v][2])) for v in ids}
+def _straight_runs(ring: list, H: list, runs: dict, uses: dict) -> list:
+    """Drop the vertices where a cycle goes straight on (collinear, same direction) and which
+    no other cycle or other visit uses (``uses[v] == 1``); record each dropped run in
+    ``runs[(a, b)]`` under the directed edge ``a -> b`` of the corners around it. Returns the
+    corners, ``[]`` if fewer than three are left."""
+    n = len(ring)
+    keep = []
+    for k in range(n):
+        a, v, b = H[ring[k - 1]], H[ring[k]], H[ring[(k + 1) % n]]
+        if uses[ring[k]] > 1 or _horient(a, v, b) != 0 or _dot(_hdir(a, v), _hdir(v, b)) <= 0:
+            keep.append(k)
+    if len(keep) < 3:
+        return []
+    for x, y in zip(keep, keep[1:] + keep[:1]):
+        between = [ring[k % n] for k in range(x + 1, y if y > x else y + n)]
+        if between:
+            runs[(ring[x], ring[y])] = between
+    return [ring[k] for k in keep]
+
+
+def _clip_simple(P: list, ids: list):
+    """Ear clipping of a simple counter-clockwise polygon (distinct vertices): an ear is a
+    convex corner whose closed triangle holds no other non-convex vertex (a vertex inside a
+    simple polygon's ear triangle implies a reflex one inside). Returns the triangles, or None
+    when it stalls (degenerate input: the caller falls back to the general test)."""
+    n = len(P)
+    prv = [k - 1 for k in range(n)]
+    prv[0] = n - 1
+    nxt = [k + 1 for k in range(n)]
+    nxt[-1] = 0
+
+    def convex(k):
+        return _horient(P[prv[k]], P[k], P[nxt[k]]) > 0
+
+    conv = [convex(k) for k in range(n)]
+    reflex = {k for k in range(n) if not conv[k]}
+    tris = []
+    k, left, stall = 0, n, 0
+    while left > 3:
+        p, q = prv[k], nxt[k]
+        if conv[k] and not any(
+            r != p and r != q and _in_closed_triangle(P[r], P[p], P[k], P[q]) for r in reflex
+        ):
+            tris.append((ids[p], ids[k], ids[q]))
+            nxt[p], prv[q] = q, p
+            reflex.discard(k)
+            left -= 1
+            for j in (p, q):
+                conv[j] = convex(j)
+                if conv[j]:
+                    reflex.discard(j)
+                else:
+                    reflex.add(j)
+            k, stall = p, 0
+        else:
+            k, stall = nxt[k], stall + 1
+            if stall > left:
+                return None
+    p, q = prv[k], nxt[k]
+    if _horient(P[p], P[k], P[q]) > 0:
+        tris.append((ids[p], ids[k], ids[q]))
+    return tris
+
+
+def _clip_general(P: list, ids: list) -> list:
+    tris = []
+    P, ids = list(P), list(ids)
+    while len(P) > 3:
+        n = len(P)
+        for i in range(n):
+            if _ear_ok(P, i):
+                tris.append((ids[i - 1], ids[i], ids[(i + 1) % n]))
+                del P[i]
+                del ids[i]
+                break
+        else:
+            if _hturn(P) == 0:
+                return tris
+            raise AssertionError("ear clipping found no ear")  # pragma: no cover
+    if len(P) == 3 and _horient(*P) > 0:
+        tris.append(tuple(ids))
+    return tris
+
+
+def _split_runs(tris: list, runs: dict) -> list:
+    """Put the dropped straight-run vertices back: a triangle with a boundary edge ``a -> b``
+    carrying a run is fanned from its opposite corner (the run lies on that edge, so no
+    T-junction is left)."""
+    if not runs:
+        return tris
+    out, work = [], list(tris)
+    while work:
+        t = work.pop()
+        for k in range(3):
+            a, b, c = t[k], t[(k + 1) % 3], t[(k + 2) % 3]
+            run = runs.get((a, b))
+            if run:
+                chain = [a, *run, b]
+                work.extend((x, y, c) for x, y in zip(chain, chain[1:]))
+                break
+        else:
+            out.append(t)
+    return out
 
 
 def triangulate_face(arr: Arrangement2D, f: int) -> list:
@@ -1021,28 +1246,42 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
     isolated vertices carry no area and are *not* constraints: their vertices may lie inside
     a triangle or on one of its edges.
 
-    Algorithm: strip dangling excursions from the cycles, bridge each hole to the outer polygon
-    by a segment joining two mutually visible vertex occurrences (exact cone and crossing tests;
-    holes that only see other holes wait for a later round), then ear clipping whose ear test
-    rejects any vertex in the closed ear, any edge crossing its diagonal and any edge leaving a
-    corner into its interior. O(n^3) in the number n of boundary vertices; for small faces.
+    Algorithm (homogeneous integer points, exact predicates): strip dangling excursions from
+    the cycles and set aside the vertices where a cycle goes straight on; bridge each hole to
+    the outer polygon by a segment joining two mutually visible vertex occurrences (exact cone
+    and crossing tests; holes that only see other holes wait for a later round); ear clipping
+    (simple polygons: convex corners tested against the non-convex vertices only; after
+    bridging, an ear test that also rejects any edge crossing the diagonal and any edge
+    leaving a corner into the ear); last, each set-aside run is put back by fanning the
+    triangle on its edge from the opposite corner. About O(n r) predicates for n corners and r
+    non-convex ones on simple faces, O(n^3) with holes.
     """
     face = arr.faces[f]
-    poly = _strip_spikes(arr.cycle_vertices(face.outer))
-    holes = [h for h in (_strip_spikes(arr.cycle_vertices(c)) for c in face.holes) if h]
-    V = _common_scale(arr, [*poly, *(v for h in holes for v in h)])
-    P = [V[v] for v in poly]
+    H = arr._H
+    rings = [_strip_spikes(arr.cycle_vertices(c)) for c in [face.outer, *face.holes]]
+    uses: dict = {}
+    for ring in rings:
+        for v in ring:
+            uses[v] = uses.get(v, 0) + 1
+    runs: dict = {}
+    rings = [_straight_runs(ring, H, runs, uses) for ring in rings]
+    poly, holes = rings[0], [h for h in rings[1:] if h]
+    if not poly:
+        return []
+    P = [H[v] for v in poly]
     ids = list(poly)
-    pending = [([V[v] for v in h], list(h)) for h in holes]
+    pending = [([H[v] for v in h], list(h)) for h in holes]
     while pending:
         others = [P] + [hp for hp, _ in pending]
         done = False
         for hi, (HP, Hid) in enumerate(pending):
-            cands = [
-                (_dot(_sub(HP[j], P[i]), _sub(HP[j], P[i])), i, j)
+            # nearest pairs first (a heuristic order: any visible pair is correct)
+            fp = [(x / w, y / w) for x, y, w in P]
+            fh = [(x / w, y / w) for x, y, w in HP]
+            cands = sorted(
+                ((fh[j][0] - fp[i][0]) ** 2 + (fh[j][1] - fp[i][1]) ** 2, i, j)
                 for i in range(len(P)) for j in range(len(HP))
-            ]
-            cands.sort()
+            )
             for _, i, j in cands:
                 if _bridge_ok(P, i, HP, j, others):
                     P = P[: i + 1] + HP[j:] + HP[:j] + [HP[j], P[i]] + P[i + 1:]
@@ -1054,19 +1293,9 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
                 break
         if not done:  # pragma: no cover - a visible pair always exists
             raise AssertionError("no bridge found for a hole")
-    tris = []
-    while len(P) > 3:
-        n = len(P)
-        for i in range(n):
-            if _ear_ok(P, i):
-                tris.append((ids[i - 1], ids[i], ids[(i + 1) % n]))
-                del P[i]
-                del ids[i]
-                break
-        else:
-            if _signed_area(P) == 0:
-                return tris
-            raise AssertionError("ear clipping found no ear")  # pragma: no cover
-    if len(P) == 3 and _orient(*P) > 0:
-        tris.append(tuple(ids))
-    return tris
+    tris = None
+    if len(set(ids)) == len(ids):
+        tris = _clip_simple(P, ids)
+    if tris is None:
+        tris = _clip_general(P, ids)
+    return _split_runs(tris, runs)

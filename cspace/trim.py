@@ -27,7 +27,14 @@ from .convex import ConvexPolytope, convex_minkowski_sum
 from .errors import ExactnessError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
-from .planar import _hom, polygon_coverage, project_homogeneous, triangulate_face, winding_number
+from .planar import (
+    _hom,
+    polygon_coverage,
+    project_homogeneous,
+    sampled_coverage,
+    triangulate_face,
+    winding_number,
+)
 from .superset import Superset, minkowski_superset
 
 __all__ = ["SumPolyhedron", "minkowski_sum"]
@@ -475,6 +482,29 @@ def _lift(H, key, ax: int) -> tuple:
     return (P[0] // g, P[1] // g, P[2] // g, W // g)
 
 
+def _pinned_edges(planes: _Planes) -> np.ndarray:
+    """``pinned[3 t + j]``: edge ``j`` (corners ``j -> j + 1``) of triangle ``t`` is, by its
+    labels, also an edge of a triangle of another plane. Such a pair is SHARED_EDGE for
+    :func:`intersect_pairs`, so no cut marks the edge: it must stay in its plane's
+    arrangement."""
+    F = planes.faces
+    u = F.reshape(-1)
+    v = F[:, [1, 2, 0]].reshape(-1)
+    lo, hi = np.minimum(u, v), np.maximum(u, v)
+    pl = np.repeat(planes.plane, 3)
+    order = np.lexsort((pl, hi, lo))
+    lo_s, hi_s, pl_s = lo[order], hi[order], pl[order]
+    new = np.ones(len(order), dtype=bool)
+    new[1:] = (lo_s[1:] != lo_s[:-1]) | (hi_s[1:] != hi_s[:-1])
+    group = np.cumsum(new) - 1
+    first = np.nonzero(new)[0]
+    last = np.append(first[1:], len(order)) - 1
+    mixed = pl_s[first] != pl_s[last]  # sorted by plane inside each group
+    pinned = np.empty(len(order), dtype=bool)
+    pinned[order] = mixed[group]
+    return pinned
+
+
 def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex:
     vid: dict = {}
     eid: dict = {}
@@ -487,6 +517,8 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex
     facet_of = planes.facet.tolist()
     n_planes = len(planes.keys)
     face_tri = []
+    sign_of = planes.sign.tolist()
+    pinned = _pinned_edges(planes).tolist()
     for p in range(n_planes):
         ax = int(planes.axis[p])
         a, b = (ax + 1) % 3, (ax + 2) % 3
@@ -515,7 +547,22 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex
         polys = [[(c[a], c[b], 1) for c in corners_of[t]] for t in tl]
         weights = [weights_of[t] for t in tl]
         segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in cuts.segments[p]]
-        cov = polygon_coverage(polys, weights, segs)
+        # The net coverage changes only where another plane's sheet meets this one
+        # (closedness of the superset): along the cuts and the edges shared by label with
+        # other planes' triangles. Where the net coverage is 0, the sheets of one orientation
+        # cover exactly where those of the other do, so the edges of the less frequent
+        # orientation bound the kept (support != 0) part. Other triangle edges stay out.
+        sg = [sign_of[t] for t in tl]
+        minority = -1 if sg.count(1) >= sg.count(-1) else 1
+        pin = [(i, j) for i, t in enumerate(tl) for j in range(3) if pinned[3 * t + j] or sg[i] == minority]
+        seg2 = [(polys[i][j], polys[i][(j + 1) % 3]) for i, j in pin] + segs
+        lab2 = pin + [(-1, k) for k in range(len(segs))]
+        try:
+            cov = sampled_coverage(polys, weights, seg2, lab2)
+        except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
+            cov = None
+        if cov is None:
+            cov = polygon_coverage(polys, weights, segs)
         arr = cov.arrangement
         key = planes.keys[p]
         gid = [-1] * len(arr.vertices)

@@ -14,6 +14,7 @@ from cspace.planar import (
     point_on_segment,
     polygon_coverage,
     project_homogeneous,
+    sampled_coverage,
     to_point,
     triangulate_face,
     winding_number,
@@ -423,6 +424,9 @@ def test_coverage_brute_force(polys, weights):
     check_arrangement(arr)
     for f, face in enumerate(arr.faces):
         assert cov.coverage[f] == brute_coverage(polys, weights, face.sample)
+        if all(len(set(q)) == len(q) == 3 for q in polys):  # simple: support is defined
+            assert cov.support[f] == sum(abs(w * winding_number([to_point(q) for q in poly], face.sample))
+                                         for poly, w in zip(polys, weights))
     assert brute_coverage(polys, weights, arr.unbounded.sample) == 0
     # integral of the coverage = weighted sum of signed areas
     total = sum((c * f.area for c, f in zip(cov.coverage, arr.faces)), Fr(0))
@@ -518,3 +522,67 @@ def test_triangulate_random(segs):
 @given(st.lists(poly, min_size=1, max_size=3))
 def test_triangulate_polygon_unions(polys):
     check_triangulation(polygon_coverage(polys).arrangement)
+
+
+def test_triangulate_straight_runs():
+    """Long runs of collinear boundary vertices (cut points on a facet's edge) are set aside
+    for the ear clipping and put back by fans: still a tiling with every boundary vertex a
+    corner, also when a run vertex is where a hole touches the outer boundary."""
+    ticks = [((k, 0), (k, -1)) for k in range(1, 20)] + [((0, k), (-1, k)) for k in range(1, 20)]
+    hole = ring([(5, 5), (10, 5), (10, 10), (5, 10)]) + [((7, 5), (7, 6)), ((8, 10), (8, 9))]
+    cases = [
+        ring(square(0, 0, 20)) + ticks,
+        ring(square(0, 0, 20)) + ticks + hole,
+        ring(square(0, 0, 20)) + ticks + ring([(4, 0), (6, 3), (2, 3)]),  # touches a run vertex
+        ring([(0, 0), (20, 0), (20, 20), (10, 1), (0, 20)]) + ticks,  # deep reflex corner
+    ]
+    for segs in cases:
+        arr = Arrangement2D(segs)
+        check_triangulation(arr)
+    arr = Arrangement2D(cases[0])
+    big = max(range(len(arr.faces)), key=lambda f: arr.faces[f].area)
+    assert len(triangulate_face(arr, big)) == 4 + 2 * 19 - 2  # n - 2 for the 42-gon
+
+
+def _covered_edges(polys):
+    return [(p[k], p[(k + 1) % len(p)]) for p in polys for k in range(len(p))]
+
+
+@given(st.lists(st.tuples(pt, pt, pt), min_size=1, max_size=4),
+       st.lists(st.integers(-2, 2), min_size=4, max_size=4))
+def test_sampled_coverage_matches_polygon_coverage(tris, weights):
+    """With every polygon edge among the segments the coverage is constant on each face; the
+    sampled values must then equal the propagated ones face by face."""
+    tris = [t for t in tris if _orient(*map(to_point, t)) != 0]
+    if not tris:
+        return
+    weights = weights[: len(tris)]
+    ref = polygon_coverage(tris, weights)
+    got = sampled_coverage(tris, weights, _covered_edges(tris))
+    assert len(got.arrangement.faces) == len(ref.arrangement.faces)
+    for f, face in enumerate(got.arrangement.faces):
+        g = ref.arrangement.locate(face.sample)
+        assert got.coverage[f] == ref.coverage[g]
+        assert (got.support[f] != 0) == (ref.support[g] != 0)
+
+
+def test_sampled_coverage_without_inner_edges():
+    """Two triangles tiling a square, arranged by the square's boundary only: one face whose
+    sample may lie on the diagonal; the push (1, eps) moves it into exactly one triangle."""
+    tris = [[(0, 0), (4, 0), (4, 4)], [(0, 0), (4, 4), (0, 4)]]
+    cov = sampled_coverage(tris, [1, 1], ring(square(0, 0, 4)))
+    assert cov.coverage == [1] and cov.support == [1]
+    cov = sampled_coverage([t[::-1] for t in tris], [2, 2], ring(square(0, 0, 4)))
+    assert cov.coverage == [-2] and cov.support == [2]
+    # a point exactly on the diagonal, pushed to each side by its sign
+    cov = sampled_coverage(tris, [1, 3], ring(square(0, 0, 4)) + [((0, 0), (4, 4))])
+    assert sorted(cov.coverage) == [1, 3]
+
+
+def test_sampled_coverage_certificate():
+    """Segments that miss a place where the coverage changes are refused, not misread."""
+    tris = [[(0, 0), (4, 0), (0, 4)], [(1, 1), (2, 1), (1, 2)]]
+    with pytest.raises(ValueError, match="not constant"):
+        sampled_coverage(tris, [1, 1], ring(tris[0]))
+    cov = sampled_coverage(tris, [1, 1], ring(tris[0]) + ring(tris[1]))
+    assert sorted(cov.coverage) == [1, 2]
