@@ -36,6 +36,8 @@ __all__ = [
     "MergeResult",
     "polygon_coverage",
     "sampled_coverage",
+    "face_triangles",
+    "strict_inner_point",
     "merge_coplanar",
     "to_point",
     "project_homogeneous",
@@ -237,6 +239,13 @@ def _horient(a, b, c) -> int:
     return (d > 0) - (d < 0)
 
 
+def _hcentroid(a, b, c) -> tuple[int, int, int]:
+    """Canonical homogeneous centroid of three homogeneous points."""
+    (xa, ya, wa), (xb, yb, wb), (xc, yc, wc) = a, b, c
+    return _hnorm(xa * wb * wc + xb * wa * wc + xc * wa * wb,
+                  ya * wb * wc + yb * wa * wc + yc * wa * wb, 3 * wa * wb * wc)
+
+
 def _hcross3(u, v):
     return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
 
@@ -420,6 +429,7 @@ class Arrangement2D:
             labels = list(labels)
             if len(labels) != len(segs):
                 raise ValueError("labels must have one entry per segment")
+        self._tris: dict = {}  # face id -> triangles (face_triangles)
         self._build(segs, labels)
 
     # ---------------------------------------------------------------- construction
@@ -701,10 +711,12 @@ class Arrangement2D:
                 return ((xa + xb) / 2, ym)
         raise AssertionError("no interior sample found")  # pragma: no cover
 
-    def _inner_point(self, face: Face) -> tuple[int, int, int]:
-        """Homogeneous integer point in the open face (possibly an isolated vertex): the
-        centroid of a strictly convex corner's triangle when the face is convex without holes,
-        else :attr:`Face.sample`."""
+    def _inner_point(self, f: int) -> tuple[int, int, int]:
+        """Homogeneous integer point in the closure of face ``f``, in the open face up to an
+        isolated vertex or a dangling edge (enough to read a coverage that is constant on the
+        face): the centroid of a strictly convex corner's triangle when the face is convex
+        without holes, else of a triangle of :func:`face_triangles`."""
+        face = self.faces[f]
         if not face.holes:
             H, origin = self._H, self.half_edge_origin
             cyc = [H[origin[h]] for h in face.outer]
@@ -718,10 +730,9 @@ class Arrangement2D:
                     best = k
             else:
                 if best is not None:
-                    (xa, ya, wa), (xb, yb, wb), (xc, yc, wc) = cyc[best - 1], cyc[best], cyc[(best + 1) % n]
-                    return _hnorm(xa * wb * wc + xb * wa * wc + xc * wa * wb,
-                                  ya * wb * wc + yb * wa * wc + yc * wa * wb, 3 * wa * wb * wc)
-        return _hom(face.sample)
+                    return _hcentroid(cyc[best - 1], cyc[best], cyc[(best + 1) % n])
+        a, b, c = face_triangles(self, f)[0]
+        return _hcentroid(self._H[a], self._H[b], self._H[c])
 
     # ---------------------------------------------------------------- queries
 
@@ -977,7 +988,7 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
     coverage, support = [0] * nf, [0] * nf
     integral = 0
     for f, face in enumerate(arr.faces):
-        X, Y, w = arr._inner_point(face)
+        X, Y, w = arr._inner_point(f)
         xf, yf = X / w, Y / w
         # conservative box filter: floats are within an ulp; integer boxes, margin 1
         near = np.nonzero((box[:, 0] <= xf + 1) & (xf - 1 <= box[:, 1])
@@ -1299,3 +1310,31 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
     if tris is None:
         tris = _clip_general(P, ids)
     return _split_runs(tris, runs)
+
+
+def face_triangles(arr: Arrangement2D, f: int) -> list:
+    """:func:`triangulate_face`, computed once per face (cached on the arrangement); a
+    triangle face without holes is its own triangle."""
+    tris = arr._tris.get(f)
+    if tris is None:
+        face = arr.faces[f]
+        if not face.holes and len(face.outer) == 3:
+            tris = [tuple(arr.cycle_vertices(face.outer))]
+        else:
+            tris = triangulate_face(arr, f)
+        arr._tris[f] = tris
+    return tris
+
+
+def strict_inner_point(arr: Arrangement2D, f: int) -> tuple[int, int, int]:
+    """Canonical homogeneous point strictly inside face ``f``: on no edge and no vertex of
+    the arrangement (isolated vertices included). The centroid of a triangle of
+    :func:`face_triangles` when no dangling edge, bridge or isolated vertex lies in the face
+    (then nothing of the arrangement meets the open triangles), else :attr:`Face.sample`."""
+    face = arr.faces[f]
+    if not face.isolated:
+        hf = arr.half_edge_face
+        if all(hf[h] != hf[h ^ 1] for cyc in (face.outer, *face.holes) for h in cyc):
+            a, b, c = face_triangles(arr, f)[0]
+            return _hcentroid(arr._H[a], arr._H[b], arr._H[c])
+    return _hom(face.sample)

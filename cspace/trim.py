@@ -8,6 +8,8 @@ return a :class:`SumPolyhedron`.
 
 from __future__ import annotations
 
+import multiprocessing as mp
+import os
 import time
 from collections import deque
 from dataclasses import dataclass, field
@@ -28,11 +30,11 @@ from .errors import ExactnessError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
 from .planar import (
-    _hom,
+    face_triangles,
     polygon_coverage,
     project_homogeneous,
     sampled_coverage,
-    triangulate_face,
+    strict_inner_point,
     winding_number,
 )
 from .superset import Superset, minkowski_superset
@@ -198,7 +200,7 @@ def _from_convex(A: ConvexPolytope, B: ConvexPolytope, t0: float) -> SumPolyhedr
     )
 
 
-def minkowski_sum(A, B, *, progress=None) -> SumPolyhedron:
+def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPolyhedron:
     """Exact Minkowski sum ``A ⊕ B`` of a closed polyhedron A and a convex polytope B.
 
     Parameters
@@ -209,6 +211,10 @@ def minkowski_sum(A, B, *, progress=None) -> SumPolyhedron:
     B : ConvexPolytope, (n, 3) points (hulled) or a closed convex mesh
     progress : callable, optional
         Called as ``progress(stage: str, fraction: float)`` during long builds.
+    workers : int, optional
+        Processes for the per-plane arrangements (forked, Linux/macOS; the result does not
+        depend on it). Default: the CPUs this process may run on; 1 runs everything here.
+        Small builds stay in this process whatever the value.
 
     Returns
     -------
@@ -231,7 +237,8 @@ def minkowski_sum(A, B, *, progress=None) -> SumPolyhedron:
     Ac = _convex_operand(A, "A", grid)
     if Ac is not None:
         return _from_convex(Ac, Bc, t0)
-    return _trim(as_mesh(A, grid=grid, name=getattr(A, "name", None) or "A"), Bc, t0, progress)
+    return _trim(as_mesh(A, grid=grid, name=getattr(A, "name", None) or "A"), Bc, t0, progress,
+                 _workers(workers))
 
 
 def _loaded(obj):
@@ -298,7 +305,7 @@ def _shared_grid(A, B) -> Grid | None:
 # --------------------------------------------------------------------------------------------
 
 
-def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress) -> SumPolyhedron:
+def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 1) -> SumPolyhedron:
     stats: dict = {}
     report = progress or (lambda stage, fraction: None)
 
@@ -324,7 +331,7 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress) -> SumPolyhedro
     stats["candidate_pairs"] = cuts.n_pairs
     stats["cut_pairs"] = cuts.n_cut
 
-    cx = _complex(S.ints, planes, cuts, report)
+    cx, stats["arrangement_processes"] = _complex(S.ints, planes, cuts, report, workers)
     t = lap("arrangements", t)
     stats["subfacets"] = len(cx.face_plane)
 
@@ -443,27 +450,29 @@ def _cuts(ints: np.ndarray, planes: _Planes) -> _Cuts:
 
 @dataclass
 class _Complex:
-    """The sub-facets (faces of non-zero coverage of the plane arrangements) and their edges.
+    """The sub-facets (faces of non-zero support of the plane arrangements) and their edges.
 
     ``points[i]``: canonical ``(X, Y, Z, W)`` (Python ints, ``W > 0``, primitive) of global
-    vertex ``i`` in grid units. Sub-facet ``f`` is face ``face_local[f]`` of the arrangement of
-    plane ``face_plane[f]``, with net coverage ``face_cov[f]`` counted along
-    ``planes.normal(plane)``. Incidence ``k``: sub-facet ``inc_face[k]`` has a boundary
-    half-edge on edge ``inc_edge[k]`` (``edges[e] = (u, v)``, ``u < v``), running ``u -> v``
-    when ``inc_sign[k] = +1``; the sub-facet lies on its left seen from ``planes.normal``.
+    vertex ``i`` in grid units. Sub-facet ``f`` lies on plane ``face_plane[f]`` with net
+    coverage ``face_cov[f]`` counted along ``planes.normal(plane)``; ``face_tris[f]`` tiles it
+    with triangles (global ids, counter-clockwise about ``planes.normal``), ``face_src[f]`` is
+    a superset facet covering it and ``face_point[f]`` an exact homogeneous point strictly
+    inside it (on no edge or vertex of its arrangement). Incidence ``k``: sub-facet
+    ``inc_face[k]`` has a boundary half-edge on edge ``inc_edge[k]`` (``edges[e] = (u, v)``,
+    ``u < v``), running ``u -> v`` when ``inc_sign[k] = +1``; the sub-facet lies on its left
+    seen from ``planes.normal``.
     """
 
     points: list
     edges: np.ndarray
     face_plane: np.ndarray
-    face_local: np.ndarray
     face_cov: np.ndarray
     inc_face: np.ndarray
     inc_edge: np.ndarray
     inc_sign: np.ndarray
-    arrangements: list
-    global_ids: list
-    face_tri: list  # (superset triangle, ccw global ids) for a lone uncut triangle, else None
+    face_tris: list
+    face_src: np.ndarray
+    face_point: list
 
 
 def _lift(H, key, ax: int) -> tuple:
@@ -505,105 +514,204 @@ def _pinned_edges(planes: _Planes) -> np.ndarray:
     return pinned
 
 
-def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report) -> _Complex:
-    vid: dict = {}
-    eid: dict = {}
-    face_plane, face_local, face_cov = [], [], []
-    inc_face, inc_edge, inc_sign = [], [], []
-    arrangements, global_ids = [], []
-    F = planes.faces
-    corners_of = ints[F].tolist()  # Python ints: the loop below reads them per triangle
-    weights_of = planes.weight.tolist()
-    facet_of = planes.facet.tolist()
-    n_planes = len(planes.keys)
-    face_tri = []
-    sign_of = planes.sign.tolist()
-    pinned = _pinned_edges(planes).tolist()
-    for p in range(n_planes):
-        ax = int(planes.axis[p])
+class _PlaneJobs:
+    """What the per-plane arrangements read, as Python lists (a forked worker inherits it)."""
+
+    def __init__(self, ints: np.ndarray, planes: _Planes, cuts: _Cuts):
+        self.planes = planes
+        self.cuts = cuts
+        self.corners = ints[planes.faces].tolist()
+        self.weight = planes.weight.tolist()
+        self.facet = planes.facet.tolist()
+        self.sign = planes.sign.tolist()
+        self.sigma = planes.sigma.tolist()
+        self.axis = planes.axis.tolist()
+        self.members = [m.tolist() for m in planes.members]
+        self.pinned = _pinned_edges(planes).tolist()
+
+    def trivial(self, p: int) -> bool:
+        """Uncut triangles of one superset facet (a fan of a convex polygon: they do not
+        overlap) are sub-facets as they are; no arrangement needed."""
+        tl = self.members[p]
+        return not self.cuts.segments[p] and (len(tl) == 1 or len({self.facet[t] for t in tl}) == 1)
+
+    def cost(self, p: int) -> int:
+        return (len(self.members[p]) + len(self.cuts.segments[p])) ** 2
+
+    def arrange(self, p: int):
+        """Sub-facets of arrangement plane ``p``: ``(lifted, faces)`` with ``lifted[v]`` the
+        canonical 3D point of local vertex ``v`` and, per face of non-zero support,
+        ``(coverage, boundary half-edges (u, v), triangles, source facet, inner point)`` in
+        local vertex ids."""
+        ax = self.axis[p]
         a, b = (ax + 1) % 3, (ax + 2) % 3
-        tris = planes.members[p]
-        if not cuts.segments[p] and (len(tris) == 1 or len(set(facet_of[t] for t in tris.tolist())) == 1):
-            # Uncut triangles of one superset facet (a fan of a convex polygon: they do not
-            # overlap) are sub-facets as they are; no arrangement needed.
-            for t in tris.tolist():
-                ccw = int(planes.sign[t]) * int(planes.sigma[p])
-                cs = corners_of[t] if ccw > 0 else corners_of[t][::-1]
-                g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
-                fid = len(face_plane)
-                face_plane.append(p)
-                face_local.append(-1)
-                face_cov.append(ccw * weights_of[t])
-                face_tri.append((t, g))
-                for k in range(3):
-                    gu, gv = g[k], g[(k + 1) % 3]
-                    inc_face.append(fid)
-                    inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
-                    inc_sign.append(1 if gu < gv else -1)
-            arrangements.append(None)
-            global_ids.append(None)
-            continue
-        tl = tris.tolist()
-        polys = [[(c[a], c[b], 1) for c in corners_of[t]] for t in tl]
-        weights = [weights_of[t] for t in tl]
-        segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in cuts.segments[p]]
+        tl = self.members[p]
+        polys = [[(c[a], c[b], 1) for c in self.corners[t]] for t in tl]
+        weights = [self.weight[t] for t in tl]
+        segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in self.cuts.segments[p]]
         # The net coverage changes only where another plane's sheet meets this one
         # (closedness of the superset): along the cuts and the edges shared by label with
         # other planes' triangles. Where the net coverage is 0, the sheets of one orientation
         # cover exactly where those of the other do, so the edges of the less frequent
         # orientation bound the kept (support != 0) part. Other triangle edges stay out.
-        sg = [sign_of[t] for t in tl]
+        sg = [self.sign[t] for t in tl]
         minority = -1 if sg.count(1) >= sg.count(-1) else 1
+        pinned = self.pinned
         pin = [(i, j) for i, t in enumerate(tl) for j in range(3) if pinned[3 * t + j] or sg[i] == minority]
         seg2 = [(polys[i][j], polys[i][(j + 1) % 3]) for i, j in pin] + segs
         lab2 = pin + [(-1, k) for k in range(len(segs))]
         try:
             cov = sampled_coverage(polys, weights, seg2, lab2)
         except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
-            cov = None
-        if cov is None:
             cov = polygon_coverage(polys, weights, segs)
         arr = cov.arrangement
-        key = planes.keys[p]
-        gid = [-1] * len(arr.vertices)
+        key = self.planes.keys[p]
+        lifted = [_lift(h, key, ax) for h in arr._H]
         origin = arr.half_edge_origin
+        faces = []
         for f, (c, support) in enumerate(zip(cov.coverage, cov.support)):
             if support == 0:
                 continue  # covered by no superset triangle
-            fid = len(face_plane)
-            face_plane.append(p)
-            face_local.append(f)
-            face_cov.append(c)
-            face_tri.append(None)
             face = arr.faces[f]
-            for cyc in [face.outer, *face.holes]:
-                for h in cyc:
-                    u, v = origin[h], origin[h ^ 1]
-                    for x in (u, v):
-                        if gid[x] < 0:
-                            gid[x] = vid.setdefault(_lift(arr._H[x], key, ax), len(vid))
-                    gu, gv = gid[u], gid[v]
-                    e = (gu, gv) if gu < gv else (gv, gu)
-                    inc_face.append(fid)
-                    inc_edge.append(eid.setdefault(e, len(eid)))
-                    inc_sign.append(1 if gu < gv else -1)
-        arrangements.append(arr)
-        global_ids.append(gid)
-        if p % 256 == 0:
-            report("arrangements", p / n_planes)
+            boundary = [(origin[h], origin[h ^ 1]) for cyc in (face.outer, *face.holes) for h in cyc]
+            tris = face_triangles(arr, f)
+            src = self._source_facet(p, arr, f, tl)
+            faces.append((c, boundary, tris, src, _lift(strict_inner_point(arr, f), key, ax)))
+        return lifted, faces
+
+    def _source_facet(self, p: int, arr, f: int, tl: list) -> int:
+        """A superset facet whose triangle covers face ``f`` (the first in plane order)."""
+        if len(tl) == 1:
+            return self.facet[tl[0]]
+        ax = self.axis[p]
+        a, b = (ax + 1) % 3, (ax + 2) % 3
+        face = arr.faces[f]
+        H, origin = arr._H, arr.half_edge_origin
+        ccw = self.sigma[p]
+        # A triangle with an edge along the face's boundary, on the face's side of it, covers
+        # the face (the face is a cell of an arrangement containing that triangle's edges).
+        for h in face.outer:
+            for i, j in arr.edge_labels[h // 2]:
+                if i < 0:
+                    continue
+                t = tl[i]
+                c = self.corners[t]
+                u, v = c[j], c[(j + 1) % 3]
+                d_tri = (v[a] - u[a], v[b] - u[b])
+                p0, p1 = H[origin[h]], H[origin[h ^ 1]]
+                d_face = (p1[0] * p0[2] - p0[0] * p1[2], p1[1] * p0[2] - p0[1] * p1[2])
+                same = d_tri[0] * d_face[0] + d_tri[1] * d_face[1] > 0
+                if same == (self.sign[t] * ccw > 0):
+                    return self.facet[t]
+        x, y = face.sample
+        for t in tl:
+            corners = [(c[a], c[b]) for c in self.corners[t]]
+            if winding_number(corners, (x, y)) != 0:
+                return self.facet[t]
+        raise ExactnessError(f"face {f} of plane {p} is covered by no superset triangle")  # pragma: no cover
+
+
+# The plane jobs of the running build, read by forked workers (set just before the fork).
+_JOBS: _PlaneJobs | None = None
+
+
+def _arrange_chunk(ps: list) -> list:
+    return [(p, _JOBS.arrange(p)) for p in ps]
+
+
+def _workers(workers: int | None) -> int:
+    if workers is not None:
+        return max(1, int(workers))
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+# Below this much estimated work (sum over planes of (triangles + cuts)^2) the arrangements
+# run in this process: forking and collecting results would cost more than they save.
+_PARALLEL_FROM = 20000
+
+
+def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tuple[dict, int]:
+    """``{plane: jobs.arrange(plane)}`` for the planes ``todo``, in ``workers`` forked
+    processes when there is enough work (results do not depend on the number of workers),
+    and the number of processes used."""
+    global _JOBS
+    n = len(todo)
+    total = sum(jobs.cost(p) for p in todo)
+    out: dict = {}
+    if workers > 1 and n >= 64 and total >= _PARALLEL_FROM and "fork" in mp.get_all_start_methods():
+        # largest first, then chunks small enough to balance the two ends
+        order = sorted(todo, key=jobs.cost, reverse=True)
+        size = max(1, min(64, n // (8 * workers)))
+        chunks = [order[k: k + size] for k in range(0, n, size)]
+        _JOBS = jobs
+        try:
+            with mp.get_context("fork").Pool(workers) as pool:
+                for res in pool.imap_unordered(_arrange_chunk, chunks):
+                    out.update(res)
+                    report("arrangements", len(out) / n)
+        finally:
+            _JOBS = None
+        return out, workers
+    for k, p in enumerate(todo):
+        out[p] = jobs.arrange(p)
+        if k % 256 == 0:
+            report("arrangements", k / max(n, 1))
+    return out, 1
+
+
+def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: int = 1) -> tuple[_Complex, int]:
+    vid: dict = {}
+    eid: dict = {}
+    face_plane, face_cov, face_tris, face_src, face_point = [], [], [], [], []
+    inc_face, inc_edge, inc_sign = [], [], []
+    jobs = _PlaneJobs(ints, planes, cuts)
+    n_planes = len(planes.keys)
+    todo = [p for p in range(n_planes) if not jobs.trivial(p)]
+    done, used = _run_arrangements(jobs, todo, workers, report)
+
+    def add(p: int, cov: int, g: list, boundary, tris, src: int, point: tuple) -> None:
+        fid = len(face_plane)
+        face_plane.append(p)
+        face_cov.append(cov)
+        face_tris.append([(g[x], g[y], g[z]) for x, y, z in tris])
+        face_src.append(src)
+        face_point.append(point)
+        for u, v in boundary:
+            gu, gv = g[u], g[v]
+            inc_face.append(fid)
+            inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
+            inc_sign.append(1 if gu < gv else -1)
+
+    for p in range(n_planes):
+        if p not in done:
+            for t in jobs.members[p]:
+                ccw = jobs.sign[t] * jobs.sigma[p]
+                cs = jobs.corners[t] if ccw > 0 else jobs.corners[t][::-1]
+                g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
+                s = [sum(c[k] for c in cs) for k in range(3)]  # 3 x centroid: strictly inside
+                h = gcd(gcd(s[0], s[1]), gcd(s[2], 3))
+                add(p, ccw * jobs.weight[t], g, ((0, 1), (1, 2), (2, 0)), ((0, 1, 2),), jobs.facet[t],
+                    (s[0] // h, s[1] // h, s[2] // h, 3 // h))
+            continue
+        lifted, faces = done.pop(p)
+        g = [vid.setdefault(x, len(vid)) for x in lifted]
+        for cov, boundary, tris, src, point in faces:
+            add(p, cov, g, boundary, tris, src, point)
     return _Complex(
         points=list(vid),
         edges=np.array(list(eid), dtype=np.int64).reshape(-1, 2),
         face_plane=np.array(face_plane, dtype=np.int64),
-        face_local=np.array(face_local, dtype=np.int64),
         face_cov=np.array(face_cov, dtype=np.int64),
         inc_face=np.array(inc_face, dtype=np.int64),
         inc_edge=np.array(inc_edge, dtype=np.int64),
         inc_sign=np.array(inc_sign, dtype=np.int8),
-        arrangements=arrangements,
-        global_ids=global_ids,
-        face_tri=face_tri,
-    )
+        face_tris=face_tris,
+        face_src=np.array(face_src, dtype=np.int64),
+        face_point=face_point,
+    ), used
 
 
 @dataclass
@@ -771,19 +879,6 @@ _UNKNOWN = np.iinfo(np.int64).min
 _ORIENT_FILTER = 16 * float(np.finfo(np.float64).eps) / 2
 
 
-def _face_point(cx: _Complex, planes: _Planes, f: int) -> tuple:
-    """Exact homogeneous 3D point strictly inside sub-facet ``f``."""
-    if cx.face_tri[f] is not None:
-        t = cx.face_tri[f][0]
-        c = planes.ints[planes.faces[t]].sum(axis=0).tolist()  # 3 x centroid: strictly inside
-        g = gcd(gcd(c[0], c[1]), gcd(c[2], 3))
-        return (c[0] // g, c[1] // g, c[2] // g, 3 // g)
-    p = int(cx.face_plane[f])
-    arr = cx.arrangements[p]
-    x, y = arr.faces[int(cx.face_local[f])].sample
-    return _lift(_hom((x, y)), planes.keys[p], int(planes.axis[p]))
-
-
 # Float filter of _PieceTest: each separating-axis value is a sum of a few products of
 # float64 numbers; its rounding error is below a few ulps of ``mag`` (the sum of the absolute
 # products). Values within this bound are re-decided with Python integers.
@@ -936,7 +1031,7 @@ def _classify(cx: _Complex, sh: _Shells, planes: _Planes, S: Superset, A: Closed
         k = int(node[s])
         f, side = k // 2, 1 if k % 2 else -1
         m = planes.normal(int(cx.face_plane[f]))
-        P4 = _face_point(cx, planes, f)
+        P4 = cx.face_point[f]
         inside[s] = test.contains(P4, tuple(side * c for c in m))
         if not inside[s] and unknown[s]:
             # w is unknown, so q - B may lie inside A without touching its surface
@@ -976,10 +1071,10 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
     tris, tri_facet, facet_src, outside_cell = [], [], [], []
     for n, f in enumerate(keep.tolist()):
         flip = bool(plus[f])  # inside on the normal's side: the outward normal is reversed
-        for a, b, c in _face_triangles(cx, f):
+        for a, b, c in cx.face_tris[f]:
             tris.append((a, c, b) if flip else (a, b, c))
             tri_facet.append(n)
-        facet_src.append(_source_facet(cx, planes, f))
+        facet_src.append(int(cx.face_src[f]))
         outside_cell.append(find(int(sh.of[2 * f + (0 if flip else 1)])))
     T = np.array(tris, dtype=np.int64).reshape(-1, 3)
     used, T = np.unique(T, return_inverse=True)
@@ -997,55 +1092,6 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
         shell=facet_shell.reshape(-1)[np.array(tri_facet, dtype=np.int64)] if len(tri_facet) else np.zeros(0, np.int64),
         shell_is_hole=shell_is_hole,
     )
-
-
-def _face_triangles(cx: _Complex, f: int) -> list:
-    """Counter-clockwise (about ``planes.normal``) triangles of sub-facet ``f``, global ids."""
-    if cx.face_tri[f] is not None:
-        return [tuple(cx.face_tri[f][1])]
-    p = int(cx.face_plane[f])
-    arr, gid = cx.arrangements[p], cx.global_ids[p]
-    face = arr.faces[int(cx.face_local[f])]
-    if not face.holes and len(face.outer) == 3:
-        a, b, c = (gid[v] for v in arr.cycle_vertices(face.outer))
-        return [(a, b, c)]
-    return [(gid[a], gid[b], gid[c]) for a, b, c in triangulate_face(arr, int(cx.face_local[f]))]
-
-
-def _source_facet(cx: _Complex, planes: _Planes, f: int) -> int:
-    """A superset facet whose triangle covers sub-facet ``f`` (the first in plane order)."""
-    if cx.face_tri[f] is not None:
-        return int(planes.facet[cx.face_tri[f][0]])
-    p = int(cx.face_plane[f])
-    if len(planes.members[p]) == 1:
-        return int(planes.facet[planes.members[p][0]])
-    arr = cx.arrangements[p]
-    ax = int(planes.axis[p])
-    a, b = (ax + 1) % 3, (ax + 2) % 3
-    members = planes.members[p].tolist()
-    face = arr.faces[int(cx.face_local[f])]
-    H, origin = arr._H, arr.half_edge_origin
-    # A triangle with an edge along the face's boundary, on the face's side of it, covers
-    # the face (the face is a cell of an arrangement containing that triangle's edges).
-    for h in face.outer:
-        for i, j in arr.edge_labels[h // 2]:
-            if i < 0:
-                continue
-            t = members[i]
-            c = planes.ints[planes.faces[t]].tolist()
-            u, v = c[j], c[(j + 1) % 3]
-            d_tri = (v[a] - u[a], v[b] - u[b])
-            p0, p1 = H[origin[h]], H[origin[h ^ 1]]
-            d_face = (p1[0] * p0[2] - p0[0] * p1[2], p1[1] * p0[2] - p0[1] * p1[2])
-            same = d_tri[0] * d_face[0] + d_tri[1] * d_face[1] > 0
-            if same == (int(planes.sign[t]) * int(planes.sigma[p]) > 0):
-                return int(planes.facet[t])
-    x, y = face.sample
-    for t in members:
-        corners = [(c[a], c[b]) for c in planes.ints[planes.faces[t]].tolist()]
-        if winding_number(corners, (x, y)) != 0:
-            return int(planes.facet[t])
-    raise ExactnessError(f"sub-facet {f} is covered by no superset triangle")  # pragma: no cover
 
 
 def _to_float(points: list, grid: Grid) -> np.ndarray:
