@@ -18,6 +18,7 @@ from functools import cached_property, cmp_to_key
 from math import gcd
 from pathlib import Path
 
+import numba as nb
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -1174,10 +1175,17 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid) -> np.ndarray:
     T = out.faces
     if not len(T):
         return np.zeros((0, 2), np.int64)
-    scale = Fraction(2) ** grid.exponent
-    moved = np.array(
-        [any(Fraction(float(x)) != Fraction(P[k], P[3]) * scale for k, x in enumerate(v))
-         for P, v in zip(out.points, V.tolist())], dtype=bool)
+    e = grid.exponent
+    up, down = (1 << e, 1) if e >= 0 else (1, 1 << -e)
+
+    def moved_point(P, v) -> bool:  # v != P[:3] / P[3] * 2**e, decided on integers
+        for k in range(3):
+            num, den = v[k].as_integer_ratio()
+            if num * P[3] * down != P[k] * up * den:
+                return True
+        return False
+
+    moved = np.array([moved_point(P, v) for P, v in zip(out.points, V.tolist())], dtype=bool)
     if not moved.any():
         return np.zeros((0, 2), np.int64)
     P = V[T]
@@ -1185,106 +1193,134 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid) -> np.ndarray:
     lo = np.floor(np.ldexp(P.min(axis=1), -grid.exponent)).astype(np.int64)
     hi = np.ceil(np.ldexp(P.max(axis=1), -grid.exponent)).astype(np.int64)
     pairs = box_pairs(lo, hi)
-    pairs = pairs[moved[T[pairs]].any(axis=(1, 2))]
-    pairs = pairs[~(_separated(V, T, pairs[:, 0], pairs[:, 1]) | _separated(V, T, pairs[:, 1], pairs[:, 0]))]
-    pairs = pairs[~_apart_in_projection(V, T, pairs)]
+    pairs = pairs[_undecided_pairs(np.ascontiguousarray(V), np.ascontiguousarray(T), pairs, moved)]
     Vi, Tl = _common_integers(V), T.tolist()
     bad = [(i, j) for i, j in pairs.tolist() if _improper(Vi, Tl[i], Tl[j])]
     return np.array(bad, dtype=np.int64).reshape(-1, 2)
 
 
-def _separated(V: np.ndarray, T: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """Pairs where every vertex of triangle ``j`` not shared with ``i`` lies strictly on one
-    side of the plane of ``i`` (float filter; undecided pairs are False): then the two
-    triangles meet at most in their shared vertices and edge."""
-    a, b, c = (V[T[i, k]] for k in range(3))
-    u, v = b - a, c - a
-    n = np.cross(u, v)
-    side = np.zeros((len(i), 3), dtype=np.int8)
-    for k in range(3):
-        w = V[T[j, k]] - a
-        det = np.einsum("ij,ij->i", n, w)
-        perm = (np.abs(u[:, 0]) * (np.abs(v[:, 1] * w[:, 2]) + np.abs(v[:, 2] * w[:, 1]))
-                + np.abs(u[:, 1]) * (np.abs(v[:, 2] * w[:, 0]) + np.abs(v[:, 0] * w[:, 2]))
-                + np.abs(u[:, 2]) * (np.abs(v[:, 0] * w[:, 1]) + np.abs(v[:, 1] * w[:, 0])))
-        sure = np.abs(det) > _ORIENT_FILTER * perm
-        shared = np.any(T[i] == T[j, k][:, None], axis=1)
-        side[:, k] = np.where(shared, 2, np.where(sure, np.sign(det), 0))
-    free = side != 2
-    pos = np.all((side == 1) | ~free, axis=1)
-    neg = np.all((side == -1) | ~free, axis=1)
-    return (pos | neg) & free.any(axis=1)
-
-
-def _o2_filtered(u, a, b) -> np.ndarray:
-    """Sign of orient2d(u, a, b) on float rows, 0 where the float filter cannot decide."""
-    x1, y1 = a[:, 0] - u[:, 0], a[:, 1] - u[:, 1]
-    x2, y2 = b[:, 0] - u[:, 0], b[:, 1] - u[:, 1]
+@nb.njit(cache=True, inline="always")
+def _o2f(V, u, a, b, k0, k1) -> int:
+    """Sign of orient2d(u, a, b) on coordinates ``k0, k1`` of float rows of ``V``, 0 where the
+    float filter cannot decide."""
+    x1, y1 = V[a, k0] - V[u, k0], V[a, k1] - V[u, k1]
+    x2, y2 = V[b, k0] - V[u, k0], V[b, k1] - V[u, k1]
     det = x1 * y2 - y1 * x2
-    sure = np.abs(det) > _ORIENT_FILTER * (np.abs(x1 * y2) + np.abs(y1 * x2))
-    return np.where(sure, np.sign(det), 0)
+    if abs(det) > _ORIENT_FILTER * (abs(x1 * y2) + abs(y1 * x2)):
+        return 1 if det > 0 else -1
+    return 0
 
 
-def _apart_in_projection(V: np.ndarray, T: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-    """Pairs sharing an edge or a vertex whose projections (along the dominant axis of the
-    first triangle's normal) meet only in the shared part, decided by a float filter
-    (undecided: False). The 3D triangles then meet only there too."""
-    i, j = pairs[:, 0], pairs[:, 1]
-    Ti, Tj = T[i], T[j]
-    eq = Ti[:, :, None] == Tj[:, None, :]  # (k, 3, 3): vertex a of i equals vertex b of j
-    n_shared = eq.sum(axis=(1, 2))
-    out = np.zeros(len(pairs), dtype=bool)
-    n = np.cross(V[Ti[:, 1]] - V[Ti[:, 0]], V[Ti[:, 2]] - V[Ti[:, 0]])
-    ax = np.argmax(np.abs(n), axis=1)
-    keep = np.stack([(ax + 1) % 3, (ax + 2) % 3], axis=1)
-    rows = np.arange(len(pairs))
+@nb.njit(cache=True, inline="always")
+def _plane_separates(V, ti, tj) -> bool:
+    """Every vertex of triangle ``tj`` not shared with ``ti`` lies strictly on one side of
+    the plane of ``ti`` (float filter; undecided: False): then the two triangles meet at
+    most in their shared vertices and edge."""
+    a, b, c = ti[0], ti[1], ti[2]
+    ux, uy, uz = V[b, 0] - V[a, 0], V[b, 1] - V[a, 1], V[b, 2] - V[a, 2]
+    vx, vy, vz = V[c, 0] - V[a, 0], V[c, 1] - V[a, 1], V[c, 2] - V[a, 2]
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    side = 0
+    for k in range(3):
+        x = tj[k]
+        if x == a or x == b or x == c:
+            continue
+        wx, wy, wz = V[x, 0] - V[a, 0], V[x, 1] - V[a, 1], V[x, 2] - V[a, 2]
+        det = nx * wx + ny * wy + nz * wz
+        perm = (abs(ux) * (abs(vy * wz) + abs(vz * wy)) + abs(uy) * (abs(vz * wx) + abs(vx * wz))
+                + abs(uz) * (abs(vx * wy) + abs(vy * wx)))
+        if not abs(det) > _ORIENT_FILTER * perm:
+            return False
+        s = 1 if det > 0 else -1
+        if side != 0 and s != side:
+            return False
+        side = s
+    return side != 0
 
-    def P(ids, r):
-        return np.stack([V[ids, keep[r, 0]], V[ids, keep[r, 1]]], axis=1)
 
-    # disjoint: an edge line of one triangle strictly separates the other (2D axes)
-    z = n_shared == 0
-    if z.any():
-        r = rows[z]
-        sep = np.zeros(len(r), dtype=bool)
-        for A_, B_ in ((Ti[r], Tj[r]), (Tj[r], Ti[r])):
+@nb.njit(cache=True, inline="always")
+def _ray_outside(V, u, x, p, q, k0, k1) -> bool:
+    """The ray ``u -> x`` lies strictly outside the convex corner ``(p, q)`` at ``u``."""
+    o = _o2f(V, u, p, q, k0, k1)
+    return o != 0 and (_o2f(V, u, p, x, k0, k1) * o < 0 or _o2f(V, u, x, q, k0, k1) * o < 0)
+
+
+@nb.njit(cache=True, inline="always")
+def _apart_in_projection(V, ti, tj) -> bool:
+    """Triangles whose projections (along the dominant axis of the first one's normal) meet
+    only in their shared vertices or edge, decided by a float filter (undecided: False). The
+    3D triangles then meet only there too."""
+    a, b, c = ti[0], ti[1], ti[2]
+    ux, uy, uz = V[b, 0] - V[a, 0], V[b, 1] - V[a, 1], V[b, 2] - V[a, 2]
+    vx, vy, vz = V[c, 0] - V[a, 0], V[c, 1] - V[a, 1], V[c, 2] - V[a, 2]
+    n0, n1, n2 = abs(uy * vz - uz * vy), abs(uz * vx - ux * vz), abs(ux * vy - uy * vx)
+    ax = 0 if (n0 >= n1 and n0 >= n2) else (1 if n1 >= n2 else 2)
+    k0, k1 = (ax + 1) % 3, (ax + 2) % 3
+    # bit r of mi / mj: vertex r of ti / tj is shared (scalars: no allocation per pair)
+    mi = mj = shared = 0
+    for r in range(3):
+        for s in range(3):
+            if ti[r] == tj[s]:
+                mi |= 1 << r
+                mj |= 1 << s
+                shared += 1
+    if shared == 0:
+        # an edge line of one triangle strictly separates the other
+        for flip in range(2):
+            A_ = ti if flip == 0 else tj
+            B_ = tj if flip == 0 else ti
             for k in range(3):
-                p, q, o3 = P(A_[:, k], r), P(A_[:, (k + 1) % 3], r), P(A_[:, (k + 2) % 3], r)
-                o = _o2_filtered(p, q, o3)
-                allout = o != 0
+                p, q, o3 = A_[k], A_[(k + 1) % 3], A_[(k + 2) % 3]
+                o = _o2f(V, p, q, o3, k0, k1)
+                if o == 0:
+                    continue
+                out = True
                 for m in range(3):
-                    allout &= _o2_filtered(p, q, P(B_[:, m], r)) * o < 0
-                sep |= allout
-        out[r] = sep
-    si = eq.any(axis=2)  # vertices of i that are shared
-    sj = eq.any(axis=1)
-    # shared edge (u, v): the two apexes strictly on opposite sides of the edge's line
-    e = n_shared == 2
-    if e.any():
-        r = rows[e]
-        ai = Ti[r, np.argmin(si[r], axis=1)]
-        aj = Tj[r, np.argmin(sj[r], axis=1)]
-        uv = np.sort(np.where(si[r], Ti[r], -1), axis=1)[:, 1:]
-        u, v = P(uv[:, 0], r), P(uv[:, 1], r)
-        s1 = _o2_filtered(u, v, P(ai, r))
-        s2 = _o2_filtered(u, v, P(aj, r))
-        out[r] = s1 * s2 < 0
-    # shared vertex u: each edge ray at u strictly outside the other triangle's corner
-    w = n_shared == 1
-    if w.any():
-        r = rows[w]
-        ku = np.argmax(si[r], axis=1)
-        u_id = Ti[r, ku]
-        a_id, b_id = Ti[r, (ku + 1) % 3], Ti[r, (ku + 2) % 3]
-        kj = np.argmax(sj[r], axis=1)
-        c_id, d_id = Tj[r, (kj + 1) % 3], Tj[r, (kj + 2) % 3]
-        u, a, b, c, d = (P(x, r) for x in (u_id, a_id, b_id, c_id, d_id))
+                    if not _o2f(V, p, q, B_[m], k0, k1) * o < 0:
+                        out = False
+                        break
+                if out:
+                    return True
+        return False
+    if shared == 2:
+        # the two apexes strictly on opposite sides of the shared edge's line
+        ai = ti[0] if not mi & 1 else (ti[1] if not mi & 2 else ti[2])
+        aj = tj[0] if not mj & 1 else (tj[1] if not mj & 2 else tj[2])
+        e0, e1 = -1, -1
+        for r in range(3):
+            if mi >> r & 1:
+                if e0 < 0:
+                    e0 = ti[r]
+                else:
+                    e1 = ti[r]
+        u, v = min(e0, e1), max(e0, e1)
+        return _o2f(V, u, v, ai, k0, k1) * _o2f(V, u, v, aj, k0, k1) < 0
+    if shared == 1:
+        # each edge ray at the shared vertex strictly outside the other triangle's corner
+        ku = 0 if mi & 1 else (1 if mi & 2 else 2)
+        kj = 0 if mj & 1 else (1 if mj & 2 else 2)
+        u = ti[ku]
+        pa, pb = ti[(ku + 1) % 3], ti[(ku + 2) % 3]
+        pc, pd = tj[(kj + 1) % 3], tj[(kj + 2) % 3]
+        return (_ray_outside(V, u, pc, pa, pb, k0, k1) and _ray_outside(V, u, pd, pa, pb, k0, k1)
+                and _ray_outside(V, u, pa, pc, pd, k0, k1) and _ray_outside(V, u, pb, pc, pd, k0, k1))
+    return False
 
-        def outside(x, p, q):  # ray u->x strictly outside the convex corner (p, q) at u
-            o = _o2_filtered(u, p, q)
-            return (o != 0) & ((_o2_filtered(u, p, x) * o < 0) | (_o2_filtered(u, x, q) * o < 0))
 
-        out[r] = outside(c, a, b) & outside(d, a, b) & outside(a, c, d) & outside(b, c, d)
+@nb.njit(cache=True)
+def _undecided_pairs(V, T, pairs, moved) -> np.ndarray:
+    """Mask of the box-overlapping pairs that the float filters leave to the exact test: a
+    pair with a moved vertex that no plane separation (either way) or separation in
+    projection sets apart."""
+    out = np.zeros(len(pairs), dtype=np.bool_)
+    for r in range(len(pairs)):
+        ti, tj = T[pairs[r, 0]], T[pairs[r, 1]]
+        if not (moved[ti[0]] or moved[ti[1]] or moved[ti[2]] or moved[tj[0]] or moved[tj[1]]
+                or moved[tj[2]]):
+            continue
+        if _plane_separates(V, ti, tj) or _plane_separates(V, tj, ti):
+            continue
+        out[r] = not _apart_in_projection(V, ti, tj)
     return out
 
 

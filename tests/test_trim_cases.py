@@ -102,6 +102,32 @@ def test_rounding_check_predicates():
     assert not _improper(V, [0, 1, 2], [0, 7, 5])  # shared vertex only
 
 
+@pytest.mark.parametrize("seed", range(6))
+def test_rounding_filter_never_drops_an_improper_pair(seed):
+    """The compiled float filters of the rounding check only set aside pairs the exact test
+    finds proper: random triangles on a few points (shared vertices and edges, coplanar
+    and crossing pairs, points a few ulps off a plane)."""
+    from cspace.trim import _common_integers, _undecided_pairs
+
+    rng = np.random.default_rng(seed)
+    pool = rng.integers(0, 4, size=(14, 3)).astype(np.float64)
+    pool[7:] += rng.choice([0.0, 2.0**-50, -(2.0**-51)], size=(7, 3))  # almost on the grid planes
+    pool = np.unique(pool, axis=0)
+    T = np.array([t for t in (rng.choice(len(pool), 3, replace=False) for _ in range(120))
+                  if np.linalg.norm(np.cross(pool[t[1]] - pool[t[0]], pool[t[2]] - pool[t[0]])) > 0],
+                 dtype=np.int64)
+    T = T[np.unique(np.sort(T, axis=1), axis=0, return_index=True)[1]]  # no repeated triangle
+    i, j = np.triu_indices(len(T), 1)
+    pairs = np.stack([i, j], axis=1).astype(np.int64)
+    undecided = _undecided_pairs(pool, T, pairs, np.ones(len(pool), dtype=bool))
+    Vi, Tl = _common_integers(pool), T.tolist()
+    improper = np.array([_improper(Vi, Tl[a], Tl[b]) for a, b in pairs.tolist()])
+    assert not (improper & ~undecided).any()
+    assert improper.sum() > 10 and (~undecided).sum() > 10  # both kinds occur
+    # no moved vertex: nothing to check
+    assert not _undecided_pairs(pool, T, pairs, np.zeros(len(pool), dtype=bool)).any()
+
+
 def test_provenance_matches_the_facet_normals():
     """Each output facet's normal is the normal of the feature it claims to come from:
     A's face (translated), B's facet (corner), or orthogonal to both edges (edge)."""
