@@ -319,9 +319,16 @@ class Face:
     outer: list
     holes: list = field(default_factory=list)
     isolated: list = field(default_factory=list)
-    area: Fraction = None
+    _area: object = field(default=None, repr=False)  # a Fraction, or the cycles' (num, den) parts
     _sample: tuple = field(default=None, repr=False)
     _owner: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def area(self):
+        # summed on first use: the parts are exact (num, den) pairs, area = sum num / (2 den)
+        if isinstance(self._area, list):
+            self._area = sum((Fraction(n, 2 * d) for n, d in self._area), Fraction(0))
+        return self._area
 
     @property
     def sample(self) -> tuple:
@@ -340,6 +347,8 @@ class Face:
 _MAX_SCALE_BITS = 1024
 # Below this many segments the plain double loop over pairs is cheaper than numpy.
 _SWEEP_FROM = 48
+# Up to this many polygons sampled_coverage filters them by boxes in plain Python.
+_FEW_POLYGONS = 16
 
 
 def _box_candidates(ids: list, boxes: dict):
@@ -430,6 +439,7 @@ class Arrangement2D:
             if len(labels) != len(segs):
                 raise ValueError("labels must have one entry per segment")
         self._tris: dict = {}  # face id -> triangles (face_triangles)
+        self._centroids: dict = {}  # face id -> centroid of its first triangle
         self._build(segs, labels)
 
     # ---------------------------------------------------------------- construction
@@ -451,7 +461,11 @@ class Arrangement2D:
         for i, j in _box_candidates(proper, boxes):
             p, q = H[i]
             r, s = H[j]
-            o1, o2 = _horient(p, q, r), _horient(p, q, s)
+            # orient(p, q, x) = (p x q) . x: one dot product with the segment's line
+            li, lj = lines[i], lines[j]
+            d1 = li[0] * r[0] + li[1] * r[1] + li[2] * r[2]
+            d2 = li[0] * s[0] + li[1] * s[1] + li[2] * s[2]
+            o1, o2 = (d1 > 0) - (d1 < 0), (d2 > 0) - (d2 < 0)
             if o1 == 0 and o2 == 0:  # collinear: overlap or touch
                 for x in (r, s):
                     if _hbetween(p, q, x, axis[i]):
@@ -462,7 +476,9 @@ class Arrangement2D:
                 continue
             if o1 * o2 > 0:
                 continue
-            o3, o4 = _horient(r, s, p), _horient(r, s, q)
+            d3 = lj[0] * p[0] + lj[1] * p[1] + lj[2] * p[2]
+            d4 = lj[0] * q[0] + lj[1] * q[1] + lj[2] * q[2]
+            o3, o4 = (d3 > 0) - (d3 < 0), (d4 > 0) - (d4 < 0)
             if o3 * o4 > 0:
                 continue
             if o1 == 0:
@@ -577,9 +593,8 @@ class Arrangement2D:
                 c.append(g)
                 g = nxt[g]
             cycles.append(c)
-        areas = [self._harea(c) for c in cycles]
+        areas = [self._harea(c) for c in cycles]  # (num, den): area = num / (2 den), den > 0
         self._cycles = cycles
-        self._cycle_areas = areas
 
         # components (union-find over edges) for the Euler count
         parent = list(range(len(V)))
@@ -596,13 +611,16 @@ class Arrangement2D:
                 parent[ru] = rv
         self.components = sum(1 for a in range(len(V)) if find(a) == a)
 
-        positive = [c for c in range(len(cycles)) if areas[c] > 0]
-        self._positive = sorted(positive, key=lambda c: areas[c])
+        positive = [c for c in range(len(cycles)) if areas[c][0] > 0]
+        # by area; Python's int division is correctly rounded, so the floats keep the order
+        # and the exact ratios decide their ties
+        self._positive = sorted(positive, key=lambda c: (areas[c][0] / areas[c][1],
+                                                         _Ratio(*areas[c])))
         self._poly = {c: [V[origin[h]] for h in cycles[c]] for c in positive}
         self._hpoly = {c: [self._H[origin[h]] for h in cycles[c]] for c in positive}
         face_of_cycle = {c: n for n, c in enumerate(positive)}
-        self.faces = [Face(outer=cycles[c], area=areas[c]) for c in positive]
-        self.unbounded = Face(outer=[], area=None)
+        self.faces = [Face(outer=cycles[c], _area=[areas[c]]) for c in positive]
+        self.unbounded = Face(outer=[])
 
         comp_of_cycle = [find(origin[c[0]]) for c in cycles]
         bbox = {}
@@ -640,7 +658,7 @@ class Arrangement2D:
             face = self.faces[f] if f >= 0 else self.unbounded
             face.holes.append(cycles[c])
             if f >= 0:
-                face.area += areas[c]
+                face._area.append(areas[c])
         for v in range(len(V)):
             if not out[v]:
                 f = host(v, find(v))
@@ -658,9 +676,10 @@ class Arrangement2D:
         else:
             self.unbounded.sample = (Fraction(0), Fraction(0))
 
-    def _harea(self, cycle) -> Fraction:
-        """Signed area of a half-edge cycle: sum of (Xa Yb - Ya Xb) / (Wa Wb) / 2, accumulated
-        over a common denominator with one reduction at the end."""
+    def _harea(self, cycle) -> tuple[int, int]:
+        """Signed area of a half-edge cycle as ``(num, den)``, ``area = num / (2 den)``,
+        ``den > 0``: the sum of (Xa Yb - Ya Xb) / (Wa Wb) / 2 over a common denominator,
+        unreduced."""
         H, origin = self._H, self.half_edge_origin
         num, den = 0, 1
         for h in cycle:
@@ -676,7 +695,7 @@ class Arrangement2D:
                     g = gcd(den, w)
                     num = num * (w // g) + t * (den // g)
                     den = den * (w // g)
-        return Fraction(num, 2 * den)
+        return num, den
 
     def _sample(self, face: Face):
         """A point strictly inside a bounded face.
@@ -714,25 +733,12 @@ class Arrangement2D:
     def _inner_point(self, f: int) -> tuple[int, int, int]:
         """Homogeneous integer point in the closure of face ``f``, in the open face up to an
         isolated vertex or a dangling edge (enough to read a coverage that is constant on the
-        face): the centroid of a strictly convex corner's triangle when the face is convex
-        without holes, else of a triangle of :func:`face_triangles`."""
-        face = self.faces[f]
-        if not face.holes:
-            H, origin = self._H, self.half_edge_origin
-            cyc = [H[origin[h]] for h in face.outer]
-            n = len(cyc)
-            best = None
-            for k in range(n):
-                o = _horient(cyc[k - 1], cyc[k], cyc[(k + 1) % n])
-                if o < 0:
-                    break
-                if o > 0 and best is None:
-                    best = k
-            else:
-                if best is not None:
-                    return _hcentroid(cyc[best - 1], cyc[best], cyc[(best + 1) % n])
-        a, b, c = face_triangles(self, f)[0]
-        return _hcentroid(self._H[a], self._H[b], self._H[c])
+        face): the centroid of the first triangle of :func:`face_triangles` (cached)."""
+        c = self._centroids.get(f)
+        if c is None:
+            a, b, d = face_triangles(self, f)[0]
+            c = self._centroids[f] = _hcentroid(self._H[a], self._H[b], self._H[d])
+        return c
 
     # ---------------------------------------------------------------- queries
 
@@ -978,12 +984,15 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
     if len(weights) != len(polys):
         raise ValueError("weights must have one entry per polygon")
     arr = Arrangement2D(segments, labels)
-    turn = []
-    box = np.empty((len(polys), 4), dtype=np.float64)
+    turn, boxes, area2 = [], [], 0
     for i, poly in enumerate(polys):
-        turn.append(_hturn([(x, y, 1) for x, y in poly]))
+        n = len(poly)
+        a2 = sum(poly[k][0] * poly[(k + 1) % n][1] - poly[k][1] * poly[(k + 1) % n][0] for k in range(n))
+        turn.append((a2 > 0) - (a2 < 0))
+        area2 += weights[i] * a2
         xs, ys = [p[0] for p in poly], [p[1] for p in poly]
-        box[i] = (min(xs), max(xs), min(ys), max(ys))
+        boxes.append((min(xs) - 1, max(xs) + 1, min(ys) - 1, max(ys) + 1))
+    box = np.array(boxes, dtype=np.float64).reshape(-1, 4) if len(polys) > _FEW_POLYGONS else None
     nf = len(arr.faces)
     coverage, support = [0] * nf, [0] * nf
     integral = 0
@@ -991,20 +1000,22 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
         X, Y, w = arr._inner_point(f)
         xf, yf = X / w, Y / w
         # conservative box filter: floats are within an ulp; integer boxes, margin 1
-        near = np.nonzero((box[:, 0] <= xf + 1) & (xf - 1 <= box[:, 1])
-                          & (box[:, 2] <= yf + 1) & (yf - 1 <= box[:, 3]))[0]
+        if box is None:
+            near = [i for i, b in enumerate(boxes) if b[0] <= xf <= b[1] and b[2] <= yf <= b[3]]
+        else:
+            near = np.nonzero((box[:, 0] <= xf) & (xf <= box[:, 1])
+                              & (box[:, 2] <= yf) & (yf <= box[:, 3]))[0].tolist()
         c = s = 0
-        for i in near.tolist():
+        for i in near:
             poly, t = polys[i], turn[i]
             n = len(poly)
             if all(_pushed_side(poly[k], poly[(k + 1) % n], X, Y, w) == t for k in range(n)):
                 c += weights[i] * t
                 s += abs(weights[i])
         coverage[f], support[f] = c, s
-        integral += c * face.area
-    expected = sum(wi * _signed_area([(Fraction(p[0]), Fraction(p[1])) for p in poly])
-                   for wi, poly in zip(weights, polys))
-    if integral != expected:
+        if c:
+            integral += c * face.area
+    if 2 * integral != area2:
         raise ValueError("the coverage is not constant on the faces: the segments miss a place "
                          "where it changes")
     return Coverage(arr, coverage, support)
@@ -1142,24 +1153,29 @@ def _ear_ok(poly, i) -> bool:
     return True
 
 
-def _straight_runs(ring: list, H: list, runs: dict, uses: dict) -> list:
+def _straight_runs(ring: list, H: list, runs: dict, uses: dict) -> tuple[list, bool]:
     """Drop the vertices where a cycle goes straight on (collinear, same direction) and which
     no other cycle or other visit uses (``uses[v] == 1``); record each dropped run in
     ``runs[(a, b)]`` under the directed edge ``a -> b`` of the corners around it. Returns the
-    corners, ``[]`` if fewer than three are left."""
+    corners (``[]`` if fewer than three are left) and whether every corner turns strictly
+    left (the runs lie on the segments between corners, so the turn at a corner is the one
+    between its cycle neighbours)."""
     n = len(ring)
     keep = []
+    convex = True
     for k in range(n):
         a, v, b = H[ring[k - 1]], H[ring[k]], H[ring[(k + 1) % n]]
-        if uses[ring[k]] > 1 or _horient(a, v, b) != 0 or _dot(_hdir(a, v), _hdir(v, b)) <= 0:
+        o = _horient(a, v, b)
+        if uses[ring[k]] > 1 or o != 0 or _dot(_hdir(a, v), _hdir(v, b)) <= 0:
             keep.append(k)
+            convex = convex and o > 0
     if len(keep) < 3:
-        return []
+        return [], False
     for x, y in zip(keep, keep[1:] + keep[:1]):
         between = [ring[k % n] for k in range(x + 1, y if y > x else y + n)]
         if between:
             runs[(ring[x], ring[y])] = between
-    return [ring[k] for k in keep]
+    return [ring[k] for k in keep], convex
 
 
 def _clip_simple(P: list, ids: list):
@@ -1276,12 +1292,13 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
             uses[v] = uses.get(v, 0) + 1
     runs: dict = {}
     rings = [_straight_runs(ring, H, runs, uses) for ring in rings]
-    poly, holes = rings[0], [h for h in rings[1:] if h]
+    (poly, convex), holes = rings[0], [h for h, _ in rings[1:] if h]
     if not poly:
         return []
     P = [H[v] for v in poly]
     ids = list(poly)
     pending = [([H[v] for v in h], list(h)) for h in holes]
+    pending_holes = bool(pending)
     while pending:
         others = [P] + [hp for hp, _ in pending]
         done = False
@@ -1306,7 +1323,11 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
             raise AssertionError("no bridge found for a hole")
     tris = None
     if len(set(ids)) == len(ids):
-        tris = _clip_simple(P, ids)
+        if convex and not pending_holes:
+            # strictly convex corners: a fan (the straight runs go back in below)
+            tris = [(ids[0], ids[k], ids[k + 1]) for k in range(1, len(P) - 1)]
+        else:
+            tris = _clip_simple(P, ids)
     if tris is None:
         tris = _clip_general(P, ids)
     return _split_runs(tris, runs)
@@ -1335,6 +1356,5 @@ def strict_inner_point(arr: Arrangement2D, f: int) -> tuple[int, int, int]:
     if not face.isolated:
         hf = arr.half_edge_face
         if all(hf[h] != hf[h ^ 1] for cyc in (face.outer, *face.holes) for h in cyc):
-            a, b, c = face_triangles(arr, f)[0]
-            return _hcentroid(arr._H[a], arr._H[b], arr._H[c])
+            return arr._inner_point(f)
     return _hom(face.sample)
