@@ -876,6 +876,8 @@ def _winding(cx: _Complex, sh: _Shells, anchor: int) -> np.ndarray:
 
 
 _UNKNOWN = np.iinfo(np.int64).min
+# From this many box pairs on, the rounding check's float filters run compiled.
+_COMPILED_FROM = 150_000
 # Float filter for orientations of float64 points (Shewchuk's bound is below 8 eps).
 _ORIENT_FILTER = 16 * float(np.finfo(np.float64).eps) / 2
 
@@ -1193,10 +1195,119 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid) -> np.ndarray:
     lo = np.floor(np.ldexp(P.min(axis=1), -grid.exponent)).astype(np.int64)
     hi = np.ceil(np.ldexp(P.max(axis=1), -grid.exponent)).astype(np.int64)
     pairs = box_pairs(lo, hi)
-    pairs = pairs[_undecided_pairs(np.ascontiguousarray(V), np.ascontiguousarray(T), pairs, moved)]
+    # The compiled filter costs a one-off load (a few tenths of a second in a fresh process):
+    # worth it only for many pairs.
+    undecided = _undecided_pairs if len(pairs) >= _COMPILED_FROM else _undecided_pairs_np
+    pairs = pairs[undecided(np.ascontiguousarray(V), np.ascontiguousarray(T), pairs, moved)]
     Vi, Tl = _common_integers(V), T.tolist()
     bad = [(i, j) for i, j in pairs.tolist() if _improper(Vi, Tl[i], Tl[j])]
     return np.array(bad, dtype=np.int64).reshape(-1, 2)
+
+
+def _separated(V: np.ndarray, T: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:
+    """Pairs where every vertex of triangle ``j`` not shared with ``i`` lies strictly on one
+    side of the plane of ``i`` (float filter; undecided pairs are False): then the two
+    triangles meet at most in their shared vertices and edge."""
+    a, b, c = (V[T[i, k]] for k in range(3))
+    u, v = b - a, c - a
+    n = np.cross(u, v)
+    side = np.zeros((len(i), 3), dtype=np.int8)
+    for k in range(3):
+        w = V[T[j, k]] - a
+        det = np.einsum("ij,ij->i", n, w)
+        perm = (np.abs(u[:, 0]) * (np.abs(v[:, 1] * w[:, 2]) + np.abs(v[:, 2] * w[:, 1]))
+                + np.abs(u[:, 1]) * (np.abs(v[:, 2] * w[:, 0]) + np.abs(v[:, 0] * w[:, 2]))
+                + np.abs(u[:, 2]) * (np.abs(v[:, 0] * w[:, 1]) + np.abs(v[:, 1] * w[:, 0])))
+        sure = np.abs(det) > _ORIENT_FILTER * perm
+        shared = np.any(T[i] == T[j, k][:, None], axis=1)
+        side[:, k] = np.where(shared, 2, np.where(sure, np.sign(det), 0))
+    free = side != 2
+    pos = np.all((side == 1) | ~free, axis=1)
+    neg = np.all((side == -1) | ~free, axis=1)
+    return (pos | neg) & free.any(axis=1)
+
+
+def _o2_filtered(u, a, b) -> np.ndarray:
+    """Sign of orient2d(u, a, b) on float rows, 0 where the float filter cannot decide."""
+    x1, y1 = a[:, 0] - u[:, 0], a[:, 1] - u[:, 1]
+    x2, y2 = b[:, 0] - u[:, 0], b[:, 1] - u[:, 1]
+    det = x1 * y2 - y1 * x2
+    sure = np.abs(det) > _ORIENT_FILTER * (np.abs(x1 * y2) + np.abs(y1 * x2))
+    return np.where(sure, np.sign(det), 0)
+
+
+def _apart_in_projection_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Pairs sharing an edge or a vertex whose projections (along the dominant axis of the
+    first triangle's normal) meet only in the shared part, decided by a float filter
+    (undecided: False). The 3D triangles then meet only there too."""
+    i, j = pairs[:, 0], pairs[:, 1]
+    Ti, Tj = T[i], T[j]
+    eq = Ti[:, :, None] == Tj[:, None, :]  # (k, 3, 3): vertex a of i equals vertex b of j
+    n_shared = eq.sum(axis=(1, 2))
+    out = np.zeros(len(pairs), dtype=bool)
+    n = np.cross(V[Ti[:, 1]] - V[Ti[:, 0]], V[Ti[:, 2]] - V[Ti[:, 0]])
+    ax = np.argmax(np.abs(n), axis=1)
+    keep = np.stack([(ax + 1) % 3, (ax + 2) % 3], axis=1)
+    rows = np.arange(len(pairs))
+
+    def P(ids, r):
+        return np.stack([V[ids, keep[r, 0]], V[ids, keep[r, 1]]], axis=1)
+
+    # disjoint: an edge line of one triangle strictly separates the other (2D axes)
+    z = n_shared == 0
+    if z.any():
+        r = rows[z]
+        sep = np.zeros(len(r), dtype=bool)
+        for A_, B_ in ((Ti[r], Tj[r]), (Tj[r], Ti[r])):
+            for k in range(3):
+                p, q, o3 = P(A_[:, k], r), P(A_[:, (k + 1) % 3], r), P(A_[:, (k + 2) % 3], r)
+                o = _o2_filtered(p, q, o3)
+                allout = o != 0
+                for m in range(3):
+                    allout &= _o2_filtered(p, q, P(B_[:, m], r)) * o < 0
+                sep |= allout
+        out[r] = sep
+    si = eq.any(axis=2)  # vertices of i that are shared
+    sj = eq.any(axis=1)
+    # shared edge (u, v): the two apexes strictly on opposite sides of the edge's line
+    e = n_shared == 2
+    if e.any():
+        r = rows[e]
+        ai = Ti[r, np.argmin(si[r], axis=1)]
+        aj = Tj[r, np.argmin(sj[r], axis=1)]
+        uv = np.sort(np.where(si[r], Ti[r], -1), axis=1)[:, 1:]
+        u, v = P(uv[:, 0], r), P(uv[:, 1], r)
+        s1 = _o2_filtered(u, v, P(ai, r))
+        s2 = _o2_filtered(u, v, P(aj, r))
+        out[r] = s1 * s2 < 0
+    # shared vertex u: each edge ray at u strictly outside the other triangle's corner
+    w = n_shared == 1
+    if w.any():
+        r = rows[w]
+        ku = np.argmax(si[r], axis=1)
+        u_id = Ti[r, ku]
+        a_id, b_id = Ti[r, (ku + 1) % 3], Ti[r, (ku + 2) % 3]
+        kj = np.argmax(sj[r], axis=1)
+        c_id, d_id = Tj[r, (kj + 1) % 3], Tj[r, (kj + 2) % 3]
+        u, a, b, c, d = (P(x, r) for x in (u_id, a_id, b_id, c_id, d_id))
+
+        def outside(x, p, q):  # ray u->x strictly outside the convex corner (p, q) at u
+            o = _o2_filtered(u, p, q)
+            return (o != 0) & ((_o2_filtered(u, p, x) * o < 0) | (_o2_filtered(u, x, q) * o < 0))
+
+        out[r] = outside(c, a, b) & outside(d, a, b) & outside(a, c, d) & outside(b, c, d)
+    return out
+
+
+def _undecided_pairs_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray, moved: np.ndarray) -> np.ndarray:
+    """:func:`_undecided_pairs` with numpy (the same filters, pair arrays at a time)."""
+    keep = moved[T[pairs]].any(axis=(1, 2))
+    sub = pairs[keep]
+    sub_keep = ~(_separated(V, T, sub[:, 0], sub[:, 1]) | _separated(V, T, sub[:, 1], sub[:, 0]))
+    rows = np.nonzero(keep)[0][sub_keep]
+    out = np.zeros(len(pairs), dtype=bool)
+    out[rows] = ~_apart_in_projection_np(V, T, pairs[rows])
+    return out
 
 
 @nb.njit(cache=True, inline="always")
