@@ -18,6 +18,7 @@ see :class:`Arrangement2D` for the complexity.
 
 from __future__ import annotations
 
+import weakref
 from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
@@ -321,7 +322,7 @@ class Face:
     isolated: list = field(default_factory=list)
     _area: object = field(default=None, repr=False)  # a Fraction, or the cycles' (num, den) parts
     _sample: tuple = field(default=None, repr=False)
-    _owner: object = field(default=None, repr=False, compare=False)
+    _owner: object = field(default=None, repr=False, compare=False)  # weakref to the arrangement
 
     @property
     def area(self):
@@ -334,7 +335,7 @@ class Face:
     def sample(self) -> tuple:
         # computed on first use: most faces never need one
         if self._sample is None and self._owner is not None:
-            self._sample = self._owner._sample(self)
+            self._sample = self._owner()._sample(self)
         return self._sample
 
     @sample.setter
@@ -669,7 +670,7 @@ class Arrangement2D:
             dtype=np.int64,
         ).reshape(-1, 2)
         for f in self.faces:
-            f._owner = self
+            f._owner = weakref.ref(self)  # no reference cycle: freed without the collector
         if V:
             h0 = self._H[0]
             self.unbounded.sample = (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))

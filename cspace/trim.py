@@ -8,6 +8,7 @@ return a :class:`SumPolyhedron`.
 
 from __future__ import annotations
 
+import gc
 import multiprocessing as mp
 import os
 import time
@@ -214,8 +215,8 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
         Called as ``progress(stage: str, fraction: float)`` during long builds.
     workers : int, optional
         Processes for the per-plane arrangements (forked, Linux/macOS; the result does not
-        depend on it). Default: the CPUs this process may run on; 1 runs everything here.
-        Small builds stay in this process whatever the value.
+        depend on it). Default: ``$CSPACE_WORKERS``, else the CPUs this process may run on;
+        1 runs everything here. Small builds stay in this process whatever the value.
 
     Returns
     -------
@@ -238,8 +239,16 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     Ac = _convex_operand(A, "A", grid)
     if Ac is not None:
         return _from_convex(Ac, Bc, t0)
-    return _trim(as_mesh(A, grid=grid, name=getattr(A, "name", None) or "A"), Bc, t0, progress,
-                 _workers(workers))
+    A = as_mesh(A, grid=grid, name=getattr(A, "name", None) or "A")
+    # The trimming makes millions of small tuples and few reference cycles: the cyclic
+    # collector's passes over them cost a quarter of the time, and nothing waits for it.
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        return _trim(A, Bc, t0, progress, _workers(workers))
+    finally:
+        if enabled:
+            gc.enable()
 
 
 def _loaded(obj):
@@ -537,7 +546,9 @@ class _PlaneJobs:
         return not self.cuts.segments[p] and (len(tl) == 1 or len({self.facet[t] for t in tl}) == 1)
 
     def cost(self, p: int) -> int:
-        return (len(self.members[p]) + len(self.cuts.segments[p])) ** 2
+        """Rough work of plane ``p``'s arrangement (its inputs; quadratic beyond a few tens)."""
+        n = len(self.members[p]) + len(self.cuts.segments[p])
+        return n + n * n // 64
 
     def arrange(self, p: int):
         """Sub-facets of arrangement plane ``p``: ``(lifted, faces)`` with ``lifted[v]`` the
@@ -621,17 +632,25 @@ def _arrange_chunk(ps: list) -> list:
 
 
 def _workers(workers: int | None) -> int:
+    """Processes for the arrangements: ``workers``, else ``$CSPACE_WORKERS``, else the CPUs
+    this process may run on."""
+    if workers is None and os.environ.get("CSPACE_WORKERS", "").strip():
+        workers = os.environ["CSPACE_WORKERS"]
     if workers is not None:
-        return max(1, int(workers))
+        try:
+            return max(1, int(workers))
+        except ValueError:
+            raise ValueError(f"workers must be a positive integer, got {workers!r}") from None
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux
         return max(1, os.cpu_count() or 1)
 
 
-# Below this much estimated work (sum over planes of (triangles + cuts)^2) the arrangements
-# run in this process: forking and collecting results would cost more than they save.
-_PARALLEL_FROM = 20000
+# Below this much estimated work (sum of _PlaneJobs.cost, about 0.1 ms a unit) the
+# arrangements run in this process: forking and collecting results (some 30-50 ms) would
+# cost more than they save.
+_PARALLEL_FROM = 1500
 
 
 def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tuple[dict, int]:
@@ -642,14 +661,16 @@ def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tup
     n = len(todo)
     total = sum(jobs.cost(p) for p in todo)
     out: dict = {}
-    if workers > 1 and n >= 64 and total >= _PARALLEL_FROM and "fork" in mp.get_all_start_methods():
+    if workers > 1 and n >= 16 and total >= _PARALLEL_FROM and "fork" in mp.get_all_start_methods():
         # largest first, then chunks small enough to balance the two ends
         order = sorted(todo, key=jobs.cost, reverse=True)
         size = max(1, min(64, n // (8 * workers)))
         chunks = [order[k: k + size] for k in range(0, n, size)]
         _JOBS = jobs
         try:
-            with mp.get_context("fork").Pool(workers) as pool:
+            # no collector in the workers: a collection would touch (and so copy) every page
+            # they inherited
+            with mp.get_context("fork").Pool(workers, initializer=gc.disable) as pool:
                 for res in pool.imap_unordered(_arrange_chunk, chunks):
                     out.update(res)
                     report("arrangements", len(out) / n)

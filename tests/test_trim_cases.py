@@ -204,6 +204,25 @@ def test_forked_arrangements_give_the_same_sum():
     assert np.array_equal(one.shell, two.shell)
 
 
+def test_collector_state_is_restored():
+    """The build pauses the cyclic garbage collector and leaves it as it found it."""
+    import gc
+
+    from zoo import l_shape
+
+    V, F = l_shape()
+    B = box_points(0.2, 0.3, 0.4)
+    assert gc.isenabled()
+    minkowski_sum((V, F), B)
+    assert gc.isenabled()
+    gc.disable()
+    try:
+        minkowski_sum((V, F), B)
+        assert not gc.isenabled()
+    finally:
+        gc.enable()
+
+
 @pytest.mark.slow
 @pytest.mark.peers
 @pytest.mark.parametrize("seed", range(12))
