@@ -803,6 +803,33 @@ def _angular_order(vectors: list, d: tuple) -> list:
     return sorted(range(len(vectors)), key=cmp_to_key(cmp))
 
 
+def _crossing_order(cx: _Complex, e: int, inc: list, inc_sign: list, plane_of: list,
+                    plane_normal: list) -> list | None:
+    """The angular order of :func:`_angular_order` at an edge where two planes cross, each
+    with a sub-facet on both sides (four incidences, two per plane, opposite half-edge
+    signs), or None for any other edge. The keys ``s_h * m`` come in two opposite pairs
+    ``±v`` (plane p) and ``±w`` (plane q); after ``v`` comes the ``w`` with
+    ``(v x w) . d > 0``, and ``d = sign(D . delta) D`` for ``D = n_p x n_q`` along the edge
+    ``delta``: that product is ``s_v s_w sign(D . delta) |D|^2``, so one exact sign decides."""
+    i0 = inc[0]
+    p = plane_of[i0]
+    same = [i for i in inc[1:] if plane_of[i] == p]
+    other = [i for i in inc[1:] if plane_of[i] != p]
+    if len(same) != 1 or len(other) != 2 or plane_of[other[0]] != plane_of[other[1]]:
+        return None
+    i1, (j0, j1) = same[0], other
+    if inc_sign[i1] == inc_sign[i0] or inc_sign[j0] == inc_sign[j1]:
+        return None
+    D = _cross(plane_normal[p], plane_normal[plane_of[j0]])
+    u, v = cx.edges[e].tolist()
+    P, Q = cx.points[u], cx.points[v]
+    s = D[0] * (Q[0] * P[3] - P[0] * Q[3]) + D[1] * (Q[1] * P[3] - P[1] * Q[3]) + D[2] * (Q[2] * P[3] - P[2] * Q[3])
+    if s == 0:  # pragma: no cover - the edge lies on both planes
+        raise ExactnessError(f"edge {e} is not along the line of its planes")
+    nxt, last = (j0, j1) if inc_sign[i0] * inc_sign[j0] * (1 if s > 0 else -1) > 0 else (j1, j0)
+    return [i0, nxt, i1, last]
+
+
 def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     order = np.argsort(cx.inc_edge, kind="stable")
     e_sorted = cx.inc_edge[order]
@@ -824,21 +851,24 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     ta += [2 * cx.inc_face[one] + 1]
     many = np.nonzero(counts > 2)[0]
     extra_a, extra_b = [], []
-    for e in many.tolist():
-        inc = order[start[e]: start[e] + counts[e]].tolist()
-        normals = [planes.normal(int(cx.face_plane[cx.inc_face[k]])) for k in inc]
-        sg = [int(cx.inc_sign[k]) for k in inc]
-        d = _edge_direction(cx, planes, e, normals)
-        vec = [tuple(s * c for c in n) for s, n in zip(sg, normals)]
-        L = [inc[k] for k in _angular_order(vec, d)]
-        k = len(L)
+    plane_normal = [planes.normal(p) for p in range(len(planes.keys))]
+    inc_sign, inc_face = cx.inc_sign.tolist(), cx.inc_face.tolist()
+    plane_of = cx.face_plane[cx.inc_face].tolist()  # plane of each incidence
+    for e, lo, k in zip(many.tolist(), start[many].tolist(), counts[many].tolist()):
+        inc = order[lo: lo + k].tolist()
+        L = _crossing_order(cx, e, inc, inc_sign, plane_of, plane_normal) if k == 4 else None
+        if L is None:
+            normals = [plane_normal[plane_of[i]] for i in inc]
+            d = _edge_direction(cx, planes, e, normals)
+            vec = [tuple(inc_sign[i] * c for c in n) for i, n in zip(inc, normals)]
+            L = [inc[m] for m in _angular_order(vec, d)]
         for pos, i in enumerate(L):
             for s in (1, -1):
-                rot = s * int(cx.inc_sign[i])
+                rot = s * inc_sign[i]
                 j = L[(pos + rot) % k]
-                s2 = -rot * int(cx.inc_sign[j])
-                extra_a.append(2 * int(cx.inc_face[i]) + (s > 0))
-                extra_b.append(2 * int(cx.inc_face[j]) + (s2 > 0))
+                s2 = -rot * inc_sign[j]
+                extra_a.append(2 * inc_face[i] + (s > 0))
+                extra_b.append(2 * inc_face[j] + (s2 > 0))
     a = np.concatenate(fa + [np.array(extra_a, dtype=np.int64)])
     b = np.concatenate(ta + [np.array(extra_b, dtype=np.int64)])
     n_nodes = 2 * len(cx.face_plane)

@@ -204,6 +204,38 @@ def test_forked_arrangements_give_the_same_sum():
     assert np.array_equal(one.shell, two.shell)
 
 
+def test_crossing_order_matches_the_angular_sort():
+    """At edges where two planes cross, the one-sign order of the half-planes equals the
+    exact angular sort (up to where the cycle starts), and it applies to most such edges."""
+    from cspace.superset import minkowski_superset
+    from cspace.trim import (
+        _angular_order, _complex, _crossing_order, _cuts, _edge_direction, _plane_groups,
+    )
+    from zoo import icosphere_points, torus
+
+    S = minkowski_superset(torus(), icosphere_points(1, radius=0.3))
+    planes = _plane_groups(S)
+    cx, _ = _complex(S.ints, planes, _cuts(S.ints, planes), lambda *a: None)
+    order = np.argsort(cx.inc_edge, kind="stable")
+    counts = np.bincount(cx.inc_edge, minlength=len(cx.edges))
+    start = np.searchsorted(cx.inc_edge[order], np.arange(len(cx.edges)))
+    normal = [planes.normal(p) for p in range(len(planes.keys))]
+    sign, plane_of = cx.inc_sign.tolist(), cx.face_plane[cx.inc_face].tolist()
+    fast = 0
+    for e in np.nonzero(counts == 4)[0].tolist():
+        inc = order[start[e]: start[e] + 4].tolist()
+        got = _crossing_order(cx, e, inc, sign, plane_of, normal)
+        if got is None:
+            continue
+        fast += 1
+        ns = [normal[plane_of[i]] for i in inc]
+        d = _edge_direction(cx, planes, e, ns)
+        ref = [inc[m] for m in _angular_order([tuple(sign[i] * c for c in n) for i, n in zip(inc, ns)], d)]
+        r = ref.index(got[0])
+        assert got == ref[r:] + ref[:r], e
+    assert fast > 100 and fast > 0.8 * int((counts == 4).sum())
+
+
 def test_collector_state_is_restored():
     """The build pauses the cyclic garbage collector and leaves it as it found it."""
     import gc
