@@ -336,10 +336,11 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 
     stats["superset_triangles"] = len(planes.faces)
     stats["n_planes"] = len(planes.keys)
 
-    cuts = _cuts(S.ints, planes)
+    cuts = _cuts(S.ints, planes, workers)
     t = lap("intersections", t)
     stats["candidate_pairs"] = cuts.n_pairs
     stats["cut_pairs"] = cuts.n_cut
+    stats["intersection_processes"] = cuts.processes
 
     cx, stats["arrangement_processes"] = _complex(S.ints, planes, cuts, report, workers)
     t = lap("arrangements", t)
@@ -437,25 +438,49 @@ class _Cuts:
     segments: list
     n_pairs: int
     n_cut: int
+    processes: int = 1
 
 
-def _cuts(ints: np.ndarray, planes: _Planes) -> _Cuts:
+def _cut_pieces(ints: np.ndarray, faces: np.ndarray, pairs: np.ndarray) -> tuple[np.ndarray, list]:
+    """The pairs that meet in a segment or a point, and the exact homogeneous endpoints
+    ``(X4, Y4)`` of each meeting."""
+    res = intersect_pairs(ints, faces, pairs)
+    hit = (res.cls == SEGMENT) | (res.cls == POINT)
+    if not hit.any():
+        return pairs[:0], []
+    sub = TriTriResult(
+        pairs=res.pairs[hit], cls=res.cls[hit], kind=res.kind[hit], u=res.u[hit],
+        v=res.v[hit], plane=res.plane[hit],
+    )
+    ex, _ = endpoint_coordinates(ints, faces, sub)
+    return sub.pairs, ex.tolist()
+
+
+# From this many candidate pairs on, they are intersected in forked workers.
+_PARALLEL_PAIRS = 40_000
+
+
+def _cuts(ints: np.ndarray, planes: _Planes, workers: int = 1) -> _Cuts:
     pairs = candidate_pairs(ints, planes.faces)
     pairs = pairs[planes.plane[pairs[:, 0]] != planes.plane[pairs[:, 1]]]
-    res = intersect_pairs(ints, planes.faces, pairs)
-    hit = (res.cls == SEGMENT) | (res.cls == POINT)
+    if workers > 1 and len(pairs) >= _PARALLEL_PAIRS and _can_fork():
+        bounds = np.linspace(0, len(pairs), 2 * workers + 1).astype(int).tolist()
+        parts = dict(_forked_map(
+            lambda k: (k, _cut_pieces(ints, planes.faces, pairs[bounds[k]: bounds[k + 1]])),
+            list(range(2 * workers)), workers))
+        pieces = [parts[k] for k in range(2 * workers)]  # in pair order, as in one process
+    else:
+        pieces = [_cut_pieces(ints, planes.faces, pairs)]
     segments: list = [[] for _ in planes.keys]
-    if hit.any():
-        sub = TriTriResult(
-            pairs=res.pairs[hit], cls=res.cls[hit], kind=res.kind[hit], u=res.u[hit],
-            v=res.v[hit], plane=res.plane[hit],
-        )
-        ex, _ = endpoint_coordinates(ints, planes.faces, sub)
-        pl = planes.plane[sub.pairs]
-        for (pa, pb), (x, y) in zip(pl.tolist(), ex.tolist()):
+    n_cut = 0
+    processes = workers if len(pieces) > 1 else 1
+    for hit_pairs, ex in pieces:
+        n_cut += len(ex)
+        pl = planes.plane[hit_pairs]
+        for (pa, pb), (x, y) in zip(pl.tolist(), ex):
             segments[pa].append((x, y))
             segments[pb].append((x, y))
-    return _Cuts(segments, len(pairs), int(hit.sum()))
+    return _Cuts(segments, len(pairs), n_cut, processes)
 
 
 @dataclass
@@ -623,12 +648,31 @@ class _PlaneJobs:
         raise ExactnessError(f"face {f} of plane {p} is covered by no superset triangle")  # pragma: no cover
 
 
-# The plane jobs of the running build, read by forked workers (set just before the fork).
-_JOBS: _PlaneJobs | None = None
+# The task of the running forked map, inherited by its workers (set just before the fork).
+_TASK = None
 
 
-def _arrange_chunk(ps: list) -> list:
-    return [(p, _JOBS.arrange(p)) for p in ps]
+def _run_task(chunk):
+    return _TASK(chunk)
+
+
+def _can_fork() -> bool:
+    return "fork" in mp.get_all_start_methods()
+
+
+def _forked_map(task, chunks: list, workers: int):
+    """``task(chunk)`` for every chunk in ``workers`` forked processes, yielded as they come
+    (any order). The workers inherit the parent's memory, so ``task`` may read anything the
+    parent built; only chunks and results are pickled."""
+    global _TASK
+    _TASK = task
+    try:
+        # no collector in the workers: a collection would touch (and so copy) every page
+        # they inherited
+        with mp.get_context("fork").Pool(workers, initializer=gc.disable) as pool:
+            yield from pool.imap_unordered(_run_task, chunks)
+    finally:
+        _TASK = None
 
 
 def _workers(workers: int | None) -> int:
@@ -657,25 +701,17 @@ def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tup
     """``{plane: jobs.arrange(plane)}`` for the planes ``todo``, in ``workers`` forked
     processes when there is enough work (results do not depend on the number of workers),
     and the number of processes used."""
-    global _JOBS
     n = len(todo)
     total = sum(jobs.cost(p) for p in todo)
     out: dict = {}
-    if workers > 1 and n >= 16 and total >= _PARALLEL_FROM and "fork" in mp.get_all_start_methods():
+    if workers > 1 and n >= 16 and total >= _PARALLEL_FROM and _can_fork():
         # largest first, then chunks small enough to balance the two ends
         order = sorted(todo, key=jobs.cost, reverse=True)
         size = max(1, min(64, n // (8 * workers)))
         chunks = [order[k: k + size] for k in range(0, n, size)]
-        _JOBS = jobs
-        try:
-            # no collector in the workers: a collection would touch (and so copy) every page
-            # they inherited
-            with mp.get_context("fork").Pool(workers, initializer=gc.disable) as pool:
-                for res in pool.imap_unordered(_arrange_chunk, chunks):
-                    out.update(res)
-                    report("arrangements", len(out) / n)
-        finally:
-            _JOBS = None
+        for res in _forked_map(lambda ps: [(p, jobs.arrange(p)) for p in ps], chunks, workers):
+            out.update(res)
+            report("arrangements", len(out) / n)
         return out, workers
     for k, p in enumerate(todo):
         out[p] = jobs.arrange(p)

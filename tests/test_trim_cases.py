@@ -188,16 +188,18 @@ def test_operands_are_snapped_once_on_one_grid():
 
 
 def test_forked_arrangements_give_the_same_sum():
-    """The per-plane arrangements run in forked workers on large builds; the sum must be the
-    same, vertex for vertex and face for face, as the one built in this process."""
+    """The triangle pairs and the per-plane arrangements run in forked workers on large
+    builds; the sum must be the same, vertex for vertex and face for face, as the one built
+    in this process."""
     from zoo import icosphere_points, torus
 
     V, F = torus()
-    B = icosphere_points(1, radius=0.3)
+    B = icosphere_points(2, radius=0.3)  # 51700 candidate pairs, 2300 arrangements
     one = minkowski_sum((V, F), B, workers=1)
     two = minkowski_sum((V, F), B, workers=2)
-    assert one.stats["arrangement_processes"] == 1
-    assert two.stats["arrangement_processes"] == 2  # the parallel path really ran
+    assert one.stats["arrangement_processes"] == one.stats["intersection_processes"] == 1
+    # the parallel paths really ran
+    assert two.stats["arrangement_processes"] == two.stats["intersection_processes"] == 2
     assert np.array_equal(one.vertices, two.vertices) and np.array_equal(one.faces, two.faces)
     assert one.points_exact == two.points_exact and one.volume_exact == two.volume_exact
     assert np.array_equal(one.facet_source_a, two.facet_source_a)
