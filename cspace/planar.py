@@ -37,6 +37,7 @@ __all__ = [
     "MergeResult",
     "polygon_coverage",
     "sampled_coverage",
+    "pushed_inside",
     "face_triangles",
     "strict_inner_point",
     "merge_coplanar",
@@ -952,6 +953,14 @@ def _pushed_side(a, b, X: int, Y: int, W: int) -> int:
     return -1 if uy > 0 else (1 if uy < 0 else (1 if ux > 0 else -1))
 
 
+def pushed_inside(poly, turn: int, X: int, Y: int, W: int) -> bool:
+    """Is the point ``(X/W, Y/W) + eps * (1, eps)`` (eps -> 0+) inside the convex polygon
+    ``poly`` (integer points) of orientation ``turn`` (+1 counter-clockwise, -1 clockwise)?
+    Never on its boundary: the push decides."""
+    n = len(poly)
+    return all(_pushed_side(poly[k], poly[(k + 1) % n], X, Y, W) == turn for k in range(n))
+
+
 def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
     """Net and unsigned coverage of the faces of the arrangement of ``segments`` by convex
     oriented polygons, read at one point per face.
@@ -1008,10 +1017,8 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
                               & (box[:, 2] <= yf) & (yf <= box[:, 3]))[0].tolist()
         c = s = 0
         for i in near:
-            poly, t = polys[i], turn[i]
-            n = len(poly)
-            if all(_pushed_side(poly[k], poly[(k + 1) % n], X, Y, w) == t for k in range(n)):
-                c += weights[i] * t
+            if pushed_inside(polys[i], turn[i], X, Y, w):
+                c += weights[i] * turn[i]
                 s += abs(weights[i])
         coverage[f], support[f] = c, s
         if c:

@@ -35,9 +35,9 @@ from .planar import (
     face_triangles,
     polygon_coverage,
     project_homogeneous,
+    pushed_inside,
     sampled_coverage,
     strict_inner_point,
-    winding_number,
 )
 from .superset import Superset, minkowski_superset
 
@@ -617,7 +617,10 @@ class _PlaneJobs:
         return lifted, faces
 
     def _source_facet(self, p: int, arr, f: int, tl: list) -> int:
-        """A superset facet whose triangle covers face ``f`` (the first in plane order)."""
+        """A superset facet whose triangle covers (part of) face ``f``: one whose edge bounds
+        the face from the covered side, else the first in plane order covering the face's
+        inner point. (A face may be covered by several coplanar facets of one orientation:
+        the merge of step 2; it names one of them.)"""
         if len(tl) == 1:
             return self.facet[tl[0]]
         ax = self.axis[p]
@@ -625,8 +628,8 @@ class _PlaneJobs:
         face = arr.faces[f]
         H, origin = arr._H, arr.half_edge_origin
         ccw = self.sigma[p]
-        # A triangle with an edge along the face's boundary, on the face's side of it, covers
-        # the face (the face is a cell of an arrangement containing that triangle's edges).
+        # A triangle with an edge along the face's boundary, on the face's side of it,
+        # covers the face next to that edge.
         for h in face.outer:
             for i, j in arr.edge_labels[h // 2]:
                 if i < 0:
@@ -640,10 +643,9 @@ class _PlaneJobs:
                 same = d_tri[0] * d_face[0] + d_tri[1] * d_face[1] > 0
                 if same == (self.sign[t] * ccw > 0):
                     return self.facet[t]
-        x, y = face.sample
+        X, Y, W = arr._inner_point(f)
         for t in tl:
-            corners = [(c[a], c[b]) for c in self.corners[t]]
-            if winding_number(corners, (x, y)) != 0:
+            if pushed_inside([(c[a], c[b]) for c in self.corners[t]], self.sign[t] * ccw, X, Y, W):
                 return self.facet[t]
         raise ExactnessError(f"face {f} of plane {p} is covered by no superset triangle")  # pragma: no cover
 
