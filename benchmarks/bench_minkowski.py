@@ -128,9 +128,12 @@ def child(tool: str, name: str) -> dict:
         out["volume"] = repr(float(MS.volume()))
         out["status"] = str(MS.status())
     elif tool == "warmup":
-        from cspace.trim import minkowski_sum
+        from cspace.trim import _undecided_pairs, minkowski_sum
 
         minkowski_sum(A, B)
+        # the rounding check's compiled filter (used from 150k box pairs on) into the cache
+        _undecided_pairs(np.zeros((3, 3)), np.array([[0, 1, 2]]), np.zeros((0, 2), np.int64),
+                         np.ones(3, dtype=bool))
     else:
         raise SystemExit(f"unknown tool {tool!r}")
     out["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
