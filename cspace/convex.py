@@ -250,6 +250,13 @@ class ConvexPolytope:
         from .mesh import as_mesh
 
         m = as_mesh(mesh, grid=grid, name=name)
+        reflex = _reflex_edge(m.ints, m.faces)
+        if reflex is not None:  # cheap and exact: no hull of a large non-convex mesh
+            f, (u, v) = reflex
+            raise NotConvexError(
+                f"mesh '{m.name}' is not convex: its edge ({u}, {v}) of face {f} is reflex "
+                "(the neighbouring face turns outwards)"
+            )
         hull = cls.from_ints(m.ints, grid=m.grid, name=m.name)
         tri = m.ints[m.faces]
         tri_n = exact.primitive(exact.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
@@ -784,3 +791,25 @@ def hull_minkowski_sum(A, B, *, method: str = "auto") -> ConvexPolytope:
     A, B = _common_grid(A, B)
     pts = (A.ints[:, None, :] + B.ints[None, :, :]).reshape(-1, 3)
     return ConvexPolytope.from_ints(pts, grid=A.grid, name=f"hull({A.name}+{B.name})", method=method)
+
+
+def _reflex_edge(ints: np.ndarray, faces: np.ndarray):
+    """A strictly reflex edge of a closed, outward-oriented 2-manifold triangle mesh, as
+    ``(face, (u, v))``, or None: edge ``u -> v`` of ``face = (u, v, w)`` is reflex when the
+    far corner of the face across it lies strictly on the outer side of ``face``'s plane
+    (exact ``orient3d``). A mesh with one is not convex; one without may still not be."""
+    m = len(faces)
+    u = faces.reshape(-1)
+    v = faces[:, [1, 2, 0]].reshape(-1)
+    w = faces[:, [2, 0, 1]].reshape(-1)
+    n = int(u.max()) + 1 if m else 0
+    key = u * n + v
+    order = np.argsort(key)
+    twin = order[np.searchsorted(key[order], v * n + u)]  # the half-edge v -> u
+    far = w[twin]
+    side = exact.orient3d(ints[u], ints[v], ints[w], ints[far])
+    bad = np.nonzero(side > 0)[0]
+    if not bad.size:
+        return None
+    k = int(bad[0])
+    return k // 3, (int(u[k]), int(v[k]))

@@ -287,8 +287,17 @@ def test_from_mesh_rejects_a_dented_sphere():
     m = trimesh.creation.icosphere(subdivisions=1)
     v = m.vertices.copy()
     v[0] *= 0.7  # below the plane of its neighbours (at ~0.85): its faces become reflex
-    with pytest.raises(NotConvexError, match="not convex: .* faces are not on its convex hull"):
+    with pytest.raises(NotConvexError, match="not convex: its edge .* of face .* is reflex"):
         ConvexPolytope.from_mesh(trimesh.Trimesh(v, m.faces, process=False))
+
+
+def test_from_mesh_rejects_convex_pieces_that_are_not_one_convex_body():
+    """No reflex edge, still not convex (two boxes apart): the hull certificate decides."""
+    a, b = trimesh.creation.box((1, 1, 1)), trimesh.creation.box((1, 1, 1))
+    b.apply_translation((3, 0, 0))
+    two = trimesh.util.concatenate([a, b])
+    with pytest.raises(NotConvexError, match="faces are not on its convex hull"):
+        ConvexPolytope.from_mesh(trimesh.Trimesh(two.vertices, two.faces, process=False))
 
 
 def l_prism() -> tuple[np.ndarray, np.ndarray]:
