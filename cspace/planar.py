@@ -568,7 +568,7 @@ class Arrangement2D:
             out[origin[h]].append(h)
         pos = [0] * nh
         for v, hs in enumerate(out):
-            if len(hs) > 1:
+            if len(hs) > 2:  # two half-edges have one cyclic order
                 o = self._H[v]
                 dirs = {h: _hdir(o, self._H[origin[h ^ 1]]) for h in hs}
                 hs.sort(key=cmp_to_key(lambda a, b: _angle_cmp(dirs[a], dirs[b])))
@@ -618,20 +618,12 @@ class Arrangement2D:
         # and the exact ratios decide their ties
         self._positive = sorted(positive, key=lambda c: (areas[c][0] / areas[c][1],
                                                          _Ratio(*areas[c])))
-        self._poly = {c: [V[origin[h]] for h in cycles[c]] for c in positive}
-        self._hpoly = {c: [self._H[origin[h]] for h in cycles[c]] for c in positive}
+        self._bbox, self._hpoly = {}, {}  # per positive cycle, made when first asked for
         face_of_cycle = {c: n for n, c in enumerate(positive)}
         self.faces = [Face(outer=cycles[c], _area=[areas[c]]) for c in positive]
         self.unbounded = Face(outer=[])
 
         comp_of_cycle = [find(origin[c[0]]) for c in cycles]
-        bbox = {}
-        for c in positive:
-            poly = self._poly[c]
-            xs = [q[0] for q in poly]
-            ys = [q[1] for q in poly]
-            bbox[c] = (min(xs), max(xs), min(ys), max(ys))
-        self._bbox = bbox
 
         def host(v, comp):
             p, hp = V[v], self._H[v]
@@ -642,10 +634,10 @@ class Arrangement2D:
             for c in self._positive:
                 if comp_of_cycle[c] == comp:
                     continue
-                b = bbox[c]
+                b = self._cycle_box(c)
                 if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
                     continue
-                if _hwinding(self._hpoly[c], hp) != 0:
+                if _hwinding(self._cycle_hpoints(c), hp) != 0:
                     return face_of_cycle[c]
             return -1
 
@@ -677,6 +669,25 @@ class Arrangement2D:
             self.unbounded.sample = (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))
         else:
             self.unbounded.sample = (Fraction(0), Fraction(0))
+
+    def _cycle_hpoints(self, c: int) -> list:
+        """Homogeneous points along cycle ``c``."""
+        pts = self._hpoly.get(c)
+        if pts is None:
+            origin = self.half_edge_origin
+            pts = self._hpoly[c] = [self._H[origin[h]] for h in self._cycles[c]]
+        return pts
+
+    def _cycle_box(self, c: int) -> tuple:
+        """Box ``(x0, x1, y0, y1)`` of cycle ``c`` in the stored point form (scaled integers,
+        or float-then-exact keys)."""
+        b = self._bbox.get(c)
+        if b is None:
+            V, origin = self._S, self.half_edge_origin
+            xs = [V[origin[h]][0] for h in self._cycles[c]]
+            ys = [V[origin[h]][1] for h in self._cycles[c]]
+            b = self._bbox[c] = (min(xs), max(xs), min(ys), max(ys))
+        return b
 
     def _harea(self, cycle) -> tuple[int, int]:
         """Signed area of a half-edge cycle as ``(num, den)``, ``area = num / (2 den)``,
@@ -775,10 +786,10 @@ class Arrangement2D:
         # the form of the stored boxes: scaled integers, or float-then-exact keys
         p = (p[0] * self._L, p[1] * self._L) if self._L else _float_key(_hom(p))
         for c in self._positive:
-            b = self._bbox[c]
+            b = self._cycle_box(c)
             if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
                 continue
-            if _hwinding(self._hpoly[c], x) != 0:
+            if _hwinding(self._cycle_hpoints(c), x) != 0:
                 return self._face_of_cycle[c]
         return -1
 
