@@ -6,7 +6,8 @@
   shape B (hulled), with the same ``--reflect-b``.
 - ``cspace sum A B`` — :func:`cspace.minkowski_sum`: the exact sum of a closed mesh A (any
   genus, non-convex) and a convex shape B (hulled), with holes and non-manifold contacts
-  reported; ``--reflect-b`` as above; per-stage times with ``--stats``.
+  reported; ``--reflect-b`` as above; per-stage times with ``--stats``; ``--workers N``
+  processes for the large stages.
 - ``cspace check SCENE`` — :func:`cspace.fcl_check.cross_check` of the scene's C-obstacles
   against FCL (membership and distance on random translations).
 - ``cspace build SCENE`` — :func:`cspace.model.model_scene`: model the scene (which bodies
@@ -91,7 +92,7 @@ def _sum(args: argparse.Namespace) -> int:
         if not args.quiet:
             print(f"  {stage} {fraction:4.0%}", file=sys.stderr, flush=True)
 
-    S, dt = _timed(minkowski_sum, A, B, progress=progress)
+    S, dt = _timed(minkowski_sum, A, B, progress=progress, workers=args.workers)
     print(f"A: {len(A.faces)} triangles ({args.a}); B: {B.n_facets} facets ({args.b})")
     print(f"A ⊕ B: {len(S.faces)} triangles, {len(S.vertices)} vertices, volume {S.volume:.9g}, "
           f"{S.n_holes} hole(s), {len(S.nonmanifold_edges)} non-manifold edge(s), "
@@ -328,6 +329,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     _operand_arguments(p, "closed mesh file of A (validated; any genus, non-convex)",
                        "write the sum as a mesh file (any format trimesh exports)")
     p.add_argument("--stats", action="store_true", help="print the time of each stage")
+    p.add_argument("--workers", type=int, default=None, metavar="N",
+                   help="processes for the large stages (default: $CSPACE_WORKERS, else the CPUs)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=_sum)
     p = sub.add_parser("check", help="cross-check a scene's C-obstacles against FCL")

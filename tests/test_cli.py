@@ -54,9 +54,11 @@ def test_sum_of_a_torus_matches_the_python_api(tmp_path, capsys):
     trimesh.creation.torus(1.0, 0.3, major_sections=16, minor_sections=8).export(a)
     trimesh.creation.box((0.2, 0.2, 0.2)).export(b)
     out_path = tmp_path / "sum.stl"
-    assert main(["sum", str(a), str(b), "--reflect-b", "0", "0", "0", "-o", str(out_path), "--stats", "-q"]) == 0
+    assert main(["sum", str(a), str(b), "--reflect-b", "0", "0", "0", "-o", str(out_path), "--stats", "-q",
+                 "--workers", "1"]) == 0
     out = capsys.readouterr().out
     assert "NCC-CVMS" in out and "0 hole(s)" in out and "arrangements:" in out
+    assert "arrangement_processes: 1" in out
     written = trimesh.load(out_path, process=False)
     A = cspace.ClosedMesh.load(a)
     B = trimesh.load(b).vertices
