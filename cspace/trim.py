@@ -11,6 +11,7 @@ from __future__ import annotations
 import gc
 import multiprocessing as mp
 import os
+import threading
 import time
 from collections import deque
 from dataclasses import dataclass, field
@@ -214,9 +215,10 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     progress : callable, optional
         Called as ``progress(stage: str, fraction: float)`` during long builds.
     workers : int, optional
-        Processes for the per-plane arrangements (forked, Linux/macOS; the result does not
-        depend on it). Default: ``$CSPACE_WORKERS``, else the CPUs this process may run on;
-        1 runs everything here. Small builds stay in this process whatever the value.
+        Processes for the triangle-pair intersections and the per-plane arrangements
+        (forked; the result does not depend on it). Default: ``$CSPACE_WORKERS``, else the
+        CPUs this process may run on; 1 runs everything here. Small builds, and calls from a
+        daemonic process or beside other threads, stay in this process whatever the value.
 
     Returns
     -------
@@ -659,7 +661,10 @@ def _run_task(chunk):
 
 
 def _can_fork() -> bool:
-    return "fork" in mp.get_all_start_methods()
+    """Forking is available and safe here: not in a daemonic process (it may not have
+    children) and no other thread (a lock it holds would stay locked in the child)."""
+    return ("fork" in mp.get_all_start_methods() and not mp.current_process().daemon
+            and threading.active_count() == 1)
 
 
 def _forked_map(task, chunks: list, workers: int):

@@ -238,6 +238,24 @@ def test_crossing_order_matches_the_angular_sort():
     assert fast > 100 and fast > 0.8 * int((counts == 4).sum())
 
 
+def test_no_fork_beside_other_threads():
+    """With another thread running, the build stays in this process (a fork would copy the
+    other thread's locks in whatever state they are)."""
+    import threading
+
+    from zoo import icosphere_points, torus
+
+    stop = threading.Event()
+    t = threading.Thread(target=stop.wait)
+    t.start()
+    try:
+        S = minkowski_sum(torus(), icosphere_points(2, radius=0.3), workers=2)
+    finally:
+        stop.set()
+        t.join()
+    assert S.stats["arrangement_processes"] == S.stats["intersection_processes"] == 1
+
+
 def test_collector_state_is_restored():
     """The build pauses the cyclic garbage collector and leaves it as it found it."""
     import gc
