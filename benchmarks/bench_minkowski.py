@@ -190,6 +190,9 @@ def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
         "- *ratio* = manifold3d time / cspace time (> 1: cspace faster). *superset*: triangles after the "
         "plane grouping; *out*: output triangles. *RSS*: peak resident set of the subprocess (imports included).",
         "- *vol err*: manifold3d's volume relative to our exact volume (manifold3d is not a reference).",
+        "- Both tools use both cores: manifold3d through its thread pool, cspace by forking workers for the "
+        "triangle-pair intersections and the per-plane arrangements on large builds (*procs*: processes of "
+        "those two stages; `minkowski_sum(workers=...)`, `$CSPACE_WORKERS`).",
         "",
         "| case | A tris | B facets | superset tris | cspace out | manifold3d out | cspace | manifold3d | ratio | "
         "cspace RSS MB | manifold3d RSS MB | holes | manifold | manifold3d vol err |",
@@ -225,12 +228,12 @@ def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
         "",
         "Stages: *superset* (step 1, SC), *planes* (exact plane groups), *intersections* (steps 4–5: boxes and "
         "exact triangle pairs, BI+TI), *arrangements* (steps 2, 3 and 6 in one exact arrangement per plane: merge, "
-        "cancel and cut, AC), *traversal* (steps 7–16: shells of sub-facet sides, BT), *membership* (exact "
-        "classification of cells), *output* (steps 17–18: facets, triangulation, TR), *rounding_check* (exact "
-        "re-check of the float64 output).",
+        "cancel and cut, AC; also the triangulation of every sub-facet, TR), *traversal* (steps 7–16: shells of "
+        "sub-facet sides, BT), *membership* (exact classification of cells), *output* (steps 17–18: the facets "
+        "between inside and outside, oriented), *rounding_check* (exact re-check of the float64 output).",
         "",
-        "| case | " + " | ".join(STAGES) + " | total | candidate pairs | cut pairs | sub-facets | shells |",
-        "|---|" + "---|" * (len(STAGES) + 5),
+        "| case | " + " | ".join(STAGES) + " | total | procs | candidate pairs | cut pairs | sub-facets | shells |",
+        "|---|" + "---|" * (len(STAGES) + 6),
     ]
     for c, _ in rows:
         if "error" in c:
@@ -238,7 +241,8 @@ def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
         st = dict(c["stats"])
         cells = " | ".join(f"{st[k]:.3f}" if k in st else "" for k in STAGES)
         lines.append(
-            f"| {c['case']} | {cells} | {st.get('total', c['time']):.3f} | {st.get('candidate_pairs', '')} | "
+            f"| {c['case']} | {cells} | {st.get('total', c['time']):.3f} | "
+            f"{st.get('intersection_processes', '')}/{st.get('arrangement_processes', '')} | {st.get('candidate_pairs', '')} | "
             f"{st.get('cut_pairs', '')} | {st.get('subfacets', '')} | {st.get('shells', '')} |"
         )
     return "\n".join(lines) + "\n"
