@@ -33,6 +33,7 @@ from .errors import ExactnessError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
 from .planar import (
+    _hnorm,
     face_triangles,
     polygon_coverage,
     project_homogeneous,
@@ -587,7 +588,8 @@ class _PlaneJobs:
         tl = self.members[p]
         polys = [[(c[a], c[b], 1) for c in self.corners[t]] for t in tl]
         weights = [self.weight[t] for t in tl]
-        segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in self.cuts.segments[p]]
+        cut3 = self.cuts.segments[p]
+        segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in cut3]
         # The net coverage changes only where another plane's sheet meets this one
         # (closedness of the superset): along the cuts and the edges shared by label with
         # other planes' triangles. Where the net coverage is 0, the sheets of one orientation
@@ -605,7 +607,12 @@ class _PlaneJobs:
             cov = polygon_coverage(polys, weights, segs)
         arr = cov.arrangement
         key = self.planes.keys[p]
-        lifted = [_lift(h, key, ax) for h in arr._H]
+        # the 3D points of the inputs are known; only crossings made in the plane are lifted
+        known = {(c[a], c[b], 1): (c[0], c[1], c[2], 1) for t in tl for c in self.corners[t]}
+        for (x, y), (px, py) in zip(cut3, segs):
+            known[_hnorm(*px)] = x
+            known[_hnorm(*py)] = y
+        lifted = [known.get(h) or _lift(h, key, ax) for h in arr._H]
         origin = arr.half_edge_origin
         faces = []
         for f, (c, support) in enumerate(zip(cov.coverage, cov.support)):
