@@ -26,7 +26,13 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
 from .arrangement import (
-    POINT, SEGMENT, TriTriResult, box_pairs, candidate_pairs, endpoint_coordinates, intersect_pairs,
+    POINT,
+    SEGMENT,
+    TriTriResult,
+    box_pairs,
+    candidate_pairs,
+    endpoint_coordinates,
+    intersect_pairs,
 )
 from .convex import ConvexPolytope, convex_minkowski_sum
 from .errors import ExactnessError, NotConvexError
@@ -547,7 +553,7 @@ def _pinned_edges(planes: _Planes) -> np.ndarray:
     first = np.nonzero(new)[0]
     last = np.append(first[1:], len(order)) - 1
     mixed = pl_s[first] != pl_s[last]  # sorted by plane inside each group
-    pinned = np.empty(len(order), dtype=bool)
+    pinned = np.zeros(len(order), dtype=bool)
     pinned[order] = mixed[group]
     return pinned
 
