@@ -102,10 +102,6 @@ def project_homogeneous(p4, drop: int) -> tuple[int, int, int]:
     return (p4[a], p4[b], p4[3])
 
 
-def _sub(a, b):
-    return (a[0] - b[0], a[1] - b[1])
-
-
 def _cross(u, v):
     return u[0] * v[1] - u[1] * v[0]
 
@@ -144,16 +140,6 @@ def winding_number(points, p) -> int:
         elif b[1] <= py and _orient(a, b, p) < 0:
             w -= 1
     return w
-
-
-def _signed_area(points) -> Fraction:
-    n = len(points)
-    s = Fraction(0)
-    for i in range(n):
-        a = points[i]
-        b = points[(i + 1) % n]
-        s += a[0] * b[1] - a[1] * b[0]
-    return s / 2
 
 
 def _angle_cmp(u, v) -> int:

@@ -696,7 +696,7 @@ def _forked_map(task, chunks: list, workers: int):
 
 
 def _workers(workers: int | None) -> int:
-    """Processes for the arrangements: ``workers``, else ``$CSPACE_WORKERS``, else the CPUs
+    """Processes for the forked stages: ``workers``, else ``$CSPACE_WORKERS``, else the CPUs
     this process may run on."""
     if workers is None and os.environ.get("CSPACE_WORKERS", "").strip():
         workers = os.environ["CSPACE_WORKERS"]
@@ -821,6 +821,14 @@ def _orient3(a, b, c, d) -> int:
     return (x > 0) - (x < 0)
 
 
+def _edge_vector(cx: _Complex, e: int) -> tuple:
+    """An integer vector along edge ``e`` from its smaller to its larger vertex id (scaled by
+    the product of their ``W``)."""
+    u, v = cx.edges[e].tolist()
+    P, Q = cx.points[u], cx.points[v]
+    return tuple(Q[k] * P[3] - P[k] * Q[3] for k in range(3))
+
+
 def _edge_direction(cx: _Complex, planes: _Planes, e: int, normals: list) -> tuple:
     """Integer vector along edge ``e`` from its smaller to its larger vertex id, from two
     non-parallel plane normals of its sub-facets (an edge with three or more half-planes
@@ -829,10 +837,7 @@ def _edge_direction(cx: _Complex, planes: _Planes, e: int, normals: list) -> tup
         for j in range(i + 1, len(normals)):
             d = _cross(normals[i], normals[j])
             if d != (0, 0, 0):
-                u, v = cx.edges[e].tolist()
-                P, Q = cx.points[u], cx.points[v]
-                delta = tuple(Q[k] * P[3] - P[k] * Q[3] for k in range(3))
-                s = _dot(d, delta)
+                s = _dot(d, _edge_vector(cx, e))
                 if s == 0:  # pragma: no cover - the edge lies on both planes
                     raise ExactnessError(f"edge {e} is not along the line of its planes")
                 return d if s > 0 else tuple(-c for c in d)
@@ -876,10 +881,7 @@ def _crossing_order(cx: _Complex, e: int, inc: list, inc_sign: list, plane_of: l
     i1, (j0, j1) = same[0], other
     if inc_sign[i1] == inc_sign[i0] or inc_sign[j0] == inc_sign[j1]:
         return None
-    D = _cross(plane_normal[p], plane_normal[plane_of[j0]])
-    u, v = cx.edges[e].tolist()
-    P, Q = cx.points[u], cx.points[v]
-    s = D[0] * (Q[0] * P[3] - P[0] * Q[3]) + D[1] * (Q[1] * P[3] - P[1] * Q[3]) + D[2] * (Q[2] * P[3] - P[2] * Q[3])
+    s = _dot(_cross(plane_normal[p], plane_normal[plane_of[j0]]), _edge_vector(cx, e))
     if s == 0:  # pragma: no cover - the edge lies on both planes
         raise ExactnessError(f"edge {e} is not along the line of its planes")
     nxt, last = (j0, j1) if inc_sign[i0] * inc_sign[j0] * (1 if s > 0 else -1) > 0 else (j1, j0)

@@ -18,9 +18,15 @@ from cspace.planar import (
     to_point,
     triangulate_face,
     winding_number,
-    _signed_area,
     _strip_spikes,
 )
+
+
+def _signed_area(points) -> Fr:
+    """Reference signed area of a closed polyline of Fraction points."""
+    n = len(points)
+    return sum((points[i][0] * points[(i + 1) % n][1] - points[i][1] * points[(i + 1) % n][0]
+                for i in range(n)), Fr(0)) / 2
 
 
 def ring(poly):
