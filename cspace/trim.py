@@ -501,7 +501,8 @@ class _Complex:
     coverage ``face_cov[f]`` counted along ``planes.normal(plane)``; ``face_tris[f]`` tiles it
     with triangles (global ids, counter-clockwise about ``planes.normal``), ``face_src[f]`` is
     a superset facet covering it and ``face_point[f]`` an exact homogeneous point strictly
-    inside it (on no edge or vertex of its arrangement). Incidence ``k``: sub-facet
+    inside it (on no edge or vertex of its arrangement), None for a lone uncut triangle
+    (:func:`_face_point` makes its centroid when asked). Incidence ``k``: sub-facet
     ``inc_face[k]`` has a boundary half-edge on edge ``inc_edge[k]`` (``edges[e] = (u, v)``,
     ``u < v``), running ``u -> v`` when ``inc_sign[k] = +1``; the sub-facet lies on its left
     seen from ``planes.normal``.
@@ -769,10 +770,8 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: in
                 ccw = jobs.sign[t] * jobs.sigma[p]
                 cs = jobs.corners[t] if ccw > 0 else jobs.corners[t][::-1]
                 g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
-                s = [sum(c[k] for c in cs) for k in range(3)]  # 3 x centroid: strictly inside
-                h = gcd(gcd(s[0], s[1]), gcd(s[2], 3))
                 add(p, ccw * jobs.weight[t], g, ((0, 1), (1, 2), (2, 0)), ((0, 1, 2),), jobs.facet[t],
-                    (s[0] // h, s[1] // h, s[2] // h, 3 // h))
+                    None)
             continue
         lifted, faces = done.pop(p)
         g = [vid.setdefault(x, len(vid)) for x in lifted]
@@ -1125,6 +1124,17 @@ class _PieceTest:
         return True
 
 
+def _face_point(cx: _Complex, f: int) -> tuple:
+    """Exact homogeneous point strictly inside sub-facet ``f``: the one its arrangement gave,
+    or the centroid of a lone triangle (integer corners)."""
+    if cx.face_point[f] is not None:
+        return cx.face_point[f]
+    c = [cx.points[i] for i in cx.face_tris[f][0]]
+    s = [c[0][k] + c[1][k] + c[2][k] for k in range(3)]  # 3 x centroid: strictly inside
+    h = gcd(gcd(s[0], s[1]), gcd(s[2], 3))
+    return (s[0] // h, s[1] // h, s[2] // h, 3 // h)
+
+
 def _classify(cx: _Complex, sh: _Shells, planes: _Planes, S: Superset, A: ClosedMesh,
               B: ConvexPolytope) -> tuple[np.ndarray, int, int]:
     """Membership of each shell's cell in A ⊕ B (True: inside)."""
@@ -1143,7 +1153,7 @@ def _classify(cx: _Complex, sh: _Shells, planes: _Planes, S: Superset, A: Closed
         k = int(node[s])
         f, side = k // 2, 1 if k % 2 else -1
         m = planes.normal(int(cx.face_plane[f]))
-        P4 = cx.face_point[f]
+        P4 = _face_point(cx, f)
         inside[s] = test.contains(P4, tuple(side * c for c in m))
         if not inside[s] and unknown[s]:
             # w is unknown, so q - B may lie inside A without touching its surface

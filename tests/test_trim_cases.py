@@ -238,6 +238,26 @@ def test_crossing_order_matches_the_angular_sort():
     assert fast > 100 and fast > 0.8 * int((counts == 4).sum())
 
 
+def test_lone_triangle_sub_facets_get_their_centroid():
+    """Uncut lone triangles carry no arrangement point; the membership test's point for them
+    is their exact centroid (on their plane, strictly inside)."""
+    from cspace.superset import minkowski_superset
+    from cspace.trim import _complex, _cuts, _face_point, _plane_groups
+    from zoo import torus
+
+    S = minkowski_superset(torus(), box_points(0.3, 0.25, 0.2))
+    planes = _plane_groups(S)
+    cx, _ = _complex(S.ints, planes, _cuts(S.ints, planes), lambda *a: None)
+    lone = [f for f in range(len(cx.face_plane)) if cx.face_point[f] is None]
+    assert len(lone) > 100
+    for f in lone[:200]:
+        (a, b, c), = cx.face_tris[f]
+        A, B, C = (cx.points[i] for i in (a, b, c))
+        assert A[3] == B[3] == C[3] == 1  # superset vertices: grid points
+        X, Y, Z, W = _face_point(cx, f)
+        assert [3 * x for x in (X, Y, Z)] == [W * (A[k] + B[k] + C[k]) for k in range(3)]
+
+
 def test_no_fork_beside_other_threads():
     """With another thread running, the build stays in this process (a fork would copy the
     other thread's locks in whatever state they are)."""
