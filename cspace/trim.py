@@ -39,6 +39,8 @@ from .errors import ExactnessError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
 from .planar import (
+    Arrangement2D,
+    Coverage,
     _hnorm,
     face_triangles,
     polygon_coverage,
@@ -573,6 +575,7 @@ class _PlaneJobs:
         self.axis = planes.axis.tolist()
         self.members = [m.tolist() for m in planes.members]
         self.pinned = _pinned_edges(planes).tolist()
+        self.vertex_ids = planes.faces.tolist()
 
     def trivial(self, p: int) -> bool:
         """Uncut triangles of one superset facet (a fan of a convex polygon: they do not
@@ -608,11 +611,19 @@ class _PlaneJobs:
         pin = [(i, j) for i, t in enumerate(tl) for j in range(3) if pinned[3 * t + j] or sg[i] == minority]
         seg2 = [(polys[i][j], polys[i][(j + 1) % 3]) for i, j in pin] + segs
         lab2 = pin + [(-1, k) for k in range(len(segs))]
-        try:
-            cov = sampled_coverage(polys, weights, seg2, lab2)
-        except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
-            cov = polygon_coverage(polys, weights, segs)
-        arr = cov.arrangement
+        one = self._one_facet(tl)
+        if one:
+            # One convex facet whose whole boundary is in the arrangement: every bounded face
+            # lies in it (nothing is drawn outside), so each is covered once, by the facet.
+            arr = Arrangement2D(seg2, lab2)
+            c = self.weight[tl[0]] * self.sign[tl[0]] * self.sigma[p]
+            cov = Coverage(arr, [c] * len(arr.faces), [abs(c)] * len(arr.faces))
+        else:
+            try:
+                cov = sampled_coverage(polys, weights, seg2, lab2)
+            except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
+                cov = polygon_coverage(polys, weights, segs)
+            arr = cov.arrangement
         key = self.planes.keys[p]
         # the 3D points of the inputs are known; only crossings made in the plane are lifted
         known = {(c[a], c[b], 1): (c[0], c[1], c[2], 1) for t in tl for c in self.corners[t]}
@@ -628,9 +639,26 @@ class _PlaneJobs:
             face = arr.faces[f]
             boundary = [(origin[h], origin[h ^ 1]) for cyc in (face.outer, *face.holes) for h in cyc]
             tris = face_triangles(arr, f)
-            src = self._source_facet(p, arr, f, tl)
+            src = self.facet[tl[0]] if one else self._source_facet(p, arr, f, tl)
             faces.append((c, boundary, tris, src, _lift(strict_inner_point(arr, f), key, ax)))
         return lifted, faces
+
+    def _one_facet(self, tl: list) -> bool:
+        """The triangles ``tl`` of a plane are the fan of one superset facet (one weight,
+        one orientation) and every edge of the fan's boundary is pinned (so in the
+        arrangement): the edges used once in the fan, by their vertex labels."""
+        facet = self.facet[tl[0]]
+        if any(self.facet[t] != facet for t in tl):
+            return False
+        once: dict = {}
+        for t in tl:
+            ids = self.vertex_ids[t]
+            for j in range(3):
+                u, v = ids[j], ids[(j + 1) % 3]
+                key = (u, v) if u < v else (v, u)
+                once[key] = None if key in once else 3 * t + j
+        pinned = self.pinned
+        return all(k is None or pinned[k] for k in once.values())
 
     def _source_facet(self, p: int, arr, f: int, tl: list) -> int:
         """A superset facet whose triangle covers (part of) face ``f``: one whose edge bounds

@@ -238,6 +238,34 @@ def test_crossing_order_matches_the_angular_sort():
     assert fast > 100 and fast > 0.8 * int((counts == 4).sum())
 
 
+@pytest.mark.parametrize("robot", ["box", "ico80"])
+def test_one_facet_planes_match_the_sampled_coverage(robot, monkeypatch):
+    """A plane holding one superset facet with its whole boundary pinned takes its coverage
+    from the facet without reading it per face; the sub-facets must be those of the sampled
+    coverage (with its area certificate), on every such plane."""
+    from cspace.superset import minkowski_superset
+    from cspace.trim import _cuts, _plane_groups, _PlaneJobs
+    from zoo import icosphere_points, star
+
+    B = box_points(0.3, 0.25, 0.2) if robot == "box" else icosphere_points(1, radius=0.3)
+    S = minkowski_superset(star(), B)
+    planes = _plane_groups(S)
+    jobs = _PlaneJobs(S.ints, planes, _cuts(S.ints, planes))
+    todo = [p for p in range(len(planes.keys)) if not jobs.trivial(p)]
+    fast = [p for p in todo if jobs._one_facet(jobs.members[p])]
+    assert 40 < len(fast) < len(todo)  # both paths are exercised
+    got = [jobs.arrange(p) for p in fast]
+    # a facet edge not pinned (not known to be in the arrangement) sends the plane back to
+    # the certified path
+    t = jobs.members[fast[0]][0]
+    k = next(3 * t + j for j in range(3) if jobs.pinned[3 * t + j])
+    jobs.pinned[k] = False
+    assert not jobs._one_facet(jobs.members[fast[0]])
+    jobs.pinned[k] = True
+    monkeypatch.setattr(_PlaneJobs, "_one_facet", lambda self, tl: False)
+    assert got == [jobs.arrange(p) for p in fast]
+
+
 def test_lone_triangle_sub_facets_get_their_centroid():
     """Uncut lone triangles carry no arrangement point; the membership test's point for them
     is their exact centroid (on their plane, strictly inside)."""
