@@ -9,9 +9,6 @@ return a :class:`SumPolyhedron`.
 from __future__ import annotations
 
 import gc
-import multiprocessing as mp
-import os
-import threading
 import time
 from collections import deque
 from dataclasses import dataclass, field
@@ -50,6 +47,7 @@ from .planar import (
     strict_inner_point,
 )
 from .superset import Superset, minkowski_superset
+from .workers import can_fork, forked_map, worker_count
 
 __all__ = ["SumPolyhedron", "minkowski_sum"]
 
@@ -225,7 +223,7 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
         Called as ``progress(stage: str, fraction: float)`` during long builds.
     workers : int, optional
         Processes for the triangle-pair intersections and the per-plane arrangements
-        (forked; the result does not depend on it). Default: ``$CSPACE_WORKERS``, else the
+        (this one and ``workers - 1`` forked; the result does not depend on it). Default: ``$CSPACE_WORKERS``, else the
         CPUs this process may run on; 1 runs everything here. Small builds, and calls from a
         daemonic process or beside other threads, stay in this process whatever the value.
 
@@ -256,7 +254,7 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     enabled = gc.isenabled()
     gc.disable()
     try:
-        return _trim(A, Bc, t0, progress, _workers(workers))
+        return _trim(A, Bc, t0, progress, worker_count(workers))
     finally:
         if enabled:
             gc.enable()
@@ -467,17 +465,17 @@ def _cut_pieces(ints: np.ndarray, faces: np.ndarray, pairs: np.ndarray) -> tuple
     return sub.pairs, ex.tolist()
 
 
-# From this many candidate pairs on, they are intersected in forked workers.
+# From this many candidate pairs on, they are intersected in several processes.
 _PARALLEL_PAIRS = 40_000
 
 
 def _cuts(ints: np.ndarray, planes: _Planes, workers: int = 1) -> _Cuts:
     pairs = candidate_pairs(ints, planes.faces)
     pairs = pairs[planes.plane[pairs[:, 0]] != planes.plane[pairs[:, 1]]]
-    if workers > 1 and len(pairs) >= _PARALLEL_PAIRS and _can_fork():
+    if workers > 1 and len(pairs) >= _PARALLEL_PAIRS and can_fork():
         bounds = np.linspace(0, len(pairs), 2 * workers + 1).astype(int).tolist()
-        parts = dict(_forked_map(
-            lambda k: (k, _cut_pieces(ints, planes.faces, pairs[bounds[k]: bounds[k + 1]])),
+        parts = dict(forked_map(
+            lambda k: _cut_pieces(ints, planes.faces, pairs[bounds[k]: bounds[k + 1]]),
             list(range(2 * workers)), workers))
         pieces = [parts[k] for k in range(2 * workers)]  # in pair order, as in one process
     else:
@@ -694,52 +692,6 @@ class _PlaneJobs:
         raise ExactnessError(f"face {f} of plane {p} is covered by no superset triangle")  # pragma: no cover
 
 
-# The task of the running forked map, inherited by its workers (set just before the fork).
-_TASK = None
-
-
-def _run_task(chunk):
-    return _TASK(chunk)
-
-
-def _can_fork() -> bool:
-    """Forking is available and safe here: not in a daemonic process (it may not have
-    children) and no other thread (a lock it holds would stay locked in the child)."""
-    return ("fork" in mp.get_all_start_methods() and not mp.current_process().daemon
-            and threading.active_count() == 1)
-
-
-def _forked_map(task, chunks: list, workers: int):
-    """``task(chunk)`` for every chunk in ``workers`` forked processes, yielded as they come
-    (any order). The workers inherit the parent's memory, so ``task`` may read anything the
-    parent built; only chunks and results are pickled."""
-    global _TASK
-    _TASK = task
-    try:
-        # no collector in the workers: a collection would touch (and so copy) every page
-        # they inherited
-        with mp.get_context("fork").Pool(workers, initializer=gc.disable) as pool:
-            yield from pool.imap_unordered(_run_task, chunks)
-    finally:
-        _TASK = None
-
-
-def _workers(workers: int | None) -> int:
-    """Processes for the forked stages: ``workers``, else ``$CSPACE_WORKERS``, else the CPUs
-    this process may run on."""
-    if workers is None and os.environ.get("CSPACE_WORKERS", "").strip():
-        workers = os.environ["CSPACE_WORKERS"]
-    if workers is not None:
-        try:
-            return max(1, int(workers))
-        except ValueError:
-            raise ValueError(f"workers must be a positive integer, got {workers!r}") from None
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
-
-
 # Below this much estimated work (sum of _PlaneJobs.cost, about 0.1 ms a unit) the
 # arrangements run in this process: forking and collecting results (some 30-50 ms) would
 # cost more than they save.
@@ -747,18 +699,18 @@ _PARALLEL_FROM = 1500
 
 
 def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tuple[dict, int]:
-    """``{plane: jobs.arrange(plane)}`` for the planes ``todo``, in ``workers`` forked
-    processes when there is enough work (results do not depend on the number of workers),
-    and the number of processes used."""
+    """``{plane: jobs.arrange(plane)}`` for the planes ``todo``, in this process and
+    ``workers - 1`` forked ones when there is enough work (results do not depend on the
+    number of workers), and the number of processes used."""
     n = len(todo)
     total = sum(jobs.cost(p) for p in todo)
     out: dict = {}
-    if workers > 1 and n >= 16 and total >= _PARALLEL_FROM and _can_fork():
+    if workers > 1 and n >= 16 and total >= _PARALLEL_FROM and can_fork():
         # largest first, then chunks small enough to balance the two ends
         order = sorted(todo, key=jobs.cost, reverse=True)
         size = max(1, min(64, n // (8 * workers)))
         chunks = [order[k: k + size] for k in range(0, n, size)]
-        for res in _forked_map(lambda ps: [(p, jobs.arrange(p)) for p in ps], chunks, workers):
+        for _, res in forked_map(lambda ps: [(p, jobs.arrange(p)) for p in ps], chunks, workers):
             out.update(res)
             report("arrangements", len(out) / n)
         return out, workers
