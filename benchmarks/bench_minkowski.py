@@ -210,9 +210,9 @@ def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
         "- *ratio* = manifold3d time / cspace time (> 1: cspace faster). *superset*: triangles after the "
         "plane grouping; *out*: output triangles. *RSS*: peak resident set of the subprocess (imports included).",
         "- *vol err*: manifold3d's volume relative to our exact volume (manifold3d is not a reference).",
-        "- Both tools use both cores: manifold3d through its thread pool, cspace by forking workers for the "
-        "triangle-pair intersections and the per-plane arrangements on large builds (*procs*: processes of "
-        "those two stages; `minkowski_sum(workers=...)`, `$CSPACE_WORKERS`).",
+        "- Both tools use both cores: manifold3d through its thread pool, cspace by forking workers beside the "
+        "parent for the triangle-pair intersections, the per-plane arrangements and the rounding check on large "
+        "builds (*procs*: processes of those three stages; `minkowski_sum(workers=...)`, `$CSPACE_WORKERS`).",
         "",
         "| case | A tris | B facets | superset tris | cspace out | manifold3d out | cspace | manifold3d | ratio | "
         "cspace RSS MB | manifold3d RSS MB | holes | manifold | manifold3d vol err |",
@@ -262,7 +262,8 @@ def report(rows: list[tuple[dict, dict]], load0, load1, quick: bool) -> str:
         cells = " | ".join(f"{st[k]:.3f}" if k in st else "" for k in STAGES)
         lines.append(
             f"| {c['case']} | {cells} | {st.get('total', c['time']):.3f} | "
-            f"{st.get('intersection_processes', '')}/{st.get('arrangement_processes', '')} | {st.get('candidate_pairs', '')} | "
+            f"{st.get('intersection_processes', '')}/{st.get('arrangement_processes', '')}/"
+            f"{st.get('rounding_processes', '')} | {st.get('candidate_pairs', '')} | "
             f"{st.get('cut_pairs', '')} | {st.get('subfacets', '')} | {st.get('shells', '')} |"
         )
     return "\n".join(lines) + "\n"

@@ -366,7 +366,7 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 
     out = _output(cx, shells, inside, anchor, planes, S)
     lap("output", t)
     stats["total"] = time.perf_counter() - t0
-    result = _result(out, S, stats)
+    result = _result(out, S, stats, workers)
     report("rounding_check", 1.0)
     return result
 
@@ -966,6 +966,8 @@ def _winding(cx: _Complex, sh: _Shells, anchor: int) -> np.ndarray:
 _UNKNOWN = np.iinfo(np.int64).min
 # From this many box pairs on, the rounding check's float filters run compiled.
 _COMPILED_FROM = 150_000
+# From this many box pairs on (numpy filters), the rounding check runs in several processes.
+_PARALLEL_CHECK = 20_000
 # Float filter for orientations of float64 points (Shewchuk's bound is below 8 eps).
 _ORIENT_FILTER = 16 * float(np.finfo(np.float64).eps) / 2
 
@@ -1234,12 +1236,12 @@ def _nonmanifold(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.nda
     return bad_edges.astype(np.int64), np.nonzero(fans > 1)[0].astype(np.int64)
 
 
-def _result(out: _Output, S: Superset, stats: dict) -> SumPolyhedron:
+def _result(out: _Output, S: Superset, stats: dict, workers: int = 1) -> SumPolyhedron:
     t = time.perf_counter()
     grid = S.grid
     V = _to_float(out.points, grid)
     nm_edges, nm_vertices = _nonmanifold(out.faces, len(V))
-    crossings = _rounding_check(out, V, grid)
+    crossings, stats["rounding_processes"] = _rounding_check(out, V, grid, workers)
     stats["rounding_check"] = time.perf_counter() - t
     stats["total"] += stats["rounding_check"]
     stats["output_triangles"] = len(out.faces)
@@ -1264,8 +1266,10 @@ def _result(out: _Output, S: Superset, stats: dict) -> SumPolyhedron:
     )
 
 
-def _rounding_check(out: _Output, V: np.ndarray, grid: Grid) -> np.ndarray:
-    """Triangle pairs that meet improperly after rounding to float64.
+def _rounding_check(out: _Output, V: np.ndarray, grid: Grid, workers: int = 1) -> tuple[np.ndarray, int]:
+    """Triangle pairs that meet improperly after rounding to float64, and the number of
+    processes that tested them (several from ``_PARALLEL_CHECK`` box pairs on, numpy filter
+    path only).
 
     In the exact result two triangles meet only in shared vertices and edges. Rounding moves
     a vertex by at most half an ulp per coordinate; only pairs with a moved vertex can change,
@@ -1288,19 +1292,31 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid) -> np.ndarray:
 
     moved = np.array([moved_point(P, v) for P, v in zip(out.points, V.tolist())], dtype=bool)
     if not moved.any():
-        return np.zeros((0, 2), np.int64)
+        return np.zeros((0, 2), np.int64), 1
     P = V[T]
     # integer boxes in grid units, rounded outwards: they contain the float boxes
     lo = np.floor(np.ldexp(P.min(axis=1), -grid.exponent)).astype(np.int64)
     hi = np.ceil(np.ldexp(P.max(axis=1), -grid.exponent)).astype(np.int64)
     pairs = box_pairs(lo, hi)
     # The compiled filter costs a one-off load (a few tenths of a second in a fresh process):
-    # worth it only for many pairs.
-    undecided = _undecided_pairs if len(pairs) >= _COMPILED_FROM else _undecided_pairs_np
-    pairs = pairs[undecided(np.ascontiguousarray(V), np.ascontiguousarray(T), pairs, moved)]
+    # worth it only for many pairs, and then fast enough to stay in this process.
+    compiled = len(pairs) >= _COMPILED_FROM
+    undecided = _undecided_pairs if compiled else _undecided_pairs_np
+    Vc, Tc = np.ascontiguousarray(V), np.ascontiguousarray(T)
     Vi, Tl = _common_integers(V), T.tolist()
-    bad = [(i, j) for i, j in pairs.tolist() if _improper(Vi, Tl[i], Tl[j])]
-    return np.array(bad, dtype=np.int64).reshape(-1, 2)
+
+    def check(ps: np.ndarray) -> list:
+        ps = ps[undecided(Vc, Tc, ps, moved)]
+        return [(i, j) for i, j in ps.tolist() if _improper(Vi, Tl[i], Tl[j])]
+
+    if workers > 1 and not compiled and len(pairs) >= _PARALLEL_CHECK and can_fork():
+        parts = np.array_split(pairs, 2 * workers)
+        done = dict(forked_map(check, parts, workers))
+        bad = [b for k in range(len(parts)) for b in done[k]]  # in pair order
+        used = workers
+    else:
+        bad, used = check(pairs), 1
+    return np.array(bad, dtype=np.int64).reshape(-1, 2), used
 
 
 def _separated(V: np.ndarray, T: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:

@@ -206,6 +206,29 @@ def test_forked_arrangements_give_the_same_sum():
     assert np.array_equal(one.shell, two.shell)
 
 
+def test_rounding_check_in_two_processes_matches_one(monkeypatch):
+    """The rounding check splits its box pairs between processes on large outputs; the
+    pairs it reports are those of one process, in the same order. (Every pair the float
+    filters leave is reported here, so the lists are long.)"""
+    import cspace.trim as T
+    from zoo import icosphere_points, star
+
+    seen = {}
+    real = T._rounding_check
+
+    def capture(out, V, grid, workers=1):
+        seen["args"] = (out, V, grid)
+        return real(out, V, grid, workers)
+
+    monkeypatch.setattr(T, "_rounding_check", capture)
+    minkowski_sum(star(), icosphere_points(2, radius=0.3), workers=1)
+    monkeypatch.setattr(T, "_improper", lambda V, s, t: True)
+    one, n1 = real(*seen["args"], 1)
+    two, n2 = real(*seen["args"], 2)
+    assert (n1, n2) == (1, 2)
+    assert len(one) > 100 and np.array_equal(one, two)
+
+
 def test_crossing_order_matches_the_angular_sort():
     """At edges where two planes cross, the one-sign order of the half-planes equals the
     exact angular sort (up to where the cycle starts), and it applies to most such edges."""
