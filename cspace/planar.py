@@ -40,6 +40,7 @@ __all__ = [
     "pushed_inside",
     "face_triangles",
     "strict_inner_point",
+    "plain_interior",
     "merge_coplanar",
     "to_point",
     "project_homogeneous",
@@ -1352,14 +1353,21 @@ def face_triangles(arr: Arrangement2D, f: int) -> list:
     return tris
 
 
+def plain_interior(arr: Arrangement2D, f: int) -> bool:
+    """No dangling edge, bridge or isolated vertex lies in face ``f``: then nothing of the
+    arrangement meets the open triangles of :func:`face_triangles`."""
+    face = arr.faces[f]
+    if face.isolated:
+        return False
+    hf = arr.half_edge_face
+    return all(hf[h] != hf[h ^ 1] for cyc in (face.outer, *face.holes) for h in cyc)
+
+
 def strict_inner_point(arr: Arrangement2D, f: int) -> tuple[int, int, int]:
     """Canonical homogeneous point strictly inside face ``f``: on no edge and no vertex of
-    the arrangement (isolated vertices included). The centroid of a triangle of
-    :func:`face_triangles` when no dangling edge, bridge or isolated vertex lies in the face
-    (then nothing of the arrangement meets the open triangles), else :attr:`Face.sample`."""
-    face = arr.faces[f]
-    if not face.isolated:
-        hf = arr.half_edge_face
-        if all(hf[h] != hf[h ^ 1] for cyc in (face.outer, *face.holes) for h in cyc):
-            return arr._inner_point(f)
-    return _hom(face.sample)
+    the arrangement (isolated vertices included). The centroid of the first triangle of
+    :func:`face_triangles` when the face has a :func:`plain_interior`, else
+    :attr:`Face.sample`."""
+    if plain_interior(arr, f):
+        return arr._inner_point(f)
+    return _hom(arr.faces[f].sample)

@@ -40,6 +40,7 @@ from .planar import (
     Coverage,
     _hnorm,
     face_triangles,
+    plain_interior,
     polygon_coverage,
     project_homogeneous,
     pushed_inside,
@@ -501,8 +502,9 @@ class _Complex:
     coverage ``face_cov[f]`` counted along ``planes.normal(plane)``; ``face_tris[f]`` tiles it
     with triangles (global ids, counter-clockwise about ``planes.normal``), ``face_src[f]`` is
     a superset facet covering it and ``face_point[f]`` an exact homogeneous point strictly
-    inside it (on no edge or vertex of its arrangement), None for a lone uncut triangle
-    (:func:`_face_point` makes its centroid when asked). Incidence ``k``: sub-facet
+    inside it (on no edge or vertex of its arrangement), None where the centroid of its first
+    triangle is one (lone uncut triangles, faces with a plain interior; :func:`_face_point`
+    makes it when asked). Incidence ``k``: sub-facet
     ``inc_face[k]`` has a boundary half-edge on edge ``inc_edge[k]`` (``edges[e] = (u, v)``,
     ``u < v``), running ``u -> v`` when ``inc_sign[k] = +1``; the sub-facet lies on its left
     seen from ``planes.normal``.
@@ -638,7 +640,10 @@ class _PlaneJobs:
             boundary = [(origin[h], origin[h ^ 1]) for cyc in (face.outer, *face.holes) for h in cyc]
             tris = face_triangles(arr, f)
             src = self.facet[tl[0]] if one else self._source_facet(p, arr, f, tl)
-            faces.append((c, boundary, tris, src, _lift(strict_inner_point(arr, f), key, ax)))
+            # a point for the membership test, which few sub-facets need: where the centroid
+            # of the first triangle is one, it is made only when asked (_face_point)
+            point = None if plain_interior(arr, f) else _lift(strict_inner_point(arr, f), key, ax)
+            faces.append((c, boundary, tris, src, point))
         return lifted, faces
 
     def _one_facet(self, tl: list) -> bool:
@@ -1108,13 +1113,15 @@ class _PieceTest:
 
 def _face_point(cx: _Complex, f: int) -> tuple:
     """Exact homogeneous point strictly inside sub-facet ``f``: the one its arrangement gave,
-    or the centroid of a lone triangle (integer corners)."""
+    else the centroid of its first triangle (strictly inside it, and nothing of the
+    arrangement meets that open triangle)."""
     if cx.face_point[f] is not None:
         return cx.face_point[f]
-    c = [cx.points[i] for i in cx.face_tris[f][0]]
-    s = [c[0][k] + c[1][k] + c[2][k] for k in range(3)]  # 3 x centroid: strictly inside
-    h = gcd(gcd(s[0], s[1]), gcd(s[2], 3))
-    return (s[0] // h, s[1] // h, s[2] // h, 3 // h)
+    (xa, ya, za, wa), (xb, yb, zb, wb), (xc, yc, zc, wc) = (cx.points[i] for i in cx.face_tris[f][0])
+    bc, ac, ab = wb * wc, wa * wc, wa * wb
+    s = (xa * bc + xb * ac + xc * ab, ya * bc + yb * ac + yc * ab, za * bc + zb * ac + zc * ab, 3 * wa * bc)
+    h = gcd(gcd(s[0], s[1]), gcd(s[2], s[3]))
+    return (s[0] // h, s[1] // h, s[2] // h, s[3] // h)
 
 
 def _classify(cx: _Complex, sh: _Shells, planes: _Planes, S: Superset, A: ClosedMesh,

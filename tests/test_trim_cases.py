@@ -293,13 +293,16 @@ def test_lone_triangle_sub_facets_get_their_centroid():
     """Uncut lone triangles carry no arrangement point; the membership test's point for them
     is their exact centroid (on their plane, strictly inside)."""
     from cspace.superset import minkowski_superset
-    from cspace.trim import _complex, _cuts, _face_point, _plane_groups
+    from cspace.trim import _complex, _cuts, _face_point, _plane_groups, _PlaneJobs
     from zoo import torus
 
     S = minkowski_superset(torus(), box_points(0.3, 0.25, 0.2))
     planes = _plane_groups(S)
-    cx, _ = _complex(S.ints, planes, _cuts(S.ints, planes), lambda *a: None)
-    lone = [f for f in range(len(cx.face_plane)) if cx.face_point[f] is None]
+    cuts = _cuts(S.ints, planes)
+    cx, _ = _complex(S.ints, planes, cuts, lambda *a: None)
+    jobs = _PlaneJobs(S.ints, planes, cuts)
+    lone = [f for f in range(len(cx.face_plane)) if jobs.trivial(int(cx.face_plane[f]))]
+    assert all(cx.face_point[f] is None for f in lone)
     assert len(lone) > 100
     for f in lone[:200]:
         (a, b, c), = cx.face_tris[f]
@@ -307,6 +310,27 @@ def test_lone_triangle_sub_facets_get_their_centroid():
         assert A[3] == B[3] == C[3] == 1  # superset vertices: grid points
         X, Y, Z, W = _face_point(cx, f)
         assert [3 * x for x in (X, Y, Z)] == [W * (A[k] + B[k] + C[k]) for k in range(3)]
+
+
+def test_plain_sub_facets_get_the_point_their_arrangement_would_give(monkeypatch):
+    """Cut sub-facets with a plain interior carry no point; the one made when the membership
+    test asks (the centroid of the first triangle, lifted) is the arrangement's own strict
+    inner point."""
+    import cspace.trim as T
+    from cspace.superset import minkowski_superset
+    from zoo import icosphere_points, star
+
+    S = minkowski_superset(star(), icosphere_points(1, radius=0.3))
+    planes = T._plane_groups(S)
+    cuts = T._cuts(S.ints, planes)
+    lazy, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
+    monkeypatch.setattr(T, "plain_interior", lambda arr, f: False)
+    eager, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
+    assert lazy.face_tris == eager.face_tris
+    made = [f for f in range(len(lazy.face_plane))
+            if lazy.face_point[f] is None and eager.face_point[f] is not None]
+    assert len(made) > 500
+    assert all(T._face_point(lazy, f) == eager.face_point[f] for f in made)
 
 
 def test_no_fork_beside_other_threads():
