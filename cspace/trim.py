@@ -872,6 +872,51 @@ def _crossing_order(cx: _Complex, e: int, inc: list, inc_sign: list, plane_of: l
     return [i0, nxt, i1, last]
 
 
+# Bound factor of the float filter of (n_p x n_q) . (P_v - P_u): about 9 eps of the same sum
+# on absolute values (conversions, products, differences, the 3-term sum); doubled.
+_CROSSING_FILTER = 18 * float(np.finfo(np.float64).eps) / 2
+
+
+def _crossing_orders(cx: _Complex, edges: np.ndarray, inc: np.ndarray,
+                     plane_normal: list) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_crossing_order` of many four-incidence edges at once: ``inc (m, 4)`` their
+    incidences (in incidence order). Returns the orders ``(m', 4)`` of the edges where two
+    planes cross and a float filter decides the sign, and a mask of the other edges (other
+    kinds, and the filter's undecided rows): those go to :func:`_crossing_order` and the
+    angular sort one by one."""
+    plane = cx.face_plane[cx.inc_face[inc]]
+    same = plane[:, 1:] == plane[:, :1]
+    by = np.argsort(same, axis=1, kind="stable")  # the two other-plane columns, then the same
+    rows = np.arange(len(inc))
+    j0, j1, i1 = (inc[rows, 1 + by[:, k]] for k in range(3))
+    jp0, jp1 = plane[rows, 1 + by[:, 0]], plane[rows, 1 + by[:, 1]]
+    i0 = inc[:, 0]
+    ok = ((same.sum(axis=1) == 1) & (jp0 == jp1)
+          & (cx.inc_sign[i1] != cx.inc_sign[i0]) & (cx.inc_sign[j0] != cx.inc_sign[j1]))
+    r = np.nonzero(ok)[0]
+    # sign of (n_p x n_q) . (P_v - P_u) in floats, with a bound on its error
+    normals = np.array(plane_normal, dtype=np.float64).reshape(-1, 3)
+    a, b = normals[plane[r, 0]], normals[jp0[r]]
+    D = np.cross(a, b)
+    M = (np.abs(a[:, [1, 2, 0]] * b[:, [2, 0, 1]]) + np.abs(a[:, [2, 0, 1]] * b[:, [1, 2, 0]]))
+    uv = cx.edges[edges[r]]
+    ids, where = np.unique(uv, return_inverse=True)
+    pts = cx.points
+    P = np.array([[X / W, Y / W, Z / W] for X, Y, Z, W in (pts[i] for i in ids.tolist())],
+                 dtype=np.float64).reshape(-1, 3)
+    Pu, Pv = P[where.reshape(-1, 2)[:, 0]], P[where.reshape(-1, 2)[:, 1]]
+    dot = np.einsum("ij,ij->i", D, Pv - Pu)
+    bound = _CROSSING_FILTER * np.einsum("ij,ij->i", M, np.abs(Pu) + np.abs(Pv))
+    sure = np.abs(dot) > bound
+    r, dot = r[sure], dot[sure]
+    slow = np.ones(len(inc), dtype=bool)
+    slow[r] = False
+    first = cx.inc_sign[i0[r]].astype(np.int64) * cx.inc_sign[j0[r]] * np.sign(dot) > 0
+    nxt = np.where(first, j0[r], j1[r])
+    last = np.where(first, j1[r], j0[r])
+    return np.stack([i0[r], nxt, i1[r], last], axis=1), slow
+
+
 def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     order = np.argsort(cx.inc_edge, kind="stable")
     e_sorted = cx.inc_edge[order]
@@ -891,9 +936,19 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     one = order[start[counts == 1]]
     fa += [2 * cx.inc_face[one]]
     ta += [2 * cx.inc_face[one] + 1]
-    many = np.nonzero(counts > 2)[0]
-    extra_a, extra_b = [], []
     plane_normal = [planes.normal(p) for p in range(len(planes.keys))]
+    # Edges where two planes cross: their order from one sign each, decided together.
+    four = np.nonzero(counts == 4)[0]
+    L4, slow = _crossing_orders(cx, four, order[start[four][:, None] + np.arange(4)], plane_normal)
+    for pos in range(4):
+        i = L4[:, pos]
+        for s in (1, -1):
+            rot = s * cx.inc_sign[i].astype(np.int64)
+            j = L4[np.arange(len(L4)), (pos + rot) % 4]
+            fa.append(2 * cx.inc_face[i] + (s > 0))
+            ta.append(2 * cx.inc_face[j] + (-rot * cx.inc_sign[j] > 0))
+    many = np.union1d(np.nonzero((counts > 2) & (counts != 4))[0], four[slow])
+    extra_a, extra_b = [], []
     inc_sign, inc_face = cx.inc_sign.tolist(), cx.inc_face.tolist()
     plane_of = cx.face_plane[cx.inc_face].tolist()  # plane of each incidence
     for e, lo, k in zip(many.tolist(), start[many].tolist(), counts[many].tolist()):

@@ -289,6 +289,29 @@ def test_one_facet_planes_match_the_sampled_coverage(robot, monkeypatch):
     assert got == [jobs.arrange(p) for p in fast]
 
 
+def test_crossing_orders_at_once_match_one_by_one():
+    """The float-filtered orders of all two-plane crossing edges at once equal the exact
+    one-sign order of each, and the filter decides nearly all of them."""
+    from cspace.superset import minkowski_superset
+    from cspace.trim import _complex, _crossing_order, _crossing_orders, _cuts, _plane_groups
+    from zoo import icosphere_points, star
+
+    S = minkowski_superset(star(), icosphere_points(1, radius=0.3))
+    planes = _plane_groups(S)
+    cx, _ = _complex(S.ints, planes, _cuts(S.ints, planes), lambda *a: None)
+    order = np.argsort(cx.inc_edge, kind="stable")
+    counts = np.bincount(cx.inc_edge, minlength=len(cx.edges))
+    start = np.searchsorted(cx.inc_edge[order], np.arange(len(cx.edges)))
+    normal = [planes.normal(p) for p in range(len(planes.keys))]
+    four = np.nonzero(counts == 4)[0]
+    inc = order[start[four][:, None] + np.arange(4)]
+    L, slow = _crossing_orders(cx, four, inc, normal)
+    sign, plane_of = cx.inc_sign.tolist(), cx.face_plane[cx.inc_face].tolist()
+    ref = [_crossing_order(cx, e, row, sign, plane_of, normal) for e, row in zip(four.tolist(), inc.tolist())]
+    assert [r for r, s in zip(ref, slow) if not s] == L.tolist()
+    assert len(L) > 500 and all(r is None for r, s in zip(ref, slow) if s)
+
+
 def test_lone_triangle_sub_facets_get_their_centroid():
     """Uncut lone triangles carry no arrangement point; the membership test's point for them
     is their exact centroid (on their plane, strictly inside)."""
