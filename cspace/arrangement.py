@@ -960,18 +960,23 @@ def _object_array(items: list) -> np.ndarray:
 def _edge_plane_point(pu, pv, tri):
     """Canonical ``(X, Y, Z, W)`` and floats of the edge ``pu pv`` crossing the plane of ``tri``.
 
-    All arguments are Python-int coordinate lists; the edge must cross the plane.
+    All arguments are Python-int coordinate lists; the edge must cross the plane. (Written
+    out in scalars: it runs once per distinct crossing, in Python.)
     """
-    a, b, c = tri
-    nrm = _cross3(_sub(b, a), _sub(c, a))
-    su, sv = _dot3(nrm, _sub(pu, a)), _dot3(nrm, _sub(pv, a))
+    (ax, ay, az), (bx, by, bz), (cx, cy, cz) = tri
+    ux, uy, uz = bx - ax, by - ay, bz - az
+    vx, vy, vz = cx - ax, cy - ay, cz - az
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
+    su = nx * (pu[0] - ax) + ny * (pu[1] - ay) + nz * (pu[2] - az)
+    sv = nx * (pv[0] - ax) + ny * (pv[1] - ay) + nz * (pv[2] - az)
     W = su - sv
     if W == 0:
         raise ValueError(f"the edge {pu} {pv} does not cross the plane of {tri}")
-    P = [su * pv[i] - sv * pu[i] for i in range(3)]
+    X, Y, Z = su * pv[0] - sv * pu[0], su * pv[1] - sv * pu[1], su * pv[2] - sv * pu[2]
     if W < 0:
-        W, P = -W, [-x for x in P]
-    g = gcd(P[0], P[1], P[2], W)
-    P, W = [x // g for x in P], W // g
+        X, Y, Z, W = -X, -Y, -Z, -W
+    g = gcd(X, Y, Z, W)
+    if g != 1:
+        X, Y, Z, W = X // g, Y // g, Z // g, W // g
     # Python's int / int is correctly rounded.
-    return (P[0], P[1], P[2], W), (P[0] / W, P[1] / W, P[2] / W)
+    return (X, Y, Z, W), (X / W, Y / W, Z / W)
