@@ -1478,10 +1478,9 @@ def _apart_in_projection_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray) -> 
 
 def _undecided_pairs_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray, moved: np.ndarray) -> np.ndarray:
     """:func:`_undecided_pairs` with numpy (the same filters, pair arrays at a time)."""
-    keep = moved[T[pairs]].any(axis=(1, 2))
-    sub = pairs[keep]
-    sub_keep = ~(_separated(V, T, sub[:, 0], sub[:, 1]) | _separated(V, T, sub[:, 1], sub[:, 0]))
-    rows = np.nonzero(keep)[0][sub_keep]
+    rows = np.nonzero(moved[T[pairs]].any(axis=(1, 2)))[0]
+    for x, y in ((0, 1), (1, 0)):  # a plane of either triangle may separate them
+        rows = rows[~_separated(V, T, pairs[rows, x], pairs[rows, y])]
     out = np.zeros(len(pairs), dtype=bool)
     out[rows] = ~_apart_in_projection_np(V, T, pairs[rows])
     return out
