@@ -59,6 +59,7 @@ __all__ = [
     "TriTriResult",
     "candidate_pairs",
     "box_pairs",
+    "BoxSweep",
     "intersect_pairs",
     "endpoint_coordinates",
 ]
@@ -226,51 +227,71 @@ def box_pairs(lo, hi, *, chunk: int = _CHUNK) -> np.ndarray:
     """All pairs of closed integer boxes ``[lo_i, hi_i]`` that intersect (the sweep of
     :func:`candidate_pairs`); ``lo, hi (t, 3)`` int64 with ``|k| < 2**29``. Rows ``(i, j)``,
     ``i < j``, sorted, each unordered pair once."""
-    lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
-    t = len(lo)
-    if t < 2:
-        return np.zeros((0, 2), dtype=np.int64)
-    first = np.arange(1, t + 1)
-    sweeps = []
-    for ax in range(3):
-        order = np.argsort(lo[:, ax], kind="stable")
-        end = np.searchsorted(lo[order, ax], hi[order, ax], side="right")
-        count = end - first  # partners after position p: p+1 .. end-1 (end > p: lo <= hi)
-        sweeps.append((int(count.sum()), ax, order, count))
-    # Sweep along the most selective axis, filter by the next most selective first.
-    sweeps.sort(key=lambda s: s[0])
-    (_, ax, order, count), others = sweeps[0], [s[1] for s in sweeps[1:]]
-    # Coordinates fit int32 (|k| < 2**29): half the memory traffic of the gathers below.
-    itype = np.int32 if t < 2**31 else np.int64
-    los = [np.ascontiguousarray(lo[order, a], dtype=np.int32) for a in others]
-    his = [np.ascontiguousarray(hi[order, a], dtype=np.int32) for a in others]
-    count = count.astype(itype)
-    cum = np.cumsum(count, dtype=np.int64)
-    # Position of the first partner of each row, minus where its run starts in the chunk.
-    shift = np.arange(1, t + 1, dtype=np.int64) - (cum - count)
-    out = []
-    start = 0
-    while start < t:
-        base = int(cum[start - 1]) if start else 0
-        stop = max(int(np.searchsorted(cum, base + chunk, side="right")), start + 1)
-        c = count[start:stop]
-        n = int(cum[stop - 1]) - base
-        if n:
-            rows = np.repeat(np.arange(start, stop, dtype=itype), c)
-            cols = np.arange(base, base + n, dtype=np.int64)
-            cols += np.repeat(shift[start:stop], c)
-            cols = cols.astype(itype, copy=False)
-            # Filter by one axis, compress, then the other: the second test sees few rows.
-            for lo_a, hi_a in zip(los, his):
-                keep = np.flatnonzero((lo_a[cols] <= hi_a[rows]) & (lo_a[rows] <= hi_a[cols]))
-                rows, cols = rows[keep], cols[keep]
-            i, j = order[rows], order[cols]
-            out.append(np.stack([np.minimum(i, j), np.maximum(i, j)], axis=1))
-        start = stop
-    if not out:
-        return np.zeros((0, 2), dtype=np.int64)
-    pairs = np.concatenate(out)
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    return BoxSweep(lo, hi).pairs(chunk=chunk)
+
+
+class BoxSweep:
+    """The sweep of :func:`box_pairs`, set up once (three sorts), so that its work can be
+    split: :meth:`pairs` expands one share of it. ``overlaps`` is its work, the number of
+    one-axis overlaps along the sweep axis."""
+
+    def __init__(self, lo, hi):
+        lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
+        t = self.t = len(lo)
+        self.overlaps = 0
+        if t < 2:
+            return
+        first = np.arange(1, t + 1)
+        sweeps = []
+        for ax in range(3):
+            order = np.argsort(lo[:, ax], kind="stable")
+            end = np.searchsorted(lo[order, ax], hi[order, ax], side="right")
+            count = end - first  # partners after position p: p+1 .. end-1 (end > p: lo <= hi)
+            sweeps.append((int(count.sum()), ax, order, count))
+        # Sweep along the most selective axis, filter by the next most selective first.
+        sweeps.sort(key=lambda s: s[0])
+        (self.overlaps, _, self.order, count), others = sweeps[0], [s[1] for s in sweeps[1:]]
+        # Coordinates fit int32 (|k| < 2**29): half the memory traffic of the gathers below.
+        self.itype = np.int32 if t < 2**31 else np.int64
+        self.los = [np.ascontiguousarray(lo[self.order, a], dtype=np.int32) for a in others]
+        self.his = [np.ascontiguousarray(hi[self.order, a], dtype=np.int32) for a in others]
+        self.count = count.astype(self.itype)
+        self.cum = np.cumsum(self.count, dtype=np.int64)
+        # Position of the first partner of each row, minus where its run starts in the chunk.
+        self.shift = np.arange(1, t + 1, dtype=np.int64) - (self.cum - self.count)
+
+    def pairs(self, share: int = 0, shares: int = 1, *, chunk: int = _CHUNK) -> np.ndarray:
+        """The intersecting pairs found from share ``share`` of ``shares`` (consecutive
+        sweep rows holding about ``overlaps / shares`` one-axis overlaps each): sorted rows
+        ``(i, j)``, ``i < j``; the shares together give every pair once."""
+        if self.overlaps == 0:
+            return np.zeros((0, 2), dtype=np.int64)
+        t, count, cum, shift, itype = self.t, self.count, self.cum, self.shift, self.itype
+        start = 0 if share == 0 else int(np.searchsorted(cum, share * self.overlaps // shares, side="right"))
+        end = t if share == shares - 1 else int(
+            np.searchsorted(cum, (share + 1) * self.overlaps // shares, side="right"))
+        out = []
+        while start < end:
+            base = int(cum[start - 1]) if start else 0
+            stop = min(max(int(np.searchsorted(cum, base + chunk, side="right")), start + 1), end)
+            c = count[start:stop]
+            n = int(cum[stop - 1]) - base
+            if n:
+                rows = np.repeat(np.arange(start, stop, dtype=itype), c)
+                cols = np.arange(base, base + n, dtype=np.int64)
+                cols += np.repeat(shift[start:stop], c)
+                cols = cols.astype(itype, copy=False)
+                # Filter by one axis, compress, then the other: the second test sees few rows.
+                for lo_a, hi_a in zip(self.los, self.his):
+                    keep = np.flatnonzero((lo_a[cols] <= hi_a[rows]) & (lo_a[rows] <= hi_a[cols]))
+                    rows, cols = rows[keep], cols[keep]
+                i, j = self.order[rows], self.order[cols]
+                out.append(np.stack([np.minimum(i, j), np.maximum(i, j)], axis=1))
+            start = stop
+        if not out:
+            return np.zeros((0, 2), dtype=np.int64)
+        pairs = np.concatenate(out)
+        return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 # --------------------------------------------------------------------------------------

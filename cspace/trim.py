@@ -25,9 +25,9 @@ from scipy.sparse.csgraph import connected_components
 from .arrangement import (
     POINT,
     SEGMENT,
+    BoxSweep,
     TriTriResult,
     box_pairs,
-    candidate_pairs,
     endpoint_coordinates,
     intersect_pairs,
 )
@@ -466,31 +466,38 @@ def _cut_pieces(ints: np.ndarray, faces: np.ndarray, pairs: np.ndarray) -> tuple
     return sub.pairs, ex.tolist()
 
 
-# From this many candidate pairs on, they are intersected in several processes.
-_PARALLEL_PAIRS = 40_000
+# From this many one-axis box overlaps on (the sweep's work; some 10-50 per candidate pair),
+# the pairs are found and intersected in several processes.
+_PARALLEL_OVERLAPS = 500_000
 
 
 def _cuts(ints: np.ndarray, planes: _Planes, workers: int = 1) -> _Cuts:
-    pairs = candidate_pairs(ints, planes.faces)
-    pairs = pairs[planes.plane[pairs[:, 0]] != planes.plane[pairs[:, 1]]]
-    if workers > 1 and len(pairs) >= _PARALLEL_PAIRS and can_fork():
-        bounds = np.linspace(0, len(pairs), 2 * workers + 1).astype(int).tolist()
-        parts = dict(forked_map(
-            lambda k: _cut_pieces(ints, planes.faces, pairs[bounds[k]: bounds[k + 1]]),
-            list(range(2 * workers)), workers))
-        pieces = [parts[k] for k in range(2 * workers)]  # in pair order, as in one process
+    corners = ints[planes.faces]
+    sweep = BoxSweep(corners.min(axis=1), corners.max(axis=1))
+
+    def share(k: int, n: int) -> tuple[int, np.ndarray, list]:
+        pairs = sweep.pairs(k, n)
+        pairs = pairs[planes.plane[pairs[:, 0]] != planes.plane[pairs[:, 1]]]
+        return (len(pairs), *_cut_pieces(ints, planes.faces, pairs))
+
+    if workers > 1 and sweep.overlaps >= _PARALLEL_OVERLAPS and can_fork():
+        n = 2 * workers
+        pieces = [r for _, r in forked_map(lambda k: share(k, n), list(range(n)), workers)]
+        processes = workers
     else:
-        pieces = [_cut_pieces(ints, planes.faces, pairs)]
+        pieces, processes = [share(0, 1)], 1
     segments: list = [[] for _ in planes.keys]
-    n_cut = 0
-    processes = workers if len(pieces) > 1 else 1
-    for hit_pairs, ex in pieces:
+    n_pairs = n_cut = 0
+    for count, hit_pairs, ex in pieces:
+        n_pairs += count
         n_cut += len(ex)
         pl = planes.plane[hit_pairs]
         for (pa, pb), (x, y) in zip(pl.tolist(), ex):
             segments[pa].append((x, y))
             segments[pb].append((x, y))
-    return _Cuts(segments, len(pairs), n_cut, processes)
+    for seg in segments:  # one order whatever process found which pair
+        seg.sort()
+    return _Cuts(segments, n_pairs, n_cut, processes)
 
 
 @dataclass

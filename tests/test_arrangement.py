@@ -22,6 +22,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from cspace.arrangement import (
+    BoxSweep,
     COPLANAR_OVERLAP,
     COPLANAR_TOUCH,
     DISJOINT,
@@ -34,6 +35,7 @@ from cspace.arrangement import (
     TRITRI_CLASSES,
     VERTEX,
     TriTriResult,
+    box_pairs,
     candidate_pairs,
     endpoint_coordinates,
     intersect_pairs,
@@ -338,6 +340,24 @@ def test_candidate_pairs_brute_force(seed, t, lim, chunk):
     got = candidate_pairs(ints, faces, chunk=chunk)
     assert got.dtype == np.int64 and got.shape[1] == 2
     assert np.array_equal(got, brute_pairs(ints, faces))
+
+
+@settings(max_examples=40)
+@given(st.integers(0, 2**31), st.integers(0, 120), st.sampled_from([3, 20, 2**26]), st.integers(1, 7),
+       st.integers(1, 50))
+def test_box_sweep_shares_give_every_pair_once(seed, t, lim, shares, chunk):
+    """The shares of one sweep (what the forked workers expand) are disjoint and together
+    give exactly the pairs of the whole sweep."""
+    rng = np.random.default_rng(seed)
+    lo = rng.integers(-lim, lim + 1, size=(t, 3))
+    hi = lo + rng.integers(0, lim + 1, size=(t, 3))
+    sweep = BoxSweep(lo, hi)
+    parts = [sweep.pairs(k, shares, chunk=chunk) for k in range(shares)]
+    got = np.concatenate(parts)
+    ref = box_pairs(lo, hi)
+    assert len(got) == len(ref)  # no pair twice
+    assert np.array_equal(got[np.lexsort((got[:, 1], got[:, 0]))], ref)
+    assert all(np.array_equal(p, p[np.lexsort((p[:, 1], p[:, 0]))]) for p in parts)
 
 
 def test_candidate_pairs_edge_cases():
