@@ -22,7 +22,6 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from cspace.arrangement import (
-    BoxSweep,
     COPLANAR_OVERLAP,
     COPLANAR_TOUCH,
     DISJOINT,
@@ -34,6 +33,7 @@ from cspace.arrangement import (
     SHARED_VERTEX,
     TRITRI_CLASSES,
     VERTEX,
+    BoxSweep,
     TriTriResult,
     box_pairs,
     candidate_pairs,
@@ -343,8 +343,8 @@ def test_candidate_pairs_brute_force(seed, t, lim, chunk):
 
 
 @settings(max_examples=40)
-@given(st.integers(0, 2**31), st.integers(0, 120), st.sampled_from([3, 20, 2**26]), st.integers(1, 7),
-       st.integers(1, 50))
+@given(st.integers(0, 2**31), st.integers(0, 120), st.sampled_from([3, 20, 2**26]),
+       st.integers(1, 7), st.integers(1, 50))
 def test_box_sweep_shares_give_every_pair_once(seed, t, lim, shares, chunk):
     """The shares of one sweep (what the forked workers expand) are disjoint and together
     give exactly the pairs of the whole sweep."""

@@ -5,9 +5,9 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
+from zoo import box_points, genus3, voxel_solid
 
 from cspace.trim import _improper, minkowski_sum
-from zoo import box_points, genus3, voxel_solid
 
 
 def _closed_and_oriented(r) -> None:
@@ -133,9 +133,10 @@ def test_rounding_filter_never_drops_an_improper_pair(seed):
 def test_provenance_matches_the_facet_normals():
     """Each output facet's normal is the normal of the feature it claims to come from:
     A's face (translated), B's facet (corner), or orthogonal to both edges (edge)."""
-    from cspace import ConvexPolytope, SUPERSET_KINDS
-    from cspace.superset import minkowski_superset
     from zoo import torus
+
+    from cspace import SUPERSET_KINDS, ConvexPolytope
+    from cspace.superset import minkowski_superset
 
     V, F = torus(sections=16, ring=8)
     B = box_points(0.3, 0.2, 0.25)
@@ -174,8 +175,9 @@ def test_operands_are_snapped_once_on_one_grid():
     """A robot larger than the obstacle makes the common grid coarser than A's own: the sum
     must be that of both operands snapped once on the common grid (found by a fuzz run: a
     second snap moved A's points, and the volume differed from libigl's by 1e-8)."""
-    from cspace import ConvexPolytope, Grid, as_mesh
     from zoo import cup, random_rotation
+
+    from cspace import ConvexPolytope, Grid, as_mesh
 
     V, F = cup()
     V = random_rotation(V, seed=3) * 0.3
@@ -210,8 +212,9 @@ def test_rounding_check_in_two_processes_matches_one(monkeypatch):
     """The rounding check splits its box pairs between processes on large outputs; the
     pairs it reports are those of one process, in the same order. (Every pair the float
     filters leave is reported here, so the lists are long.)"""
-    import cspace.trim as T
     from zoo import icosphere_points, star
+
+    import cspace.trim as T
 
     seen = {}
     real = T._rounding_check
@@ -229,22 +232,31 @@ def test_rounding_check_in_two_processes_matches_one(monkeypatch):
     assert len(one) > 100 and np.array_equal(one, two)
 
 
-def test_crossing_order_matches_the_angular_sort():
-    """At edges where two planes cross, the one-sign order of the half-planes equals the
-    exact angular sort (up to where the cycle starts), and it applies to most such edges."""
+def _edge_incidences(A, B):
+    """The sub-facet complex of A ⊕ B's superset, with its incidences grouped by edge
+    (``order[start[e]: start[e] + counts[e]]``) and the oriented plane normals."""
     from cspace.superset import minkowski_superset
-    from cspace.trim import (
-        _angular_order, _complex, _crossing_order, _cuts, _edge_direction, _plane_groups,
-    )
-    from zoo import icosphere_points, torus
+    from cspace.trim import _complex, _cuts, _plane_groups
 
-    S = minkowski_superset(torus(), icosphere_points(1, radius=0.3))
+    S = minkowski_superset(A, B)
     planes = _plane_groups(S)
     cx, _ = _complex(S.ints, planes, _cuts(S.ints, planes), lambda *a: None)
     order = np.argsort(cx.inc_edge, kind="stable")
     counts = np.bincount(cx.inc_edge, minlength=len(cx.edges))
     start = np.searchsorted(cx.inc_edge[order], np.arange(len(cx.edges)))
     normal = [planes.normal(p) for p in range(len(planes.keys))]
+    return cx, planes, order, counts, start, normal
+
+
+def test_crossing_order_matches_the_angular_sort():
+    """At edges where two planes cross, the one-sign order of the half-planes equals the
+    exact angular sort (up to where the cycle starts), and it applies to most such edges."""
+    from zoo import icosphere_points, torus
+
+    from cspace.trim import _angular_order, _crossing_order, _edge_direction
+
+    B = icosphere_points(1, radius=0.3)
+    cx, planes, order, counts, start, normal = _edge_incidences(torus(), B)
     sign, plane_of = cx.inc_sign.tolist(), cx.face_plane[cx.inc_face].tolist()
     fast = 0
     for e in np.nonzero(counts == 4)[0].tolist():
@@ -266,9 +278,10 @@ def test_one_facet_planes_match_the_sampled_coverage(robot, monkeypatch):
     """A plane holding one superset facet with its whole boundary pinned takes its coverage
     from the facet without reading it per face; the sub-facets must be those of the sampled
     coverage (with its area certificate), on every such plane."""
+    from zoo import icosphere_points, star
+
     from cspace.superset import minkowski_superset
     from cspace.trim import _cuts, _plane_groups, _PlaneJobs
-    from zoo import icosphere_points, star
 
     B = box_points(0.3, 0.25, 0.2) if robot == "box" else icosphere_points(1, radius=0.3)
     S = minkowski_superset(star(), B)
@@ -292,22 +305,18 @@ def test_one_facet_planes_match_the_sampled_coverage(robot, monkeypatch):
 def test_crossing_orders_at_once_match_one_by_one():
     """The float-filtered orders of all two-plane crossing edges at once equal the exact
     one-sign order of each, and the filter decides nearly all of them."""
-    from cspace.superset import minkowski_superset
-    from cspace.trim import _complex, _crossing_order, _crossing_orders, _cuts, _plane_groups
     from zoo import icosphere_points, star
 
-    S = minkowski_superset(star(), icosphere_points(1, radius=0.3))
-    planes = _plane_groups(S)
-    cx, _ = _complex(S.ints, planes, _cuts(S.ints, planes), lambda *a: None)
-    order = np.argsort(cx.inc_edge, kind="stable")
-    counts = np.bincount(cx.inc_edge, minlength=len(cx.edges))
-    start = np.searchsorted(cx.inc_edge[order], np.arange(len(cx.edges)))
-    normal = [planes.normal(p) for p in range(len(planes.keys))]
+    from cspace.trim import _crossing_order, _crossing_orders
+
+    B = icosphere_points(1, radius=0.3)
+    cx, planes, order, counts, start, normal = _edge_incidences(star(), B)
     four = np.nonzero(counts == 4)[0]
     inc = order[start[four][:, None] + np.arange(4)]
     L, slow = _crossing_orders(cx, four, inc, normal)
     sign, plane_of = cx.inc_sign.tolist(), cx.face_plane[cx.inc_face].tolist()
-    ref = [_crossing_order(cx, e, row, sign, plane_of, normal) for e, row in zip(four.tolist(), inc.tolist())]
+    ref = [_crossing_order(cx, e, row, sign, plane_of, normal)
+           for e, row in zip(four.tolist(), inc.tolist())]
     assert [r for r, s in zip(ref, slow) if not s] == L.tolist()
     assert len(L) > 500 and all(r is None for r, s in zip(ref, slow) if s)
 
@@ -315,9 +324,10 @@ def test_crossing_orders_at_once_match_one_by_one():
 def test_lone_triangle_sub_facets_get_their_centroid():
     """Uncut lone triangles carry no arrangement point; the membership test's point for them
     is their exact centroid (on their plane, strictly inside)."""
+    from zoo import torus
+
     from cspace.superset import minkowski_superset
     from cspace.trim import _complex, _cuts, _face_point, _plane_groups, _PlaneJobs
-    from zoo import torus
 
     S = minkowski_superset(torus(), box_points(0.3, 0.25, 0.2))
     planes = _plane_groups(S)
@@ -339,9 +349,10 @@ def test_plain_sub_facets_get_the_point_their_arrangement_would_give(monkeypatch
     """Cut sub-facets with a plain interior carry no point; the one made when the membership
     test asks (the centroid of the first triangle, lifted) is the arrangement's own strict
     inner point."""
+    from zoo import icosphere_points, star
+
     import cspace.trim as T
     from cspace.superset import minkowski_superset
-    from zoo import icosphere_points, star
 
     S = minkowski_superset(star(), icosphere_points(1, radius=0.3))
     planes = T._plane_groups(S)
