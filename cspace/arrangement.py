@@ -267,9 +267,11 @@ class BoxSweep:
         if self.overlaps == 0:
             return np.zeros((0, 2), dtype=np.int64)
         t, count, cum, shift, itype = self.t, self.count, self.cum, self.shift, self.itype
-        start = 0 if share == 0 else int(np.searchsorted(cum, share * self.overlaps // shares, side="right"))
-        end = t if share == shares - 1 else int(
-            np.searchsorted(cum, (share + 1) * self.overlaps // shares, side="right"))
+        def row(k: int) -> int:  # first sweep row of share k
+            return int(np.searchsorted(cum, k * self.overlaps // shares, side="right"))
+
+        start = 0 if share == 0 else row(share)
+        end = t if share == shares - 1 else row(share + 1)
         out = []
         while start < end:
             base = int(cum[start - 1]) if start else 0

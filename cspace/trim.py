@@ -223,9 +223,10 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     progress : callable, optional
         Called as ``progress(stage: str, fraction: float)`` during long builds.
     workers : int, optional
-        Processes for the triangle-pair intersections and the per-plane arrangements
-        (this one and ``workers - 1`` forked; the result does not depend on it). Default: ``$CSPACE_WORKERS``, else the
-        CPUs this process may run on; 1 runs everything here. Small builds, and calls from a
+        Processes for the triangle-pair intersections, the per-plane arrangements and the
+        rounding check (this one and ``workers - 1`` forked; the result does not depend on
+        it). Default: ``$CSPACE_WORKERS``, else the CPUs this process may run on; 1 runs
+        everything here. Small builds, and calls from a
         daemonic process or beside other threads, stay in this process whatever the value.
 
     Returns
@@ -1179,9 +1180,11 @@ def _face_point(cx: _Complex, f: int) -> tuple:
     arrangement meets that open triangle)."""
     if cx.face_point[f] is not None:
         return cx.face_point[f]
-    (xa, ya, za, wa), (xb, yb, zb, wb), (xc, yc, zc, wc) = (cx.points[i] for i in cx.face_tris[f][0])
+    a, b, c = cx.face_tris[f][0]
+    (xa, ya, za, wa), (xb, yb, zb, wb), (xc, yc, zc, wc) = cx.points[a], cx.points[b], cx.points[c]
     bc, ac, ab = wb * wc, wa * wc, wa * wb
-    s = (xa * bc + xb * ac + xc * ab, ya * bc + yb * ac + yc * ab, za * bc + zb * ac + zc * ab, 3 * wa * bc)
+    s = (xa * bc + xb * ac + xc * ab, ya * bc + yb * ac + yc * ab, za * bc + zb * ac + zc * ab,
+         3 * wa * bc)
     h = gcd(gcd(s[0], s[1]), gcd(s[2], s[3]))
     return (s[0] // h, s[1] // h, s[2] // h, s[3] // h)
 
@@ -1335,7 +1338,8 @@ def _result(out: _Output, S: Superset, stats: dict, workers: int = 1) -> SumPoly
     )
 
 
-def _rounding_check(out: _Output, V: np.ndarray, grid: Grid, workers: int = 1) -> tuple[np.ndarray, int]:
+def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
+                    workers: int = 1) -> tuple[np.ndarray, int]:
     """Triangle pairs that meet improperly after rounding to float64, and the number of
     processes that tested them (several from ``_PARALLEL_CHECK`` box pairs on, numpy filter
     path only).
