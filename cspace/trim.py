@@ -226,8 +226,8 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
         Processes for the triangle-pair intersections, the per-plane arrangements and the
         rounding check (this one and ``workers - 1`` forked; the result does not depend on
         it). Default: ``$CSPACE_WORKERS``, else the CPUs this process may run on; 1 runs
-        everything here. Small builds, and calls from a
-        daemonic process or beside other threads, stay in this process whatever the value.
+        everything here. Small builds, and calls from a daemonic process or beside other
+        threads, stay in this process whatever the value.
 
     Returns
     -------
@@ -605,7 +605,6 @@ class _PlaneJobs:
         a, b = (ax + 1) % 3, (ax + 2) % 3
         tl = self.members[p]
         polys = [[(c[a], c[b], 1) for c in self.corners[t]] for t in tl]
-        weights = [self.weight[t] for t in tl]
         cut3 = self.cuts.segments[p]
         segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in cut3]
         # The net coverage changes only where another plane's sheet meets this one
@@ -627,6 +626,7 @@ class _PlaneJobs:
             c = self.weight[tl[0]] * self.sign[tl[0]] * self.sigma[p]
             cov = Coverage(arr, [c] * len(arr.faces), [abs(c)] * len(arr.faces))
         else:
+            weights = [self.weight[t] for t in tl]
             try:
                 cov = sampled_coverage(polys, weights, seg2, lab2)
             except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
@@ -925,20 +925,33 @@ def _crossing_orders(cx: _Complex, edges: np.ndarray, inc: np.ndarray,
     return np.stack([i0[r], nxt, i1[r], last], axis=1), slow
 
 
+def _wedge_links(cx: _Complex, L: np.ndarray, positions) -> tuple[list, list]:
+    """Side-node pairs across the free wedges of edges whose half-planes (incidences) are in
+    cyclic angular order ``L (m, k)``: from side ``s`` of the sub-facet at ``positions`` of
+    each row, rotating through the free wedge reaches the next half-plane, and the side of
+    it that faces the wedge (the plane-angle rule; with two half-planes, orientation
+    coherence)."""
+    rows = np.arange(len(L))
+    k = L.shape[1]
+    a, b = [], []
+    for pos in positions:
+        i = L[:, pos]
+        for s in (1, -1):
+            rot = s * cx.inc_sign[i].astype(np.int64)
+            j = L[rows, (pos + rot) % k]
+            a.append(2 * cx.inc_face[i] + (s > 0))
+            b.append(2 * cx.inc_face[j] + (-rot * cx.inc_sign[j] > 0))
+    return a, b
+
+
 def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     order = np.argsort(cx.inc_edge, kind="stable")
     e_sorted = cx.inc_edge[order]
     counts = np.bincount(cx.inc_edge, minlength=len(cx.edges))
     start = np.searchsorted(e_sorted, np.arange(len(cx.edges)))
-    fa, ta = [], []  # side pairs (node, node)
-    two = counts == 2
-    i2 = order[start[two]]
-    j2 = order[start[two] + 1]
-    for s in (1, -1):
-        rot = s * cx.inc_sign[i2].astype(np.int64)
-        s2 = -rot * cx.inc_sign[j2]
-        fa.append(2 * cx.inc_face[i2] + (s > 0))
-        ta.append(2 * cx.inc_face[j2] + (s2 > 0))
+    # side pairs (node, node); with two half-planes one position gives every link
+    two = start[counts == 2]
+    fa, ta = _wedge_links(cx, np.stack([order[two], order[two + 1]], axis=1), (0,))
     # A free edge (one half-plane: the rim of a sheet whose superset pieces cancel) joins
     # the two sides of its sub-facet: the cell wraps around the rim.
     one = order[start[counts == 1]]
@@ -948,16 +961,12 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     # Edges where two planes cross: their order from one sign each, decided together.
     four = np.nonzero(counts == 4)[0]
     L4, slow = _crossing_orders(cx, four, order[start[four][:, None] + np.arange(4)], plane_normal)
-    for pos in range(4):
-        i = L4[:, pos]
-        for s in (1, -1):
-            rot = s * cx.inc_sign[i].astype(np.int64)
-            j = L4[np.arange(len(L4)), (pos + rot) % 4]
-            fa.append(2 * cx.inc_face[i] + (s > 0))
-            ta.append(2 * cx.inc_face[j] + (-rot * cx.inc_sign[j] > 0))
+    a4, b4 = _wedge_links(cx, L4, range(4))
+    fa += a4
+    ta += b4
+    orders: dict = {}  # the other edges' orders, by number of half-planes
     many = np.union1d(np.nonzero((counts > 2) & (counts != 4))[0], four[slow])
-    extra_a, extra_b = [], []
-    inc_sign, inc_face = cx.inc_sign.tolist(), cx.inc_face.tolist()
+    inc_sign = cx.inc_sign.tolist()
     plane_of = cx.face_plane[cx.inc_face].tolist()  # plane of each incidence
     for e, lo, k in zip(many.tolist(), start[many].tolist(), counts[many].tolist()):
         inc = order[lo: lo + k].tolist()
@@ -967,15 +976,13 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
             d = _edge_direction(cx, planes, e, normals)
             vec = [tuple(inc_sign[i] * c for c in n) for i, n in zip(inc, normals)]
             L = [inc[m] for m in _angular_order(vec, d)]
-        for pos, i in enumerate(L):
-            for s in (1, -1):
-                rot = s * inc_sign[i]
-                j = L[(pos + rot) % k]
-                s2 = -rot * inc_sign[j]
-                extra_a.append(2 * inc_face[i] + (s > 0))
-                extra_b.append(2 * inc_face[j] + (s2 > 0))
-    a = np.concatenate(fa + [np.array(extra_a, dtype=np.int64)])
-    b = np.concatenate(ta + [np.array(extra_b, dtype=np.int64)])
+        orders.setdefault(k, []).append(L)
+    for k, Ls in orders.items():
+        a, b = _wedge_links(cx, np.array(Ls, dtype=np.int64), range(k))
+        fa += a
+        ta += b
+    a = np.concatenate(fa)
+    b = np.concatenate(ta)
     n_nodes = 2 * len(cx.face_plane)
     g = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n_nodes, n_nodes))
     n, of = connected_components(g, directed=False)
@@ -1352,7 +1359,7 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
     """
     T = out.faces
     if not len(T):
-        return np.zeros((0, 2), np.int64)
+        return np.zeros((0, 2), np.int64), 1
     e = grid.exponent
     up, down = (1 << e, 1) if e >= 0 else (1, 1 << -e)
 

@@ -248,6 +248,18 @@ def _edge_incidences(A, B):
     return cx, planes, order, counts, start, normal
 
 
+def test_rounding_check_of_an_empty_output():
+    """No triangles: nothing to check, in one process."""
+    import cspace.trim as T
+    from cspace.exact import Grid
+
+    z = np.zeros((0, 3), np.int64)
+    out = T._Output(points=[], faces=z, face_facet=z[:, 0], facet_superset=z[:, 0],
+                    shell=z[:, 0], shell_is_hole=np.zeros(0, bool))
+    bad, used = T._rounding_check(out, np.zeros((0, 3)), Grid(exponent=-20), workers=2)
+    assert bad.shape == (0, 2) and used == 1
+
+
 def test_crossing_order_matches_the_angular_sort():
     """At edges where two planes cross, the one-sign order of the half-planes equals the
     exact angular sort (up to where the cycle starts), and it applies to most such edges."""
