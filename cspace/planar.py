@@ -39,6 +39,7 @@ __all__ = [
     "sampled_coverage",
     "pushed_inside",
     "face_triangles",
+    "known_triangles",
     "strict_inner_point",
     "plain_interior",
     "merge_coplanar",
@@ -47,6 +48,7 @@ __all__ = [
     "winding_number",
     "point_on_segment",
     "triangulate_face",
+    "triangulate_rings",
 ]
 
 Point = tuple  # (Fraction, Fraction)
@@ -1270,10 +1272,21 @@ def _split_runs(tris: list, runs: dict) -> list:
 
 
 def triangulate_face(arr: Arrangement2D, f: int) -> list:
-    """Triangulate a bounded face (with its holes) without new vertices, exactly.
+    """Triangulate a bounded face (with its holes) without new vertices, exactly: the
+    :func:`triangulate_rings` of its cycles."""
+    face = arr.faces[f]
+    return triangulate_rings(arr._H, [arr.cycle_vertices(c) for c in (face.outer, *face.holes)])
 
-    Returns counter-clockwise triangles as triples of vertex ids of ``arr``. The triangles
-    tile the face (their areas sum to ``face.area``) and meet the face boundary only at its
+
+def triangulate_rings(H, rings: list) -> list:
+    """Triangulate a face given by its boundary cycles, without new vertices, exactly.
+
+    ``H[v]`` is the canonical homogeneous point ``(x, y, w)`` (primitive, ``w > 0``: points
+    are compared as tuples) of vertex id ``v``; ``rings`` are the face's cycles as vertex-id
+    lists, the outer one (counter-clockwise) first, then the holes, as an
+    :class:`Arrangement2D` traces them (dangling excursions included). Returns
+    counter-clockwise triangles as triples of vertex ids. The triangles tile the face (their
+    areas sum to ``face.area``) and meet the face boundary only at its
     vertices: every vertex lying on the outer boundary or on a hole boundary with non-zero
     extent is a triangle corner (no T-junctions there). Dangling edges, tree-shaped holes and
     isolated vertices carry no area and are *not* constraints: their vertices may lie inside
@@ -1289,9 +1302,7 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
     triangle on its edge from the opposite corner. About O(n r) predicates for n corners and r
     non-convex ones on simple faces, O(n^3) with holes.
     """
-    face = arr.faces[f]
-    H = arr._H
-    rings = [_strip_spikes(arr.cycle_vertices(c)) for c in [face.outer, *face.holes]]
+    rings = [_strip_spikes(ring) for ring in rings]
     uses: dict = {}
     for ring in rings:
         for v in ring:
@@ -1339,17 +1350,24 @@ def triangulate_face(arr: Arrangement2D, f: int) -> list:
     return _split_runs(tris, runs)
 
 
-def face_triangles(arr: Arrangement2D, f: int) -> list:
-    """:func:`triangulate_face`, computed once per face (cached on the arrangement); a
-    triangle face without holes is its own triangle."""
+def known_triangles(arr: Arrangement2D, f: int) -> list | None:
+    """The triangles of face ``f`` if they cost nothing: already made by
+    :func:`face_triangles`, or the face itself when it is a triangle without holes; else
+    None."""
     tris = arr._tris.get(f)
     if tris is None:
         face = arr.faces[f]
         if not face.holes and len(face.outer) == 3:
-            tris = [tuple(arr.cycle_vertices(face.outer))]
-        else:
-            tris = triangulate_face(arr, f)
-        arr._tris[f] = tris
+            tris = arr._tris[f] = [tuple(arr.cycle_vertices(face.outer))]
+    return tris
+
+
+def face_triangles(arr: Arrangement2D, f: int) -> list:
+    """:func:`triangulate_face`, computed once per face (cached on the arrangement); a
+    triangle face without holes is its own triangle."""
+    tris = known_triangles(arr, f)
+    if tris is None:
+        tris = arr._tris[f] = triangulate_face(arr, f)
     return tris
 
 

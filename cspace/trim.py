@@ -39,13 +39,14 @@ from .planar import (
     Arrangement2D,
     Coverage,
     _hnorm,
-    face_triangles,
+    known_triangles,
     plain_interior,
     polygon_coverage,
     project_homogeneous,
     pushed_inside,
     sampled_coverage,
     strict_inner_point,
+    triangulate_rings,
 )
 from .superset import Superset, minkowski_superset
 from .workers import can_fork, forked_map, worker_count
@@ -507,8 +508,11 @@ class _Complex:
 
     ``points[i]``: canonical ``(X, Y, Z, W)`` (Python ints, ``W > 0``, primitive) of global
     vertex ``i`` in grid units. Sub-facet ``f`` lies on plane ``face_plane[f]`` with net
-    coverage ``face_cov[f]`` counted along ``planes.normal(plane)``; ``face_tris[f]`` tiles it
-    with triangles (global ids, counter-clockwise about ``planes.normal``), ``face_src[f]`` is
+    coverage ``face_cov[f]`` counted along ``planes.normal(plane)``; ``_face_tris(cx, f)``
+    tiles it with triangles (global ids, counter-clockwise about ``planes.normal``): they are
+    ``face_tris[f]``, or, where that is None, made on first use from its boundary cycles
+    ``face_rings[f]`` (global ids, outer first) projected along ``plane_axis[plane]``;
+    ``face_src[f]`` is
     a superset facet covering it and ``face_point[f]`` an exact homogeneous point strictly
     inside it (on no edge or vertex of its arrangement), None where the centroid of its first
     triangle is one (lone uncut triangles, faces with a plain interior; :func:`_face_point`
@@ -526,6 +530,8 @@ class _Complex:
     inc_edge: np.ndarray
     inc_sign: np.ndarray
     face_tris: list
+    face_rings: list
+    plane_axis: list
     face_src: np.ndarray
     face_point: list
 
@@ -599,8 +605,8 @@ class _PlaneJobs:
     def arrange(self, p: int):
         """Sub-facets of arrangement plane ``p``: ``(lifted, faces)`` with ``lifted[v]`` the
         canonical 3D point of local vertex ``v`` and, per face of non-zero support,
-        ``(coverage, boundary half-edges (u, v), triangles, source facet, inner point)`` in
-        local vertex ids."""
+        ``(coverage, boundary cycles, triangles or None, source facet, inner point or None)``
+        in local vertex ids (cycles: the outer one, then the holes, as vertex lists)."""
         ax = self.axis[p]
         a, b = (ax + 1) % 3, (ax + 2) % 3
         tl = self.members[p]
@@ -645,13 +651,15 @@ class _PlaneJobs:
             if support == 0:
                 continue  # covered by no superset triangle
             face = arr.faces[f]
-            boundary = [(origin[h], origin[h ^ 1]) for cyc in (face.outer, *face.holes) for h in cyc]
-            tris = face_triangles(arr, f)
+            rings = [[origin[h] for h in cyc] for cyc in (face.outer, *face.holes)]
+            # Most sub-facets are not output (a fifth to a half of them are) and few need a
+            # membership point, so triangles not made already wait until asked (_face_tris).
+            tris = known_triangles(arr, f)
             src = self.facet[tl[0]] if one else self._source_facet(p, arr, f, tl)
-            # a point for the membership test, which few sub-facets need: where the centroid
-            # of the first triangle is one, it is made only when asked (_face_point)
+            # where the centroid of the first triangle is a strict inner point, it too is made
+            # only when asked (_face_point)
             point = None if plain_interior(arr, f) else _lift(strict_inner_point(arr, f), key, ax)
-            faces.append((c, boundary, tris, src, point))
+            faces.append((c, rings, tris, src, point))
         return lifted, faces
 
     def _one_facet(self, tl: list) -> bool:
@@ -737,25 +745,31 @@ def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tup
 def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: int = 1) -> tuple[_Complex, int]:
     vid: dict = {}
     eid: dict = {}
-    face_plane, face_cov, face_tris, face_src, face_point = [], [], [], [], []
+    face_plane, face_cov, face_tris, face_rings, face_src, face_point = [], [], [], [], [], []
     inc_face, inc_edge, inc_sign = [], [], []
     jobs = _PlaneJobs(ints, planes, cuts)
     n_planes = len(planes.keys)
     todo = [p for p in range(n_planes) if not jobs.trivial(p)]
     done, used = _run_arrangements(jobs, todo, workers, report)
 
-    def add(p: int, cov: int, g: list, boundary, tris, src: int, point: tuple) -> None:
+    def add(p: int, cov: int, g: list, rings, tris, src: int, point: tuple) -> None:
         fid = len(face_plane)
         face_plane.append(p)
         face_cov.append(cov)
-        face_tris.append([(g[x], g[y], g[z]) for x, y, z in tris])
+        rings = [[g[v] for v in ring] for ring in rings]
+        if tris is None:
+            face_tris.append(None)
+            face_rings.append(rings)
+        else:
+            face_tris.append([(g[x], g[y], g[z]) for x, y, z in tris])
+            face_rings.append(None)
         face_src.append(src)
         face_point.append(point)
-        for u, v in boundary:
-            gu, gv = g[u], g[v]
-            inc_face.append(fid)
-            inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
-            inc_sign.append(1 if gu < gv else -1)
+        for ring in rings:
+            for gu, gv in zip(ring, ring[1:] + ring[:1]):
+                inc_face.append(fid)
+                inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
+                inc_sign.append(1 if gu < gv else -1)
 
     for p in range(n_planes):
         if p not in done:
@@ -763,13 +777,12 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: in
                 ccw = jobs.sign[t] * jobs.sigma[p]
                 cs = jobs.corners[t] if ccw > 0 else jobs.corners[t][::-1]
                 g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
-                add(p, ccw * jobs.weight[t], g, ((0, 1), (1, 2), (2, 0)), ((0, 1, 2),), jobs.facet[t],
-                    None)
+                add(p, ccw * jobs.weight[t], g, ((0, 1, 2),), ((0, 1, 2),), jobs.facet[t], None)
             continue
         lifted, faces = done.pop(p)
         g = [vid.setdefault(x, len(vid)) for x in lifted]
-        for cov, boundary, tris, src, point in faces:
-            add(p, cov, g, boundary, tris, src, point)
+        for cov, rings, tris, src, point in faces:
+            add(p, cov, g, rings, tris, src, point)
     return _Complex(
         points=list(vid),
         edges=np.array(list(eid), dtype=np.int64).reshape(-1, 2),
@@ -779,6 +792,8 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: in
         inc_edge=np.array(inc_edge, dtype=np.int64),
         inc_sign=np.array(inc_sign, dtype=np.int8),
         face_tris=face_tris,
+        face_rings=face_rings,
+        plane_axis=jobs.axis,
         face_src=np.array(face_src, dtype=np.int64),
         face_point=face_point,
     ), used
@@ -1181,13 +1196,28 @@ class _PieceTest:
         return True
 
 
+def _face_tris(cx: _Complex, f: int) -> list:
+    """The triangles of sub-facet ``f`` (global ids, counter-clockwise about its plane's
+    normal), triangulated on first use from its cycles: the triangles its arrangement would
+    have made, since its vertices project back to the same canonical 2D points."""
+    tris = cx.face_tris[f]
+    if tris is None:
+        ax = cx.plane_axis[cx.face_plane[f]]
+        a, b = (ax + 1) % 3, (ax + 2) % 3
+        rings, P = cx.face_rings[f], cx.points
+        H = {v: _hnorm(P[v][a], P[v][b], P[v][3]) for ring in rings for v in ring}
+        tris = cx.face_tris[f] = triangulate_rings(H, rings)
+        cx.face_rings[f] = None
+    return tris
+
+
 def _face_point(cx: _Complex, f: int) -> tuple:
     """Exact homogeneous point strictly inside sub-facet ``f``: the one its arrangement gave,
     else the centroid of its first triangle (strictly inside it, and nothing of the
     arrangement meets that open triangle)."""
     if cx.face_point[f] is not None:
         return cx.face_point[f]
-    a, b, c = cx.face_tris[f][0]
+    a, b, c = _face_tris(cx, f)[0]
     (xa, ya, za, wa), (xb, yb, zb, wb), (xc, yc, zc, wc) = cx.points[a], cx.points[b], cx.points[c]
     bc, ac, ab = wb * wc, wa * wc, wa * wb
     s = (xa * bc + xb * ac + xc * ab, ya * bc + yb * ac + yc * ab, za * bc + zb * ac + zc * ab,
@@ -1254,7 +1284,7 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
     tris, tri_facet, facet_src, outside_cell = [], [], [], []
     for n, f in enumerate(keep.tolist()):
         flip = bool(plus[f])  # inside on the normal's side: the outward normal is reversed
-        for a, b, c in cx.face_tris[f]:
+        for a, b, c in _face_tris(cx, f):
             tris.append((a, c, b) if flip else (a, b, c))
             tri_facet.append(n)
         facet_src.append(int(cx.face_src[f]))

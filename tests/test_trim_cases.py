@@ -311,7 +311,16 @@ def test_one_facet_planes_match_the_sampled_coverage(robot, monkeypatch):
     assert not jobs._one_facet(jobs.members[fast[0]])
     jobs.pinned[k] = True
     monkeypatch.setattr(_PlaneJobs, "_one_facet", lambda self, tl: False)
-    assert got == [jobs.arrange(p) for p in fast]
+    ref = [jobs.arrange(p) for p in fast]
+
+    def untriangulated(res):  # the fast path leaves triangles to _face_tris
+        lifted, faces = res
+        return lifted, [(c, rings, src, point) for c, rings, _, src, point in faces]
+
+    assert [untriangulated(r) for r in got] == [untriangulated(r) for r in ref]
+    pairs = [(a[2], b[2]) for g, r in zip(got, ref) for a, b in zip(g[1], r[1])]
+    assert all(a == b for a, b in pairs if a is not None)
+    assert sum(a is None for a, _ in pairs) > 40
 
 
 def test_crossing_orders_at_once_match_one_by_one():
@@ -377,6 +386,30 @@ def test_plain_sub_facets_get_the_point_their_arrangement_would_give(monkeypatch
             if lazy.face_point[f] is None and eager.face_point[f] is not None]
     assert len(made) > 500
     assert all(T._face_point(lazy, f) == eager.face_point[f] for f in made)
+
+
+def test_triangles_made_when_asked_are_the_arrangements_own(monkeypatch):
+    """Sub-facets whose triangles were not made in their arrangement (most of them are never
+    output) are triangulated from their cycles when asked: the same triangles, vertex for
+    vertex, as triangulating in the arrangement."""
+    from zoo import icosphere_points, star
+
+    import cspace.trim as T
+    from cspace.planar import face_triangles
+    from cspace.superset import minkowski_superset
+
+    S = minkowski_superset(star(), icosphere_points(1, radius=0.3))
+    planes = T._plane_groups(S)
+    cuts = T._cuts(S.ints, planes)
+    lazy, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
+    monkeypatch.setattr(T, "known_triangles", face_triangles)
+    eager, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
+    assert all(t is not None for t in eager.face_tris)
+    waiting = [f for f, t in enumerate(lazy.face_tris) if t is None]
+    assert len(waiting) > 200
+    assert all(lazy.face_rings[f] is not None for f in waiting)
+    assert [T._face_tris(lazy, f) for f in range(len(lazy.face_tris))] == eager.face_tris
+    assert all(lazy.face_rings[f] is None for f in waiting)  # made once
 
 
 def test_no_fork_beside_other_threads():
