@@ -1060,6 +1060,10 @@ _COMPILED_FROM = 150_000
 _PARALLEL_CHECK = 20_000
 # Float filter for orientations of float64 points (Shewchuk's bound is below 8 eps).
 _ORIENT_FILTER = 16 * float(np.finfo(np.float64).eps) / 2
+# Float filter of a dot product of float64 rows: the three products and two sums are off by
+# at most 3 unit roundoffs of the sum of absolute products, the bound's own addition by one
+# more; 8 leaves room for the rounding of the bound itself.
+_DOT_FILTER = 8 * float(np.finfo(np.float64).eps) / 2
 
 
 # Float filter of _PieceTest: each separating-axis value is a sum of a few products of
@@ -1461,17 +1465,17 @@ def _o2_filtered(u, a, b) -> np.ndarray:
     return np.where(sure, np.sign(det), 0)
 
 
-def _apart_in_projection_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-    """Pairs sharing an edge or a vertex whose projections (along the dominant axis of the
-    first triangle's normal) meet only in the shared part, decided by a float filter
-    (undecided: False). The 3D triangles then meet only there too."""
+def _apart_in_projection_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray,
+                            ax: np.ndarray) -> np.ndarray:
+    """Pairs whose projections along coordinate axis ``ax`` (per pair) meet only in their
+    shared vertices or edge, decided by a float filter (undecided: False). The 3D triangles
+    then meet only there too (the projection of their intersection lies in the intersection
+    of their projections)."""
     i, j = pairs[:, 0], pairs[:, 1]
     Ti, Tj = T[i], T[j]
     eq = Ti[:, :, None] == Tj[:, None, :]  # (k, 3, 3): vertex a of i equals vertex b of j
     n_shared = eq.sum(axis=(1, 2))
     out = np.zeros(len(pairs), dtype=bool)
-    n = np.cross(V[Ti[:, 1]] - V[Ti[:, 0]], V[Ti[:, 2]] - V[Ti[:, 0]])
-    ax = np.argmax(np.abs(n), axis=1)
     keep = np.stack([(ax + 1) % 3, (ax + 2) % 3], axis=1)
     rows = np.arange(len(pairs))
 
@@ -1524,13 +1528,39 @@ def _apart_in_projection_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray) -> 
     return out
 
 
+def _axes_apart_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray) -> np.ndarray:
+    """Pairs (no shared vertex) strictly separated along one of the cross products of an
+    edge of each triangle, decided by a float filter (undecided: False). Any axis is a valid
+    certificate, so only the dot products need a bound, not the axes."""
+    A, B = V[T[pairs[:, 0]]], V[T[pairs[:, 1]]]  # (k, 3 corners, 3)
+    eA, eB = A[:, [1, 2, 0]] - A, B[:, [1, 2, 0]] - B
+    out = np.zeros(len(pairs), dtype=bool)
+    for i in range(3):
+        for j in range(3):
+            a = np.cross(eA[:, i], eB[:, j])[:, None, :]
+            pa, pb = (A * a).sum(axis=2), (B * a).sum(axis=2)
+            ea = _DOT_FILTER * np.abs(A * a).sum(axis=2)
+            eb = _DOT_FILTER * np.abs(B * a).sum(axis=2)
+            out |= (((pa + ea).max(axis=1) < (pb - eb).min(axis=1))
+                    | ((pb + eb).max(axis=1) < (pa - ea).min(axis=1)))
+    return out
+
+
 def _undecided_pairs_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray, moved: np.ndarray) -> np.ndarray:
     """:func:`_undecided_pairs` with numpy (the same filters, pair arrays at a time)."""
     rows = np.nonzero(moved[T[pairs]].any(axis=(1, 2)))[0]
     for x, y in ((0, 1), (1, 0)):  # a plane of either triangle may separate them
         rows = rows[~_separated(V, T, pairs[rows, x], pairs[rows, y])]
+    Ti = T[pairs[rows, 0]]
+    ax = np.argmax(np.abs(np.cross(V[Ti[:, 1]] - V[Ti[:, 0]], V[Ti[:, 2]] - V[Ti[:, 0]])), axis=1)
+    for step in (0, 1, 2):  # the dominant projection of the first triangle, then the others
+        left = ~_apart_in_projection_np(V, T, pairs[rows], (ax + step) % 3)
+        rows, ax = rows[left], ax[left]
+    if len(rows):
+        lone = ~(T[pairs[rows, 0]][:, :, None] == T[pairs[rows, 1]][:, None, :]).any(axis=(1, 2))
+        rows = rows[~(lone & _axes_apart_np(V, T, pairs[rows]))]
     out = np.zeros(len(pairs), dtype=bool)
-    out[rows] = ~_apart_in_projection_np(V, T, pairs[rows])
+    out[rows] = True
     return out
 
 
@@ -1581,15 +1611,47 @@ def _ray_outside(V, u, x, p, q, k0, k1) -> bool:
 
 
 @nb.njit(cache=True, inline="always")
-def _apart_in_projection(V, ti, tj) -> bool:
-    """Triangles whose projections (along the dominant axis of the first one's normal) meet
-    only in their shared vertices or edge, decided by a float filter (undecided: False). The
-    3D triangles then meet only there too."""
+def _dominant_axis(V, ti) -> int:
+    """The coordinate axis of the largest component of triangle ``ti``'s float normal."""
     a, b, c = ti[0], ti[1], ti[2]
     ux, uy, uz = V[b, 0] - V[a, 0], V[b, 1] - V[a, 1], V[b, 2] - V[a, 2]
     vx, vy, vz = V[c, 0] - V[a, 0], V[c, 1] - V[a, 1], V[c, 2] - V[a, 2]
     n0, n1, n2 = abs(uy * vz - uz * vy), abs(uz * vx - ux * vz), abs(ux * vy - uy * vx)
-    ax = 0 if (n0 >= n1 and n0 >= n2) else (1 if n1 >= n2 else 2)
+    return 0 if (n0 >= n1 and n0 >= n2) else (1 if n1 >= n2 else 2)
+
+
+@nb.njit(cache=True, inline="always")
+def _axes_apart(V, ti, tj) -> bool:
+    """:func:`_axes_apart_np` for one pair: strictly separated along the cross product of an
+    edge of each triangle (float filter of the dot products; undecided: False)."""
+    for i in range(3):
+        p, q = ti[i], ti[(i + 1) % 3]
+        ex, ey, ez = V[q, 0] - V[p, 0], V[q, 1] - V[p, 1], V[q, 2] - V[p, 2]
+        for j in range(3):
+            r, t = tj[j], tj[(j + 1) % 3]
+            fx, fy, fz = V[t, 0] - V[r, 0], V[t, 1] - V[r, 1], V[t, 2] - V[r, 2]
+            ax, ay, az = ey * fz - ez * fy, ez * fx - ex * fz, ex * fy - ey * fx
+            lo_a = lo_b = np.inf
+            hi_a = hi_b = -np.inf
+            for k in range(3):
+                x = ti[k]
+                d = V[x, 0] * ax + V[x, 1] * ay + V[x, 2] * az
+                e = _DOT_FILTER * (abs(V[x, 0] * ax) + abs(V[x, 1] * ay) + abs(V[x, 2] * az))
+                lo_a, hi_a = min(lo_a, d - e), max(hi_a, d + e)
+                y = tj[k]
+                d = V[y, 0] * ax + V[y, 1] * ay + V[y, 2] * az
+                e = _DOT_FILTER * (abs(V[y, 0] * ax) + abs(V[y, 1] * ay) + abs(V[y, 2] * az))
+                lo_b, hi_b = min(lo_b, d - e), max(hi_b, d + e)
+            if hi_a < lo_b or hi_b < lo_a:
+                return True
+    return False
+
+
+@nb.njit(cache=True, inline="always")
+def _apart_in_projection(V, ti, tj, ax) -> bool:
+    """Triangles whose projections along coordinate axis ``ax`` meet only in their shared
+    vertices or edge, decided by a float filter (undecided: False). The 3D triangles then
+    meet only there too."""
     k0, k1 = (ax + 1) % 3, (ax + 2) % 3
     # bit r of mi / mj: vertex r of ti / tj is shared (scalars: no allocation per pair)
     mi = mj = shared = 0
@@ -1645,8 +1707,9 @@ def _apart_in_projection(V, ti, tj) -> bool:
 @nb.njit(cache=True)
 def _undecided_pairs(V, T, pairs, moved) -> np.ndarray:
     """Mask of the box-overlapping pairs that the float filters leave to the exact test: a
-    pair with a moved vertex that no plane separation (either way) or separation in
-    projection sets apart."""
+    pair with a moved vertex that no plane separation (either way), no separation in any of
+    the three coordinate projections and, for pairs with no shared vertex, no separation
+    along an edge-edge cross product sets apart."""
     out = np.zeros(len(pairs), dtype=np.bool_)
     for r in range(len(pairs)):
         ti, tj = T[pairs[r, 0]], T[pairs[r, 1]]
@@ -1655,7 +1718,15 @@ def _undecided_pairs(V, T, pairs, moved) -> np.ndarray:
             continue
         if _plane_separates(V, ti, tj) or _plane_separates(V, tj, ti):
             continue
-        out[r] = not _apart_in_projection(V, ti, tj)
+        ax = _dominant_axis(V, ti)
+        if (_apart_in_projection(V, ti, tj, ax) or _apart_in_projection(V, ti, tj, (ax + 1) % 3)
+                or _apart_in_projection(V, ti, tj, (ax + 2) % 3)):
+            continue
+        lone = True
+        for k in range(3):
+            if ti[k] == tj[0] or ti[k] == tj[1] or ti[k] == tj[2]:
+                lone = False
+        out[r] = not (lone and _axes_apart(V, ti, tj))
     return out
 
 
