@@ -511,13 +511,11 @@ class _Complex:
     coverage ``face_cov[f]`` counted along ``planes.normal(plane)``; ``_face_tris(cx, f)``
     tiles it with triangles (global ids, counter-clockwise about ``planes.normal``): they are
     ``face_tris[f]``, or, where that is None, made on first use from its boundary cycles
-    ``face_rings[f]`` (global ids, outer first) projected along ``plane_axis[plane]``;
-    ``face_src[f]`` is
-    a superset facet covering it and ``face_point[f]`` an exact homogeneous point strictly
-    inside it (on no edge or vertex of its arrangement), None where the centroid of its first
-    triangle is one (lone uncut triangles, faces with a plain interior; :func:`_face_point`
-    makes it when asked). Incidence ``k``: sub-facet
-    ``inc_face[k]`` has a boundary half-edge on edge ``inc_edge[k]`` (``edges[e] = (u, v)``,
+    ``face_rings[f]`` (global ids, outer first) projected along ``plane_axis[plane]``.
+    ``face_src[f]`` is a superset facet covering it and ``face_point[f]`` an exact homogeneous
+    point strictly inside it (on no edge or vertex of its arrangement), None where the
+    centroid of its first triangle is one (lone uncut triangles, faces with a plain interior;
+    :func:`_face_point` makes it when asked). Incidence ``k``: sub-facet ``inc_face[k]`` has a boundary half-edge on edge ``inc_edge[k]`` (``edges[e] = (u, v)``,
     ``u < v``), running ``u -> v`` when ``inc_sign[k] = +1``; the sub-facet lies on its left
     seen from ``planes.normal``.
     """
