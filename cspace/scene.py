@@ -73,18 +73,21 @@ both in the robot frame after orientation, and the robot placed with its referen
 OMPL.app ``.cfg`` files
 -----------------------
 Read as OMPL.app's GUI reads them (``gui/ompl_app.py``, ``MainWindow.openConfig``):
-``[problem]`` ``world`` and ``robot`` are mesh paths relative to the file; the problem is 3D
-when ``start.z`` is present. Positions are ``start.x/.y/.z``, ``goal.x/.y/.z``; rotations are
-axis-angle, ``start.axis.x/.y/.z`` and ``start.theta`` in radians (the axis is normalised, as
-OMPL's ``setAxisAngle`` does; a zero axis is the identity). In 2D (no ``start.z``) the robot
-turns by ``start.theta`` about z, z is 0 and the bounds' z range is ``[0, 0]``. The **start**
-rotation is the fixed orientation; a different goal rotation gives a warning. Bounds are
-``volume.min.*`` / ``volume.max.*`` (all of them, or none); without them they are inferred as
-OMPL.app does: the bounding box of the world, grown to hold the start and goal. The world
-mesh is one obstacle body (it may hold several disjoint parts). The robot's reference point
-is the mean of its distinct vertex positions, as OMPL.app centres robots
-(``RigidBodyGeometry::getRobotCenter``: the average of the robot's vertices). Other keys and
-sections (``objective``, ``[benchmark]``, ``[planner]``, ...) are ignored.
+``[problem]`` ``world`` and ``robot`` are mesh paths relative to the file, read in the frame
+Assimp gives them (Collada unit scale and up axis applied, see :mod:`cspace.meshfile`); the
+problem is 3D when ``start.z`` is present. Positions are ``start.x/.y/.z``,
+``goal.x/.y/.z``; rotations are axis-angle, ``start.axis.x/.y/.z`` and ``start.theta`` in
+radians (the axis is normalised, as OMPL's ``setAxisAngle`` does; a zero axis is the
+identity). In 2D (no ``start.z``) the robot turns by ``start.theta`` about z, z is 0 and the
+bounds' z range is ``[0, 0]``. The **start** rotation is the fixed orientation; a different
+goal rotation gives a warning. Bounds are ``volume.min.*`` / ``volume.max.*`` (all of them,
+or none); without them they are inferred as OMPL.app does: the bounding box of the world,
+grown to hold the start and goal. The world mesh is one obstacle body (it may hold several
+disjoint parts). The robot's reference point is OMPL.app's robot centre
+(``RigidBodyGeometry::getRobotCenter``, :attr:`cspace.meshfile.MeshFile.assimp_centre`: the
+mean of the vertices as Assimp returns them, not of the distinct positions), with z set to
+0 in 2D (OMPL.app's ``robotShift``: a planar robot keeps its own z). Other keys and sections
+(``objective``, ``[benchmark]``, ``[planner]``, ...) are ignored.
 
 Parasol (PPL) ``.env`` / ``.query`` / ``.robot`` files
 ------------------------------------------------------
@@ -130,8 +133,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .convex import ConvexPolytope, fan_triangles
+from .convex import ConvexPolytope
 from .errors import InvalidMeshError, SceneError
+from .meshfile import _is_float, read_mesh_file
+from .transform import axis_angle as _axis_angle
+from .transform import euler_xyz as _euler_xyz
+from .transform import transform as _transform
 
 __all__ = ["Body", "Scene", "SceneError", "load_scene"]
 
@@ -369,50 +376,6 @@ def load_scene(path) -> Scene:
 # geometry helpers
 
 
-def _cos_sin_degrees(angle: float) -> tuple[float, float]:
-    """Cosine and sine of an angle in degrees, exact for multiples of 90."""
-    quarters, rest = divmod(float(angle), 90.0)
-    if rest == 0.0 and abs(quarters) < 2.0**52:
-        return ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))[int(quarters) % 4]
-    radians = math.radians(angle)
-    return math.cos(radians), math.sin(radians)
-
-
-def _euler_xyz(angles_degrees) -> np.ndarray:
-    """``Rz(c) @ Ry(b) @ Rx(a)`` for ``[a, b, c]`` in degrees (extrinsic XYZ), (3, 3) float64."""
-    (ca, sa), (cb, sb), (cc, sc) = (_cos_sin_degrees(x) for x in angles_degrees)
-    rx = np.array([[1.0, 0.0, 0.0], [0.0, ca, -sa], [0.0, sa, ca]])
-    ry = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
-    rz = np.array([[cc, -sc, 0.0], [sc, cc, 0.0], [0.0, 0.0, 1.0]])
-    return rz @ ry @ rx
-
-
-def _axis_angle(axis, theta: float) -> np.ndarray:
-    """Rotation by ``theta`` radians about ``axis`` (normalised; zero axis: identity)."""
-    axis = np.asarray(axis, dtype=np.float64)
-    norm = float(np.linalg.norm(axis))
-    if norm == 0.0 or theta == 0.0:
-        return np.eye(3)
-    x, y, z = axis / norm
-    k = np.array([[0.0, -z, y], [z, 0.0, -x], [-y, x, 0.0]])
-    return np.eye(3) + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)
-
-
-def _transform(points: np.ndarray, rotation=None, translation=None) -> np.ndarray:
-    """``rotation @ p + translation`` for each row, element by element (no BLAS).
-
-    Each output coordinate is ``((x r0 + y r1) + z r2) + t`` in float64, the same expression
-    for every row, so equal input rows give equal output rows.
-    """
-    out = np.array(points, dtype=np.float64)
-    if rotation is not None and not np.array_equal(rotation, np.eye(3)):
-        r = np.asarray(rotation, dtype=np.float64)
-        out = out[:, 0:1] * r[:, 0] + out[:, 1:2] * r[:, 1] + out[:, 2:3] * r[:, 2]
-    if translation is not None:
-        out = out + np.asarray(translation, dtype=np.float64)
-    return out + 0.0  # no negative zeros
-
-
 def _box(extents) -> tuple[np.ndarray, np.ndarray]:
     """The 8 corners and 12 outward triangles of a box of full ``extents`` centred at 0."""
     h = np.asarray(extents, dtype=np.float64) / 2.0
@@ -424,101 +387,9 @@ def _box(extents) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices and faces of a mesh file as stored (trimesh ``process=False``; BYU ``.g``)."""
-    if not path.is_file():
-        raise SceneError(f"{where}: mesh file not found: '{path}'")
-    if path.suffix.lower() == ".g":
-        return _read_byu(path)
-    import trimesh
-
-    try:
-        loaded = trimesh.load(str(path), force="mesh", process=False)
-        vertices = np.array(loaded.vertices, dtype=np.float64)
-        faces = np.array(loaded.faces, dtype=np.int64)
-    except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds
-        raise SceneError(
-            f"{where}: trimesh cannot read '{path}' as a triangle mesh: "
-            f"{type(exc).__name__}: {exc}"
-        ) from exc
-    if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0 or len(vertices) == 0:
-        raise SceneError(f"{where}: '{path}' holds no triangles")
-    if not np.isfinite(vertices).all():
-        row = int(np.argmin(np.isfinite(vertices).all(axis=1)))
-        raise SceneError(f"{where}: '{path}': vertex {row} is not finite: "
-                         f"{vertices[row].tolist()}")
-    return vertices, faces
-
-
-def _read_byu(path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """A Movie.BYU ``.g`` file: vertices as listed, polygons triangulated as fans."""
-    tokens, lines = [], []
-    for number, line in enumerate(path.read_text(errors="replace").splitlines(), 1):
-        words = line.split()
-        tokens += words
-        lines += [number] * len(words)
-
-    def fail(i: int, message: str) -> SceneError:
-        line = lines[min(i, len(lines) - 1)] if lines else 1
-        return SceneError(f"{path}:{line}: {message}")
-
-    def ints(start: int, count: int, what: str) -> np.ndarray:
-        chunk = tokens[start:start + count]
-        try:
-            return np.array([int(t) for t in chunk], dtype=np.int64)
-        except ValueError:
-            bad = next(k for k, t in enumerate(chunk) if not re.fullmatch(r"[+-]?\d+", t))
-            raise fail(start + bad, f"expected an integer ({what}), got {chunk[bad]!r}") from None
-
-    if len(tokens) < 4:
-        raise fail(0, "BYU header 'nparts nverts npolys nconn' is missing")
-    nparts, nverts, npolys, nconn = ints(0, 4, "BYU header").tolist()
-    if min(nparts, nverts, npolys, nconn) <= 0:
-        raise fail(0, f"BYU header counts must be positive, got {nparts} {nverts} {npolys} {nconn}")
-    first_vertex = 4 + 2 * nparts
-    first_index = first_vertex + 3 * nverts
-    need = first_index + nconn
-    if len(tokens) < need:
-        raise fail(len(tokens), f"file ends early: the header announces {need} numbers, "
-                                f"found {len(tokens)}")
-    if len(tokens) > need:
-        raise fail(need, f"unexpected data after the {nconn} vertex indices: {tokens[need]!r}")
-    ints(4, 2 * nparts, "part polygon range")
-    chunk = tokens[first_vertex:first_index]
-    try:
-        vertices = np.array([float(t) for t in chunk], dtype=np.float64).reshape(-1, 3)
-    except ValueError:
-        bad = next(k for k, t in enumerate(chunk) if not _is_float(t))
-        message = f"expected a vertex coordinate, got {chunk[bad]!r}"
-        raise fail(first_vertex + bad, message) from None
-    if not np.isfinite(vertices).all():
-        bad = int(np.argmin(np.isfinite(vertices).ravel()))
-        raise fail(first_vertex + bad, f"vertex {bad // 3 + 1} is not finite")
-    conn = ints(first_index, nconn, "vertex index")
-    bad = np.flatnonzero((conn == 0) | (np.abs(conn) > nverts))
-    if len(bad):
-        raise fail(first_index + int(bad[0]),
-                   f"vertex index {int(conn[bad[0]])} is out of range 1..{nverts}")
-    if conn[-1] > 0:
-        raise fail(need - 1, "the last polygon is not closed (its last index must be negative)")
-    offsets = np.r_[0, np.flatnonzero(conn < 0) + 1]
-    if len(offsets) - 1 != npolys:
-        raise fail(first_index, f"the header announces {npolys} polygons, the indices "
-                                f"give {len(offsets) - 1}")
-    degree = np.diff(offsets)
-    if (degree < 3).any():
-        k = int(np.argmax(degree < 3))
-        raise fail(first_index + int(offsets[k]), f"polygon {k + 1} has {int(degree[k])} "
-                                                  "vertices (at least 3 needed)")
-    faces, _ = fan_triangles(offsets.astype(np.int64), np.abs(conn) - 1)
-    return vertices, faces
-
-
-def _is_float(text: str) -> bool:
-    try:
-        float(text)
-    except ValueError:
-        return False
-    return True
+    """Vertices and faces of a mesh file in the frame it means (:mod:`cspace.meshfile`)."""
+    mesh = read_mesh_file(path, where)
+    return mesh.vertices, mesh.faces
 
 
 def _obj_vertex_mean(path: Path) -> np.ndarray | None:
@@ -773,8 +644,11 @@ def _load_cfg(path: Path, notes: list[str]) -> Scene:
     world_path = (base / text("world")).resolve()
     robot_path = (base / text("robot")).resolve()
     world_v, world_f = _read_mesh(world_path, f"{path}: [problem] world")
-    robot_v, robot_f = _read_mesh(robot_path, f"{path}: [problem] robot")
-    centre = np.unique(robot_v, axis=0).mean(axis=0)
+    robot_file = read_mesh_file(robot_path, f"{path}: [problem] robot")
+    robot_v, robot_f = robot_file.vertices, robot_file.faces
+    centre = robot_file.assimp_centre.copy()
+    if not three_d:
+        centre[2] = 0.0  # OMPL.app: in 2D the robot keeps its own z (robotShift z = 0)
     world = Body(world_path.name, world_v, world_f, str(world_path))
     robot = Body(robot_path.name, _transform(robot_v, r_start), robot_f, str(robot_path))
     reference = _transform(centre[None], r_start)[0]

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 import trimesh
 
+import cspace.meshfile as meshfile
 import cspace.scene as scene_module
 from cspace import ConvexPolytope, Grid, convex_minkowski_sum
 from cspace.scene import Body, Scene, SceneError, load_scene
@@ -669,7 +670,7 @@ def test_byu_reader(tmp_path):
     # Two parts: a square (fan-triangulated) and a triangle; 1-based, negative closes.
     good = "2 5 2 7\n1 1\n2 2\n0 0 0 1 0 0 1 1 0\n0 1 0\n5 5 5\n1 2 3 -4\n2 5 -3\n"
     (tmp_path / "m.g").write_text(good)
-    vertices, faces = scene_module._read_byu(tmp_path / "m.g")
+    vertices, faces = meshfile._read_byu(tmp_path / "m.g")
     assert vertices.shape == (5, 3) and vertices[4].tolist() == [5.0, 5.0, 5.0]
     assert faces.tolist() == [[0, 1, 2], [0, 2, 3], [1, 4, 2]]
     for bad, match in [
@@ -681,4 +682,4 @@ def test_byu_reader(tmp_path):
     ]:
         (tmp_path / "m.g").write_text(bad)
         with pytest.raises(SceneError, match=match):
-            scene_module._read_byu(tmp_path / "m.g")
+            meshfile._read_byu(tmp_path / "m.g")
