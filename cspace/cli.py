@@ -175,15 +175,17 @@ def _model(args: argparse.Namespace):
 
     scene = load_scene(args.scene)
     cache = None if args.no_cache else (args.cache_dir or True)
-    return model_scene(scene, cache=cache, progress=_Progress(args.quiet))
+    return model_scene(scene, cache=cache, progress=_Progress(args.quiet),
+                       robot_hull=args.robot_hull)
 
 
 def _build(args: argparse.Namespace) -> int:
     import numpy as np
 
     m = _model(args)
-    built = [b for b in m.bodies if b.co is not None]
-    hits = sum(b.cache == "hit" for b in built)
+    built = [(f"{b.name} x {p.part}" if len(m.robot_parts) > 1 else b.name, b.kind, co, p.cache)
+             for b in m.bodies for p in b.pairs for co in p.cos]
+    hits = sum(cache == "hit" for _, _, _, cache in built)
     if args.explain:
         print(m.explain())
     else:
@@ -195,11 +197,11 @@ def _build(args: argparse.Namespace) -> int:
     for b in failed:
         print(f"cspace: error: body {b.name!r} ({b.kind}): {b.error}", file=sys.stderr)
     if args.output:
-        arrays = {"names": np.array([b.name for b in built]),
-                  "kinds": np.array([b.kind for b in built])}
-        for i, b in enumerate(built):
-            arrays[f"vertices_{i}"] = b.co.vertices
-            arrays[f"faces_{i}"] = b.co.faces
+        arrays = {"names": np.array([name for name, _, _, _ in built]),
+                  "kinds": np.array([kind for _, kind, _, _ in built])}
+        for i, (_, _, co, _) in enumerate(built):
+            arrays[f"vertices_{i}"] = co.vertices
+            arrays[f"faces_{i}"] = co.faces
         np.savez_compressed(args.output, **arrays)
         print(f"wrote {args.output} (per C-obstacle: vertices_<i>, faces_<i>; names, kinds)")
     return 1 if failed else 0
@@ -297,6 +299,10 @@ def _model_options(p: argparse.ArgumentParser) -> None:
                    help="report what was modelled and why, per body (kind, reason, sizes, "
                         "build time, cache hit or miss)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
+    p.add_argument("--robot-hull", action="store_true",
+                   help="build against the robot's convex hull instead of its exact parts "
+                        "(faster for a non-convex robot; conservative: it can only add "
+                        "collisions); default: the robot exactly")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
 

@@ -1,6 +1,6 @@
 """Cross-checks of C-obstacle queries against python-fcl (float64, solid semantics).
 
-- :class:`FclOracle`: a convex robot translated by ``q`` against one closed obstacle mesh,
+- :class:`FclOracle`: a robot (convex, or any mesh) translated by ``q`` against one obstacle mesh,
   with *solid* semantics: ``fcl.Convex`` is solid, ``fcl.BVHModel`` is a hollow surface, so a
   non-convex obstacle is a BVH plus a containment test (generalized winding number of one
   robot vertex) when FCL finds no surface contact.
@@ -184,12 +184,17 @@ class FclOracle:
         :meth:`cspace.ConvexPolytope.from_mesh`.
     surface : bool, default False
         Surface semantics instead (an open mesh, ``kind='surface'`` C-obstacles): FCL's plain
-        mesh collision, no containment test.
+        mesh collision, no containment of the robot in the obstacle.
+    robot_kind : {'convex', 'solid', 'surface'}, default 'convex'
+        The robot's semantics: a convex solid, a non-convex closed solid (a BVH plus a winding
+        test of one vertex of each obstacle component inside it), or an open surface (no
+        containment). Anything but ``'convex'`` uses BVH-vs-BVH with containment tests for
+        the solid sides (one vertex per connected component).
     """
 
     def __init__(self, obstacle_vertices, obstacle_faces, robot_vertices, robot_faces,
                  reference_point=(0.0, 0.0, 0.0), *, convex: bool | None = None,
-                 surface: bool = False):
+                 surface: bool = False, robot_kind: str = "convex"):
         fcl = self._fcl = _fcl()
         self.obstacle_vertices = np.ascontiguousarray(obstacle_vertices, dtype=np.float64)
         self.obstacle_faces = np.ascontiguousarray(obstacle_faces, dtype=np.int64)
@@ -208,7 +213,15 @@ class FclOracle:
                 convex = True
             except InvalidMeshError:
                 convex = False
-        self.convex = bool(convex)
+        if robot_kind not in ("convex", "solid", "surface"):
+            raise ValueError(f"robot_kind must be 'convex', 'solid' or 'surface', got {robot_kind!r}")
+        self.robot_kind = robot_kind
+        # Containment points: one vertex of each connected component of either mesh.
+        from .pairs import component_points
+
+        self._obstacle_points = component_points(self.obstacle_vertices, self.obstacle_faces)
+        self._robot_points = component_points(self.robot_vertices, self.robot_faces)
+        self.convex = bool(convex) and robot_kind == "convex"
         if self.convex:
             self._geom = fcl_convex(self.obstacle_vertices, self.obstacle_faces)
         else:
@@ -249,22 +262,32 @@ class FclOracle:
         for i in range(len(q)):
             rob.setTranslation(q[i])  # float64 row (lists raise in python-fcl)
             out[i] = fcl.collide(rob, obs, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
-        if not self.convex and (~out).any():
+        if self.convex:
+            return out
+        for p in self._obstacle_points:  # an obstacle component inside the robot
             free = np.nonzero(~out)[0]
-            out[free] = self._swallowed(q[free])
-        if not self.convex and not self.surface and (~out).any():
+            if not free.size or self.robot_kind == "surface":
+                break
+            if self.robot_kind == "convex":
+                out[free] = self._swallowed(q[free], p)
+            else:
+                out[free] = winding_number(self.robot_vertices, self.robot_faces,
+                                           p - q[free]) > 0.5
+        for p in self._robot_points:  # a robot component inside the solid obstacle
             free = np.nonzero(~out)[0]
+            if not free.size or self.surface:
+                break
             out[free] = winding_number(self.obstacle_vertices, self.obstacle_faces,
-                                       self.robot_vertices[0] + q[free]) > 0.5
+                                       p + q[free]) > 0.5
         return out
 
-    def _swallowed(self, q: np.ndarray) -> np.ndarray:
-        """The obstacle's first vertex inside the (convex, closed) robot at ``q``: the whole
-        obstacle inside the hollow robot mesh, which BVH-vs-BVH contact does not see."""
+    def _swallowed(self, q: np.ndarray, point: np.ndarray) -> np.ndarray:
+        """An obstacle point inside the (convex, closed) robot at ``q``: a whole obstacle
+        component inside the hollow robot mesh, which BVH-vs-BVH contact does not see."""
         V, F = self.robot_vertices, self.robot_faces
         n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
         d = np.einsum("ij,ij->i", n, V[F[:, 0]])
-        x = self.obstacle_vertices[0] - q  # in the robot's frame
+        x = point - q  # in the robot's frame
         return np.all(x @ n.T <= d, axis=1)
 
     def distance(self, q) -> np.ndarray:
@@ -301,7 +324,8 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
     """Compare membership and distance with FCL on sampled translations.
 
     Half of the samples are uniform in the bounds (``CSpace.bounds``, or the C-obstacle's
-    bounding box grown by 10%), half near the C-obstacle surfaces (random boundary points
+    bounding box grown by 10%), half near the C-obstacle surfaces (those outside the bounds,
+    where a scene's C-space is not modelled, are dropped) (random boundary points
     moved along the facet normal by ``10**U(-12, -1)`` times the scene size, or not at all).
 
     Parameters
@@ -345,19 +369,16 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         if len(idx):
             parts.append(_near_surface(o, len(idx), rng, size))
     q = np.vstack(parts)
+    # A scene's C-space is modelled inside its bounds only (pieces that cannot reach them are
+    # never built), so near-surface samples outside the bounds are not compared.
+    q = q[((lo <= q) & (q <= hi)).all(axis=1)]
 
     t0 = time.perf_counter()
     ours_in = cs.contains(q)
     ours_d = cs.signed_distance(q)
     t_ours = time.perf_counter() - t0
 
-    oracles = []
-    for o in cs.obstacles:
-        if o.obstacle is None or o.robot is None:
-            raise ValueError("cross_check needs C-obstacles built with CSpaceObstacle.build")
-        oracles.append(FclOracle(o.obstacle.vertices, o.obstacle.faces, o.robot.vertices,
-                                 o.robot.faces, o.reference_point, convex=o.kind == "convex",
-                                 surface=o.kind == "surface"))
+    oracles = [_oracle(o) for o in cs.obstacles]
     t0 = time.perf_counter()
     fcl_in = np.zeros(len(q), dtype=bool)
     fcl_d = np.full(len(q), np.inf)
@@ -395,6 +416,23 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
     }
 
 
+def _oracle(co) -> "FclOracle":
+    """The FCL oracle of one C-obstacle, with the semantics of the pair it was built for:
+    a part of a non-convex robot carries ``co.semantics = (obstacle solid, robot kind)``."""
+    if co.obstacle is None or co.robot is None:
+        raise ValueError("FCL checks need C-obstacles built from operands (CSpaceObstacle.build "
+                         "or cspace.model_scene)")
+    semantics = getattr(co, "semantics", None)
+    if semantics is None:
+        return FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices,
+                         co.robot.faces, co.reference_point, convex=co.kind == "convex",
+                         surface=co.kind == "surface")
+    obstacle_solid, robot_kind = semantics
+    return FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices, co.robot.faces,
+                     co.reference_point, convex=False, surface=not obstacle_solid,
+                     robot_kind=robot_kind)
+
+
 def co_collider(co):
     """FCL collision test ``collides(q) -> (k,) bool`` for one C-obstacle's operands.
 
@@ -402,9 +440,7 @@ def co_collider(co):
     semantics). Surface C-obstacles (``kind='surface'``, open meshes): FCL's plain mesh
     collision against the surface, no containment.
     """
-    return FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices,
-                     co.robot.faces, co.reference_point, convex=co.kind == "convex",
-                     surface=co.kind == "surface").collides
+    return _oracle(co).collides
 
 
 def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray, int]:

@@ -46,9 +46,11 @@ from .errors import BuildError, InvalidMeshError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh
 from .obstacle import CSpace, CSpaceObstacle
+from .pairs import (CONSTRUCTIONS, component_points, containment_meshes,
+                    convex_triangle_pieces, pair_construction, triangle_pair_pieces)
 from .surface import SurfaceMesh, SurfaceObstacle
 
-__all__ = ["KINDS", "BodyModel", "SceneModel", "model_scene"]
+__all__ = ["KINDS", "BodyModel", "RobotPart", "PairModel", "SceneModel", "model_scene"]
 
 KINDS = ("convex", "solid", "surface", "dropped")
 
@@ -73,7 +75,10 @@ class BodyModel:
     pieces : int
         Surface: triangles whose piece can meet the bounds (built); else 0.
     co : CSpaceObstacle or None
-        The built C-obstacle (None if dropped, not built, or failed).
+        The built C-obstacle when the robot is one convex part (None if dropped, not built,
+        failed, or the robot has several parts: see ``pairs``).
+    pairs : list of PairModel
+        One per robot part: the construction it got and its C-obstacles.
     seconds : float
         Build (or cache load) time.
     cache : {'hit', 'miss', 'off', ''}
@@ -90,12 +95,18 @@ class BodyModel:
     faces: np.ndarray
     pieces: int = 0
     co: CSpaceObstacle | None = None
+    pairs: list = field(default_factory=list)
     seconds: float = 0.0
     cache: str = ""
     error: str = ""
     _ints: np.ndarray | None = field(default=None, repr=False)
     _solid: object = field(default=None, repr=False)
     _keep: np.ndarray | None = field(default=None, repr=False)
+
+    @property
+    def cos(self) -> list:
+        """Every C-obstacle built for this body (over all robot parts)."""
+        return [co for p in self.pairs for co in p.cos]
 
     def line(self) -> str:
         """One report line: name, kind, sizes, reason, build time and cache."""
@@ -113,6 +124,72 @@ class BodyModel:
 
 
 @dataclass(eq=False)
+class RobotPart:
+    """One part of the robot after modelling (robot frame, reference point not subtracted).
+
+    Attributes
+    ----------
+    name : str
+        ``<robot>`` or ``<robot>#<k>`` when the robot was split.
+    kind : {'convex', 'solid', 'surface'}
+    reason : str
+    ints : (n, 3) int64
+        Welded grid vertices (for ``solid``: the validated mesh's, oriented outwards).
+    faces : (m, 3) int64
+    grid : Grid
+    operand : ConvexPolytope, ClosedMesh or None
+        The exact operand: the polytope (convex), the closed mesh (solid), none (surface).
+    """
+
+    name: str
+    kind: str
+    reason: str
+    ints: np.ndarray
+    faces: np.ndarray
+    grid: Grid
+    operand: object = None
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64: the snapped vertices, exactly ``grid.to_float(ints)``."""
+        return self.grid.to_float(self.ints)
+
+    def line(self) -> str:
+        return f"{self.name}: {self.kind} ({len(self.faces)} triangles): {self.reason}"
+
+
+@dataclass(eq=False)
+class PairModel:
+    """An (obstacle body, robot part) pair: its construction and C-obstacles.
+
+    Attributes
+    ----------
+    part : str
+        The robot part's name.
+    construction : str
+        A key of :data:`cspace.pairs.CONSTRUCTIONS`.
+    cos : list of CSpaceObstacle
+        Its C-obstacles (convex pieces and containment terms for triangle pairs).
+    detail : str
+        Sizes: pieces built, left out, thickened.
+    seconds : float
+    cache : {'hit', 'miss', 'off', ''}
+    """
+
+    part: str
+    construction: str
+    cos: list = field(default_factory=list)
+    detail: str = ""
+    seconds: float = 0.0
+    cache: str = ""
+
+    def line(self) -> str:
+        built = f"; {self.seconds:.3f} s (cache {self.cache})" if self.cache else ""
+        return (f"x {self.part}: {self.construction}"
+                f"{'; ' + self.detail if self.detail else ''}{built}")
+
+
+@dataclass(eq=False)
 class SceneModel:
     """What :func:`model_scene` decided and built for a scene.
 
@@ -121,7 +198,12 @@ class SceneModel:
     scene : Scene
     grid : Grid
     robot : ConvexPolytope
-        The robot's hull on ``grid`` (its frame).
+        The robot's hull on ``grid`` (its frame): its bounding box decides what is dropped.
+    robot_parts : list of RobotPart
+        What the C-obstacles are built from: the robot's exact parts, or its hull alone when
+        ``robot_hull=True`` was asked for.
+    robot_hull : bool
+        Whether the hull stands in for the robot (an explicit choice, never a silent one).
     bodies : list of BodyModel
     sources : dict
         Per scene body: ``triangles`` (input), ``collapsed``, ``double_sided``, ``repeated``
@@ -136,6 +218,8 @@ class SceneModel:
     bodies: list
     sources: dict
     seconds: dict
+    robot_parts: list = field(default_factory=list)
+    robot_hull: bool = False
 
     def of_kind(self, kind: str) -> list[BodyModel]:
         return [b for b in self.bodies if b.kind == kind]
@@ -159,15 +243,21 @@ class SceneModel:
                 f"cannot build the C-obstacle of body {b.name!r} ({b.kind}: {b.reason}): "
                 f"{b.error}" for b in failed))
         kept = [b for b in self.bodies if b.kind != "dropped"]
-        missing = [b.name for b in kept if b.co is None]
+        missing = [b.name for b in kept if not b.pairs]
         if missing:
             raise BuildError(f"scene {self.scene.name!r}: bodies {missing} were modelled "
                              "without building (build=False)")
-        # Surfaces share one broad phase (one cell lookup per query for all of them).
-        surfaces = [b.co for b in kept if b.kind == "surface"]
-        cos = [b.co for b in kept if b.kind != "surface"]
-        if surfaces:
-            cos.append(SurfaceObstacle.union(surfaces))
+        # Surface pieces of one robot part share one broad phase (one cell lookup per query
+        # for all of them); every other C-obstacle stands alone.
+        cos, surfaces = [], {}
+        for b in kept:
+            for p in b.pairs:
+                for co in p.cos:
+                    if isinstance(co, SurfaceObstacle) and p.construction == "surface pieces":
+                        surfaces.setdefault(p.part, []).append(co)
+                    else:
+                        cos.append(co)
+        cos += [SurfaceObstacle.union(group) for group in surfaces.values()]
         return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name)
 
     def explain(self) -> str:
@@ -175,8 +265,13 @@ class SceneModel:
         c = self.counts()
         lines = [f"scene {self.scene.name!r}: {len(self.scene.obstacles)} obstacle bodies -> "
                  f"{len(self.bodies)} modelled: " + ", ".join(f"{c[k]} {k}" for k in KINDS),
-                 f"robot: {self.robot.n_facets} facets, {len(self.robot.ints)} vertices (hull); "
-                 f"grid step 2**{self.grid.exponent}; bounds {self.scene.bounds.tolist()}"]
+                 f"robot {self.scene.robot.name!r}: " + (
+                     f"its convex hull ({self.robot.n_facets} facets, {len(self.robot.ints)} "
+                     "vertices), as asked (robot_hull)" if self.robot_hull else
+                     f"{len(self.robot_parts)} part{'s' if len(self.robot_parts) != 1 else ''}, "
+                     "modelled exactly") + f"; grid step 2**{self.grid.exponent}; bounds "
+                 f"{self.scene.bounds.tolist()}"]
+        lines += ["  " + p.line() for p in self.robot_parts]
         for name, s in self.sources.items():
             extra = [f"{s[k]} {k.replace('_', '-')}" for k in ("collapsed", "double_sided",
                                                                  "repeated") if s[k]]
@@ -184,6 +279,11 @@ class SceneModel:
                          + (f"; dropped triangles: {', '.join(extra)}" if extra else ""))
         for b in self.bodies:
             lines.append("    " + b.line())
+            if len(self.robot_parts) > 1 or any(p.kind != "convex" for p in self.robot_parts):
+                lines += ["      " + p.line() for p in b.pairs]
+        used = sorted({p.construction for b in self.bodies for p in b.pairs})
+        if len(self.robot_parts) > 1 or any(p.kind != "convex" for p in self.robot_parts):
+            lines += ["constructions:"] + [f"  {c}: {CONSTRUCTIONS[c]}" for c in used]
         lines.append(f"modelling {self.seconds['model']:.3f} s, building "
                      f"{self.seconds['build']:.3f} s")
         return "\n".join(lines)
@@ -264,6 +364,33 @@ def _meets(lo: np.ndarray, hi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> 
     return ((lo.astype(np.float64) <= bhi) & (blo <= hi.astype(np.float64))).all(axis=-1)
 
 
+def _closed_kind(name, P, F, grid):
+    """Kind of a welded part, without bounds: ``(kind, reason, operand)``.
+
+    ``('convex', reason, ConvexPolytope)``, ``('solid', reason, ClosedMesh)`` or
+    ``('surface', why, None)`` (open, or closed but not a valid solid).
+    """
+    edge, count = _edges(F, len(P))
+    n_boundary = int((count == 1).sum())
+    if n_boundary:
+        return "surface", f"open: {n_boundary} boundary edges", None
+    V = grid.to_float(P)
+    try:
+        solid = ClosedMesh.from_arrays(V, F, grid=grid, name=name)
+    except InvalidMeshError as exc:
+        return "surface", (f"closed but not a valid solid ({type(exc).__name__}: "
+                           f"{str(exc).split(': ', 1)[-1]})"), None
+    shells = int(solid.components.max()) + 1
+    chi = len(solid.ints) - len(F) * 3 // 2 + len(F)
+    try:
+        poly = ConvexPolytope.from_mesh(solid)
+    except NotConvexError:
+        genus = f", genus {1 - chi // 2}" if shells == 1 else ""
+        return "solid", (f"closed 2-manifold, not convex ({shells} shell"
+                         f"{'s' if shells > 1 else ''}, Euler characteristic {chi}{genus})"), solid
+    return "convex", f"closed and convex ({poly.n_facets} facets)", poly
+
+
 def _classify(name, source, ints, F, minus_r: ConvexPolytope, bounds_g, grid) -> BodyModel:
     used, local = np.unique(F, return_inverse=True)
     P, F = ints[used], local.reshape(-1, 3)
@@ -275,37 +402,16 @@ def _classify(name, source, ints, F, minus_r: ConvexPolytope, bounds_g, grid) ->
         body.reason = (f"its C-obstacle's bounding box {grid.to_float(np.stack([lo, hi])).tolist()} "
                        "misses the planning bounds: the robot can never touch it")
         return body
-    edge, count = _edges(F, len(P))
-    n_boundary = int((count == 1).sum())
-    why_surface = ""
-    if n_boundary:
-        why_surface = f"open: {n_boundary} boundary edges"
-    else:
-        try:
-            solid = ClosedMesh.from_arrays(V, F, grid=grid, name=name)
-        except InvalidMeshError as exc:
-            why_surface = (f"closed but not a valid solid ({type(exc).__name__}: "
-                           f"{str(exc).split(': ', 1)[-1]})")
-        else:
-            shells = int(solid.components.max()) + 1
-            chi = len(solid.ints) - len(F) * 3 // 2 + len(F)
-            try:
-                poly = ConvexPolytope.from_mesh(solid)
-            except NotConvexError:
-                body.kind, body._solid = "solid", solid
-                genus = f", genus {1 - chi // 2}" if shells == 1 else ""
-                body.reason = (f"closed 2-manifold, not convex ({shells} shell"
-                               f"{'s' if shells > 1 else ''}, Euler characteristic {chi}{genus}): "
-                               "NCC-CVMS")
-                return body
-            body.kind, body._solid = "convex", poly
-            body.reason = f"closed and convex ({poly.n_facets} facets): CVMS"
-            return body
+    kind, why, operand = _closed_kind(name, P, F, grid)
+    if kind != "surface":
+        body.kind, body._solid = kind, operand
+        body.reason = why + (": CVMS" if kind == "convex" else ": NCC-CVMS")
+        return body
     # Surface semantics; leave out triangles whose piece cannot meet the bounds.
     tri = P[F]
     keep = _meets(tri.min(axis=1) + r_lo, tri.max(axis=1) + r_hi, *bounds_g)
     body.kind, body._keep, body.pieces = "surface", keep, int(keep.sum())
-    body.reason = (f"{why_surface}: surface semantics, the union of triangle ⊕ (-R) over "
+    body.reason = (f"{why}: surface semantics, the union of triangle ⊕ (-R) over "
                    f"{int(keep.sum())} triangles" + (f" ({int((~keep).sum())} more cannot "
                                                      "reach the bounds)" if (~keep).any() else ""))
     return body
@@ -349,8 +455,116 @@ def _key(body: BodyModel, robot, c_ints, grid) -> str:
     return co_key(body.kind, grid, body._ints, faces, robot.ints, c_ints)
 
 
+def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> list[RobotPart]:
+    """The robot's exact parts (steps 1-3 and 5 of the obstacles, without dropping), or the
+    hull alone when asked for."""
+    if robot_hull:
+        return [RobotPart(scene.robot.name, "convex", "the convex hull of its vertices "
+                          "(robot_hull: an approximation that can only add collisions)",
+                          hull.ints, hull.faces, grid, hull)]
+    ints, F, _ = _weld_dedupe(scene.robot, grid)
+    parts = _parts(ints, F) if len(F) else []
+    if not parts:
+        raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r}: all "
+                         f"{len(scene.robot.faces)} triangles collapse when welded on the grid "
+                         f"(step 2**{grid.exponent})")
+    out = []
+    for k, faces in enumerate(parts):
+        name = scene.robot.name if len(parts) == 1 else f"{scene.robot.name}#{k}"
+        used, local = np.unique(F[faces], return_inverse=True)
+        P, Fk = ints[used], local.reshape(-1, 3)
+        kind, why, operand = _closed_kind(name, P, Fk, grid)
+        if kind == "solid":  # the validated mesh: oriented outwards
+            P, Fk = operand.ints, operand.faces
+        out.append(RobotPart(name, kind, why, P, Fk, grid, operand))
+    return out
+
+
+def _pair_key(construction, body: BodyModel, part: RobotPart, c_ints, grid) -> str:
+    faces = body.faces[body._keep] if body.kind == "surface" else body.faces
+    robot = np.vstack([part.ints, part.faces])
+    return co_key(f"{construction} robot {len(part.ints)}", grid, body._ints, faces, robot,
+                  c_ints)
+
+
+def _body_operand(body: BodyModel):
+    """The obstacle body's exact grid vertices and triangles (a solid's are oriented)."""
+    if body.kind == "surface":
+        return body._ints, body.faces[body._keep]
+    return body._solid.ints, body._solid.faces
+
+
+def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, grid, bounds_g):
+    """C-obstacles of a pair with a non-convex robot part, from built or cached arrays."""
+    c = grid.to_float(c_ints)
+    obstacle = (SurfaceMesh(body.vertices, body.faces[body._keep], body.name)
+                if body.kind == "surface" else body._solid)
+    name = f"{body.name} x {part.name}"
+    if construction == "NCC-CVMS swapped":
+        cos = [CSpaceObstacle.from_mesh(arrays["vertices"], arrays["faces"], obstacle=obstacle,
+                                        robot=part, reference_point=c, grid=grid, name=name)]
+    else:
+        pieces = unpack_polytopes(arrays, "p_", grid)
+        cos = [SurfaceObstacle(pieces, obstacle=obstacle, robot=part, reference_point=c,
+                               grid=grid)] if pieces else []
+    if construction == "triangle pairs":
+        o_ints, o_faces = _body_operand(body)
+        terms = []
+        if part.kind == "solid":
+            terms += containment_meshes(component_points(o_ints, o_faces), part.ints,
+                                        part.faces, c_ints, robot_solid=True)
+        if body.kind == "solid":
+            terms += containment_meshes(component_points(part.ints, part.faces), o_ints, o_faces,
+                                        c_ints, robot_solid=False)
+        for ints, faces in terms:
+            if _meets(ints.min(axis=0), ints.max(axis=0), *bounds_g):
+                cos.append(CSpaceObstacle.from_mesh(grid.to_float(ints), faces, obstacle=obstacle,
+                                                    robot=part, reference_point=c, grid=grid,
+                                                    name=f"{name} (containment)"))
+    for co in cos:
+        co.semantics = (body.kind != "surface", part.kind)
+    return cos
+
+
+def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, grid, bounds_g,
+                       progress) -> dict:
+    """Build a pair with a non-convex robot part: arrays for the cache."""
+    if construction == "NCC-CVMS swapped":
+        from .trim import minkowski_sum
+
+        moved = ClosedMesh.from_arrays(grid.to_float(part.ints - c_ints), part.faces, grid=grid,
+                                       name=part.name)
+        S = minkowski_sum(moved, body._solid.reflected((0.0, 0.0, 0.0)))
+        # -(A ⊕ B): negating floats is exact; reversing the triangles keeps them outward.
+        return {"vertices": -np.asarray(S.vertices) + 0.0,
+                "faces": np.ascontiguousarray(np.asarray(S.faces)[:, ::-1])}
+    if construction == "convex ⊕ robot triangles":
+        made = convex_triangle_pieces(body._solid.ints, part.ints, part.faces, c_ints, grid,
+                                      bounds_g)
+    else:
+        o_ints, o_faces = _body_operand(body)
+        made = triangle_pair_pieces(o_ints, o_faces, part.ints, part.faces, c_ints, grid,
+                                    bounds_g, closed=body.kind == "solid" or part.kind == "solid",
+                                    progress=progress)
+    arrays = pack_polytopes(made.pieces, "p_")
+    arrays["counts"] = np.array([len(made.pieces), made.thickened, made.flat_skipped,
+                                 made.out_of_bounds], dtype=np.int64)
+    return arrays
+
+
+def _pair_detail(construction, arrays) -> str:
+    if "counts" not in arrays:
+        return ""
+    n, thick, flat, out = (int(x) for x in arrays["counts"])
+    what = "pieces" if construction == "triangle pairs" else "robot-triangle pieces"
+    extra = [f"{out} out of the bounds"] if out else []
+    extra += [f"{flat} flat left out (an operand is closed)"] if flat else []
+    extra += [f"{thick} flat thickened by one grid step"] if thick else []
+    return f"{n} {what}" + (f" ({', '.join(extra)})" if extra else "")
+
+
 def model_scene(scene, *, build: bool = True, cache=None, progress=None,
-                grid: Grid | None = None) -> SceneModel:
+                grid: Grid | None = None, robot_hull: bool = False) -> SceneModel:
     """Decide, per obstacle body, what to build and why; build it.
 
     Parameters
@@ -366,6 +580,10 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         body and during long surface builds.
     grid : Grid, optional
         Default ``Grid.for_extent(scene.extent())``.
+    robot_hull : bool, default False
+        Build against the robot's convex hull instead of its exact parts: faster for a
+        non-convex robot, and conservative (the hull holds the robot, so it can only add
+        collisions), but not the robot the scene gave. ``explain()`` says which was used.
 
     Returns
     -------
@@ -375,9 +593,9 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     """
     t0 = time.perf_counter()
     grid = grid or Grid.for_extent(scene.extent())
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the scene warned about its robot when loaded
-        robot = scene.robot_polytope(grid)
+    # The hull's bounding box is the robot's: exact for dropping bodies, whatever the parts.
+    robot = ConvexPolytope.from_points(scene.robot.vertices, grid=grid, name=scene.robot.name)
+    parts = _model_robot(scene, grid, robot, robot_hull)
     c = np.asarray(scene.reference_point, dtype=np.float64)
     c_ints = grid.snap(c)
     minus_r = robot.reflected(c)
@@ -385,13 +603,13 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     bodies, sources = [], {}
     for sb in scene.obstacles:
         ints, F, counts = _weld_dedupe(sb, grid)
-        parts = _parts(ints, F) if len(F) else []
-        counts["parts"] = len(parts)
+        split = _parts(ints, F) if len(F) else []
+        counts["parts"] = len(split)
         sources[sb.name] = counts
-        for k, faces in enumerate(parts):
-            name = sb.name if len(parts) == 1 else f"{sb.name}#{k}"
+        for k, faces in enumerate(split):
+            name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
             bodies.append(_classify(name, sb.name, ints, F[faces], minus_r, bounds_g, grid))
-        if not parts:
+        if not split:
             bodies.append(BodyModel(sb.name, sb.name, "dropped",
                                     f"empty: all {len(sb.faces)} triangles collapse when welded "
                                     f"on the grid (step 2**{grid.exponent})",
@@ -404,34 +622,59 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     else:
         store = COCache(None if cache is True else cache)
     if build:
-        todo = [b for b in bodies if b.kind != "dropped"]
+        todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
         c_snapped = grid.to_float(c_ints)
-        for i, b in enumerate(todo):
-            def sub(f, i=i, b=b):
+        for i, (b, part) in enumerate(todo):
+            construction = pair_construction(b.kind, part.kind)
+
+            def sub(f, i=i, b=b, part=part):
                 if progress is not None:
-                    progress((i + f) / len(todo), f"{b.name} ({b.kind})")
+                    progress((i + f) / len(todo), f"{b.name} ({b.kind}) x {part.name}")
             sub(0.0)
             t = time.perf_counter()
+            pair = PairModel(part.name, construction)
+            b.pairs.append(pair)
             try:
-                key = _key(b, robot, c_ints, grid) if store is not None else None
-                arrays = store.load(key) if store is not None else None
-                if arrays is not None:
-                    b.co, b.cache = _from_arrays(arrays, b, robot, c_snapped, grid), "hit"
+                convex = part.kind == "convex"
+                if store is None:
+                    key = None
+                elif convex:
+                    key = _key(b, part.operand, c_ints, grid)
                 else:
-                    b.co = _build(b, robot, c, grid, sub if b.kind == "surface" else None)
-                    b.cache = "off" if store is None else "miss"
-                    if store is not None:
-                        try:
-                            store.store(key, _to_arrays(b.co))
-                        except OSError as exc:  # an unwritable cache must not fail the build
-                            warnings.warn(f"C-obstacle cache: cannot write {store.path(key)}: "
-                                          f"{exc}", UserWarning, stacklevel=2)
+                    key = _pair_key(construction, b, part, c_ints, grid)
+                arrays = store.load(key) if store is not None else None
+                pair.cache = "hit" if arrays is not None else ("off" if store is None else "miss")
+                if convex and arrays is not None:
+                    pair.cos = [_from_arrays(arrays, b, part.operand, c_snapped, grid)]
+                elif convex:
+                    pair.cos = [_build(b, part.operand, c, grid,
+                                       sub if b.kind == "surface" else None)]
+                    arrays = _to_arrays(pair.cos[0]) if store is not None else None
+                else:
+                    if arrays is None:
+                        arrays = _build_pair_arrays(construction, b, part, c_ints, grid,
+                                                    bounds_g, sub)
+                    pair.cos = _pair_cos(construction, arrays, b, part, c_ints, grid, bounds_g)
+                    pair.detail = _pair_detail(construction, arrays)
+                if store is not None and pair.cache == "miss":
+                    try:
+                        store.store(key, arrays)
+                    except OSError as exc:  # an unwritable cache must not fail the build
+                        warnings.warn(f"C-obstacle cache: cannot write {store.path(key)}: "
+                                      f"{exc}", UserWarning, stacklevel=2)
             except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
-                b.error = f"{type(exc).__name__}: {exc}"
-                b.cache = "off" if store is None else "miss"
-            b.seconds = time.perf_counter() - t
+                error = f"{type(exc).__name__}: {exc}"
+                b.error = error if len(parts) == 1 else f"{b.error}; {part.name}: {error}".lstrip("; ")
+                pair.cache = "off" if store is None else "miss"
+            pair.seconds = time.perf_counter() - t
+            b.seconds += pair.seconds
+            b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"
+        for b in bodies:  # one convex part: the body's one C-obstacle, as before parts
+            if len(parts) == 1 and parts[0].kind == "convex" and b.pairs and b.pairs[0].cos:
+                b.co = b.pairs[0].cos[0]
         if progress is not None:
-            progress(1.0, f"{len(todo)} C-obstacles")
+            progress(1.0, f"{len(todo)} C-obstacle pairs")
     t2 = time.perf_counter()
     return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
-                      seconds={"model": t1 - t0, "build": t2 - t1})
+                      seconds={"model": t1 - t0, "build": t2 - t1}, robot_parts=parts,
+                      robot_hull=robot_hull)

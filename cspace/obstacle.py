@@ -736,7 +736,7 @@ class CSpace:
 
     @classmethod
     def from_scene(cls, scene, *, grid: Grid | None = None, cache=None,
-                   progress=None) -> "CSpace":
+                   progress=None, robot_hull: bool = False) -> "CSpace":
         """The C-obstacles a scene needs, built: :func:`cspace.model.model_scene` decides per
         body (split, deduplicated; convex, solid, surface or dropped) and builds each.
 
@@ -749,6 +749,8 @@ class CSpace:
             Disk cache of C-obstacles (:mod:`cspace.cache`); None: none.
         progress : callable, optional
             ``progress(fraction, message)``, see :func:`cspace.model.model_scene`.
+        robot_hull : bool, default False
+            Use the robot's convex hull instead of its exact parts (see ``model_scene``).
 
         Raises
         ------
@@ -757,7 +759,8 @@ class CSpace:
         """
         from .model import model_scene
 
-        return model_scene(scene, grid=grid, cache=cache, progress=progress).cspace()
+        return model_scene(scene, grid=grid, cache=cache, progress=progress,
+                           robot_hull=robot_hull).cspace()
 
     def __len__(self) -> int:
         return len(self.obstacles)

@@ -67,8 +67,11 @@ def _bounds(bounds) -> np.ndarray:
     b = np.array(bounds, dtype=np.float64)
     if b.shape != (2, 3):
         raise ValueError(f"bounds must be (2, 3), got shape {b.shape}")
-    if not np.isfinite(b).all() or (b[0] >= b[1]).any():
-        raise ValueError(f"bounds must be finite with lower < upper, got {b.tolist()}")
+    # A flat axis (lower == upper) fixes that coordinate: a planar problem in 3D (OMPL.app's
+    # 2D problems have z bounds [0, 0]). At least one axis must be free.
+    if not np.isfinite(b).all() or (b[0] > b[1]).any() or not (b[0] < b[1]).any():
+        raise ValueError("bounds must be finite with lower <= upper on every axis and "
+                         f"lower < upper on at least one, got {b.tolist()}")
     return b
 
 
@@ -392,11 +395,12 @@ class PlanResult:
         return float(np.linalg.norm(np.diff(self.path, axis=0), axis=1).sum())
 
 
-def _as_cspace(scene_or_cspace, cache=None):
+def _as_cspace(scene_or_cspace, cache=None, robot_hull: bool = False):
     if isinstance(scene_or_cspace, CSpace):
         return scene_or_cspace, None
     if hasattr(scene_or_cspace, "obstacles") and hasattr(scene_or_cspace, "robot"):
-        return CSpace.from_scene(scene_or_cspace, cache=cache), scene_or_cspace
+        return (CSpace.from_scene(scene_or_cspace, cache=cache, robot_hull=robot_hull),
+                scene_or_cspace)
     raise TypeError(f"expected a Scene or a CSpace, got {type(scene_or_cspace).__name__}")
 
 
@@ -425,7 +429,7 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
          time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
          planner_range: float | None = None, cache=None,
-         sampler: str = "uniform") -> PlanResult:
+         sampler: str = "uniform", robot_hull: bool = False) -> PlanResult:
     """Plan a collision-free translation with OMPL, checked exactly.
 
     Parameters
@@ -467,6 +471,8 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         OMPL's uniform one, or ``'narrow'``: half the samples from
         :func:`narrow_passage_samples` (computed once, exact), half uniform. Planners that
         sample unchecked states (RRT, RRTConnect, ...) ignore it.
+    robot_hull : bool, default False
+        For a scene: build against the robot's convex hull instead of its exact parts.
 
     Returns
     -------
@@ -491,7 +497,7 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         raise ValueError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
     if not (time > 0):
         raise ValueError(f"time must be positive, got {time}")
-    cs, scene = _as_cspace(scene_or_cspace, cache)
+    cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull)
     if bounds is None:
         bounds = scene.bounds if scene is not None else cs.bounds
     b = _bounds(bounds)

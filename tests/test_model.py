@@ -410,8 +410,9 @@ def test_stick_bug_as_an_obstacle_is_closed_after_dropping_its_repeated_faces(sh
 
 
 def test_fcl_environment_builds_and_agrees_with_fcl(shared_data):
+    # The robot's hull, as asked (its exact 4 open parts: test_fcl_environment_exact_robot).
     scene = fcl_env_scene(shared_data)
-    m = model_scene(scene)
+    m = model_scene(scene, robot_hull=True)
     cs = m.cspace()
     assert len(cs) == 14  # 13 convex and the 21 surfaces joined in one
     assert [o.kind for o in cs.obstacles].count("surface") == 1
@@ -449,3 +450,16 @@ def test_parasol_solid_builds_and_agrees_with_fcl(shared_data, tmp_path, rel):
     assert ours.tolist() == ([False, False] if "bug_trap" in rel else [True, False])
     again = model_scene(scene, cache=tmp_path / "cache")
     assert again.bodies[0].cache == "hit"
+
+
+@pytest.mark.slow
+def test_fcl_environment_exact_robot(shared_data, tmp_path):
+    # rob.obj exactly: 4 open parts (one closed but non-manifold), every body paired with each
+    # part (convex ⊕ robot triangles, triangle pairs); about a minute here.
+    m = model_scene(fcl_env_scene(shared_data), cache=tmp_path / "cache")
+    assert [p.kind for p in m.robot_parts] == ["surface"] * 4
+    cs = m.cspace()
+    from cspace.fcl_check import cross_check
+
+    r = cross_check(cs, n=2000, seed=2, band=1e-9)
+    assert r["n_disagree"] == 0, r["disagreements"][:5]
