@@ -325,7 +325,7 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
 
     Half of the samples are uniform in the bounds (``CSpace.bounds``, or the C-obstacle's
     bounding box grown by 10%), half near the C-obstacle surfaces (those outside the bounds,
-    where a scene's C-space is not modelled, are dropped) (random boundary points
+    where a scene's C-space is not modelled, are drawn again) (random boundary points
     moved along the facet normal by ``10**U(-12, -1)`` times the scene size, or not at all).
 
     Parameters
@@ -366,12 +366,20 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
     parts = [rng.uniform(lo, hi, (n_uniform, 3))]
     per = np.array_split(np.arange(n // 2), len(cs.obstacles))
     for o, idx in zip(cs.obstacles, per):
-        if len(idx):
-            parts.append(_near_surface(o, len(idx), rng, size))
+        # A scene's C-space is modelled inside its bounds only (pieces that cannot reach them
+        # are never built), so near-surface samples outside the bounds are drawn again.
+        if not len(idx):
+            continue
+        near = np.zeros((0, 3))
+        for k in range(16):
+            if len(near) >= len(idx):
+                break
+            more = _near_surface(o, (1 if k == 0 else 4) * (len(idx) - len(near)), rng, size)
+            near = np.vstack([near, more[((lo <= more) & (more <= hi)).all(axis=1)]])
+        if len(near) < len(idx):  # a surface nearly all outside the bounds: uniform points
+            near = np.vstack([near, rng.uniform(lo, hi, (len(idx) - len(near), 3))])
+        parts.append(near[:len(idx)])
     q = np.vstack(parts)
-    # A scene's C-space is modelled inside its bounds only (pieces that cannot reach them are
-    # never built), so near-surface samples outside the bounds are not compared.
-    q = q[((lo <= q) & (q <= hi)).all(axis=1)]
 
     t0 = time.perf_counter()
     ours_in = cs.contains(q)

@@ -629,7 +629,8 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
 
             def sub(f, i=i, b=b, part=part):
                 if progress is not None:
-                    progress((i + f) / len(todo), f"{b.name} ({b.kind}) x {part.name}")
+                    progress((i + f) / len(todo), f"{b.name} ({b.kind})"
+                             + (f" x {part.name}" if len(parts) > 1 else ""))
             sub(0.0)
             t = time.perf_counter()
             pair = PairModel(part.name, construction)
@@ -673,7 +674,8 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
             if len(parts) == 1 and parts[0].kind == "convex" and b.pairs and b.pairs[0].cos:
                 b.co = b.pairs[0].cos[0]
         if progress is not None:
-            progress(1.0, f"{len(todo)} C-obstacle pairs")
+            progress(1.0, f"{len(todo)} C-obstacles" if len(parts) == 1
+                     else f"{len(todo)} (body, robot part) pairs")
     t2 = time.perf_counter()
     return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
                       seconds={"model": t1 - t0, "build": t2 - t1}, robot_parts=parts,
