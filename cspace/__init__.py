@@ -1,6 +1,6 @@
 """cspace: exact translational configuration-space obstacles for motion planning.
 
-A robot R (a convex polytope translating at a fixed orientation) meets an obstacle O exactly
+A robot R (any mesh, translating at a fixed orientation) meets an obstacle O exactly
 when its reference point lies in the C-obstacle ``O ⊕ (-R)``. cspace computes these
 Minkowski sums exactly: inputs are snapped to a stated dyadic grid and every decision is an
 exact predicate (:mod:`cspace.exact`).

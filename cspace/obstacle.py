@@ -37,7 +37,7 @@ from .convex import ConvexPolytope, convex_minkowski_sum
 from .errors import InvalidMeshError, NonFiniteError, NotConvexError
 from .exact import _EPS, _FILTER, Grid
 
-__all__ = ["CSpaceObstacle", "CSpace", "scene_obstacles"]
+__all__ = ["CSpaceObstacle", "CSpace"]
 
 # _FILTER (16 eps, from the kernel) also covers the 4-term products here (3 coordinates and
 # the offset, from rounded inputs): they need about 6 eps times the permanent.
@@ -816,34 +816,3 @@ class CSpace:
             _, to = o._impl.segments(a, b, want_t=True)
             t = np.fmin(t, to)
         return float(t[0]) if single else t
-
-
-def scene_obstacles(scene, *, grid: Grid | None = None):
-    """The C-obstacle of each modelled obstacle body of a scene, or why there is none.
-
-    Bodies are as :func:`cspace.model.model_scene` models them (split into parts,
-    deduplicated); every kept body is built.
-
-    Parameters
-    ----------
-    scene : Scene
-    grid : Grid, optional
-        Default ``Grid.for_extent(scene.extent())``: holds every body and C-obstacle.
-
-    Returns
-    -------
-    grid : Grid
-    robot : ConvexPolytope
-        The robot's hull on ``grid`` (in its frame; ``scene.reference_point`` not applied).
-    bodies : list of (BodyModel, CSpaceObstacle or None, str or None)
-        Each body (``name``, ``vertices``, ``faces``, ``kind``, ``reason``) with its
-        C-obstacle, or None and why (dropped: its reason; a failed build: the error).
-    """
-    from .model import model_scene
-
-    m = model_scene(scene, grid=grid)
-    out = []
-    for b in m.bodies:
-        why = b.error or (b.reason if b.kind == "dropped" else None)
-        out.append((b, b.co, why))
-    return m.grid, m.robot, out

@@ -795,10 +795,9 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
                superset: bool = False, animate: bool = True) -> dict[str, str]:
     """Draw a :class:`cspace.scene.Scene`: obstacles, the robot at start and goal, C-obstacles, a path.
 
-    C-obstacles are exact: ``O ⊕ (−(R − c))`` by CVMS for every convex obstacle body, on one
-    grid for the whole scene. Non-convex bodies get their C-obstacle once trimming lands
-    (NCC-CVMS steps 2–18); until then ``superset=True`` draws their untrimmed superset,
-    coloured by facet kind, and the returned report says which body got what.
+    The scene is modelled and built as :func:`cspace.model.model_scene` does (exact robot
+    parts; every body's C-obstacles, whatever the construction: CVMS, NCC-CVMS, pieces).
+    ``superset=True`` draws the untrimmed superset of a body whose build failed.
 
     Parameters
     ----------
@@ -808,7 +807,7 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
         Reference-point positions of a path; drawn as a polyline, and the robot is animated
         along it when ``animate``.
     cobstacles, superset : bool
-        Whether to compute and draw C-obstacles (convex bodies) / supersets (other bodies).
+        Whether to draw the C-obstacles / the superset of a body whose build failed.
 
     Returns
     -------
@@ -818,30 +817,36 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
     import warnings
 
     from .errors import InvalidMeshError
-    from .obstacle import scene_obstacles
+    from .model import model_scene
     from .superset import minkowski_superset
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the scene already warned when it was loaded
-        _, robot, bodies = scene_obstacles(scene)
-    minus_r = robot.reflected(scene.reference_point)
+        m = model_scene(scene)
+    minus_r = m.robot.reflected(scene.reference_point)
     report: dict[str, str] = {}
-    for body, co, error in bodies:
+    for body in m.bodies:
         view.add_obstacle(body.name, body.vertices, body.faces)
         report[body.name] = "obstacle"
-        if co is not None and cobstacles:
-            view.add_cobstacle(body.name, co.vertices, co.faces)
-            report[body.name] = f"C-obstacle (CVMS, {co.n_facets} facets)"
-        elif co is None and superset:
+        cos = body.cos
+        if cos and cobstacles:
+            for k, co in enumerate(cos):
+                view.add_cobstacle(body.name if len(cos) == 1 else f"{body.name} {k}",
+                                   co.vertices, co.faces)
+            how = ", ".join(sorted({p.construction for p in body.pairs}))
+            report[body.name] = (f"C-obstacle ({how}, {sum(co.n_facets for co in cos)} facets"
+                                 + (f" in {len(cos)} parts" if len(cos) > 1 else "") + ")")
+        elif body.error and superset:
             try:
                 S = minkowski_superset((body.vertices, body.faces), minus_r)
             except InvalidMeshError as e:
                 report[body.name] = f"obstacle only: {e}"
                 continue
             view.add_superset(body.name, S)
-            report[body.name] = f"superset ({S.n_facets} facets; trimming not available yet)"
-        elif co is None:
-            report[body.name] = f"obstacle only (not convex: {str(error).split(': ', 1)[-1]})"
+            report[body.name] = f"superset ({S.n_facets} facets; the build failed: {body.error})"
+        elif not cos:
+            why = body.error or body.reason
+            report[body.name] = f"obstacle only ({body.kind}: {str(why).split(': ', 1)[-1]})"
     view.add_robot("start", scene.robot.vertices, scene.robot.faces, scene.start,
                    reference=scene.reference_point)
     view.add_robot("goal", scene.robot.vertices, scene.robot.faces, scene.goal,
