@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Iterable
 
 import numpy as np
 
@@ -45,6 +46,21 @@ _EPS = 2.0**-53
 # from int64 inputs (each conversion may round once when |k| >= 2**53). The exact requirement
 # is about 7 * eps * permanent; 16 leaves room for the rounding of the permanent itself.
 _FILTER = 16.0 * _EPS
+# Absolute slack covering underflow of scaled queries (ldexp to subnormals).
+_TINY = 2.0**-1000
+
+
+def _dyadic(values: Iterable[float]) -> tuple[list[int], int]:
+    """Floats as integers times one common power of two: ``v_i = ints[i] * 2**exp``."""
+    ints, exps = [], []
+    for v in values:
+        m, x = math.frexp(float(v))
+        ints.append(int(m * 9007199254740992.0))  # m * 2**53 is an exact integer
+        exps.append(x - 53)
+    lo = min(exps)
+    return [i << (x - lo) for i, x in zip(ints, exps)], lo
+
+
 # Largest integer magnitude the predicates accept: differences of two such values, and
 # their products of three, stay exact in int64 / finite in float64.
 _MAX_INT = 2**61

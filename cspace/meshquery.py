@@ -55,8 +55,7 @@ from .arrangement import _cross3 as _cross
 from .arrangement import _dot3 as _dot
 from .arrangement import _sub
 from .errors import EmptyMeshError, InvalidMeshError, NonFiniteError, OpenMeshError
-from .exact import _FILTER
-from .obstacle import _TINY, _dyadic
+from .exact import _FILTER, _TINY, _dyadic
 
 __all__ = ["MeshCO"]
 

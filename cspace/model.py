@@ -46,8 +46,16 @@ from .errors import BuildError, InvalidMeshError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh
 from .obstacle import CSpace, CSpaceObstacle
-from .pairs import (CONSTRUCTIONS, component_points, containment_meshes,
-                    convex_triangle_pieces, pair_construction, triangle_pair_pieces)
+from .pairs import (
+    CONSTRUCTIONS,
+    PairObstacle,
+    TrianglePairs,
+    component_points,
+    containment_meshes,
+    convex_triangle_pieces,
+    pair_construction,
+    triangle_pairs,
+)
 from .surface import SurfaceMesh, SurfaceObstacle
 
 __all__ = ["KINDS", "BodyModel", "RobotPart", "PairModel", "SceneModel", "model_scene"]
@@ -197,8 +205,8 @@ class SceneModel:
     ----------
     scene : Scene
     grid : Grid
-    robot : ConvexPolytope
-        The robot's hull on ``grid`` (its frame): its bounding box decides what is dropped.
+    robot : ConvexPolytope or None
+        The robot's hull on ``grid`` (its frame); None for a flat robot.
     robot_parts : list of RobotPart
         What the C-obstacles are built from: the robot's exact parts, or its hull alone when
         ``robot_hull=True`` was asked for.
@@ -214,7 +222,7 @@ class SceneModel:
 
     scene: object
     grid: Grid
-    robot: ConvexPolytope
+    robot: ConvexPolytope | None
     bodies: list
     sources: dict
     seconds: dict
@@ -391,11 +399,11 @@ def _closed_kind(name, P, F, grid):
     return "convex", f"closed and convex ({poly.n_facets} facets)", poly
 
 
-def _classify(name, source, ints, F, minus_r: ConvexPolytope, bounds_g, grid) -> BodyModel:
+def _classify(name, source, ints, F, minus_r_box, bounds_g, grid) -> BodyModel:
     used, local = np.unique(F, return_inverse=True)
     P, F = ints[used], local.reshape(-1, 3)
     V = grid.to_float(P)
-    r_lo, r_hi = minus_r.ints.min(axis=0), minus_r.ints.max(axis=0)
+    r_lo, r_hi = minus_r_box  # the box of c - R, grid units
     lo, hi = P.min(axis=0) + r_lo, P.max(axis=0) + r_hi
     body = BodyModel(name, source, "dropped", "", V, F, _ints=P)
     if not _meets(lo, hi, *bounds_g):
@@ -503,6 +511,13 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
     if construction == "NCC-CVMS swapped":
         cos = [CSpaceObstacle.from_mesh(arrays["vertices"], arrays["faces"], obstacle=obstacle,
                                         robot=part, reference_point=c, grid=grid, name=name)]
+    elif construction == "triangle pairs":
+        o_ints, o_faces = _body_operand(body)
+        S = o_ints[o_faces]
+        T = c_ints - part.ints[part.faces]
+        tp = TrianglePairs(S, T, arrays["pairs"], arrays["flat"])
+        cos = [PairObstacle(tp, obstacle=obstacle, robot=part, reference_point=c,
+                            grid=grid)] if len(tp.pairs) else []
     else:
         pieces = unpack_polytopes(arrays, "p_", grid)
         cos = [SurfaceObstacle(pieces, obstacle=obstacle, robot=part, reference_point=c,
@@ -543,9 +558,11 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
                                       bounds_g)
     else:
         o_ints, o_faces = _body_operand(body)
-        made = triangle_pair_pieces(o_ints, o_faces, part.ints, part.faces, c_ints, grid,
-                                    bounds_g, closed=body.kind == "solid" or part.kind == "solid",
-                                    progress=progress)
+        tp = triangle_pairs(o_ints, o_faces, part.ints, part.faces, c_ints, bounds_g,
+                            closed=body.kind == "solid" or part.kind == "solid")
+        return {"pairs": tp.pairs, "flat": tp.flat,
+                "counts": np.array([len(tp.pairs), 0, tp.flat_skipped, tp.out_of_bounds],
+                                   dtype=np.int64)}
     arrays = pack_polytopes(made.pieces, "p_")
     arrays["counts"] = np.array([len(made.pieces), made.thickened, made.flat_skipped,
                                  made.out_of_bounds], dtype=np.int64)
@@ -555,11 +572,10 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
 def _pair_detail(construction, arrays) -> str:
     if "counts" not in arrays:
         return ""
-    n, thick, flat, out = (int(x) for x in arrays["counts"])
-    what = "pieces" if construction == "triangle pairs" else "robot-triangle pieces"
+    n, _, flat, out = (int(x) for x in arrays["counts"])
+    what = "triangle pairs" if construction == "triangle pairs" else "robot-triangle pieces"
     extra = [f"{out} out of the bounds"] if out else []
     extra += [f"{flat} flat left out (an operand is closed)"] if flat else []
-    extra += [f"{thick} flat thickened by one grid step"] if thick else []
     return f"{n} {what}" + (f" ({', '.join(extra)})" if extra else "")
 
 
@@ -593,12 +609,19 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     """
     t0 = time.perf_counter()
     grid = grid or Grid.for_extent(scene.extent())
-    # The hull's bounding box is the robot's: exact for dropping bodies, whatever the parts.
-    robot = ConvexPolytope.from_points(scene.robot.vertices, grid=grid, name=scene.robot.name)
-    parts = _model_robot(scene, grid, robot, robot_hull)
     c = np.asarray(scene.reference_point, dtype=np.float64)
     c_ints = grid.snap(c)
-    minus_r = robot.reflected(c)
+    # The box of c - R decides what is dropped, exactly, whatever the robot's parts.
+    r_ints = grid.snap(scene.robot.vertices[np.unique(scene.robot.faces)])
+    minus_r_box = (c_ints - r_ints.max(axis=0), c_ints - r_ints.min(axis=0))
+    try:
+        robot = ConvexPolytope.from_ints(r_ints, grid=grid, name=scene.robot.name)
+    except InvalidMeshError as exc:  # a flat robot has no hull polytope
+        if robot_hull:
+            raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r} has no convex "
+                             f"hull to stand in for it ({exc})") from exc
+        robot = None
+    parts = _model_robot(scene, grid, robot, robot_hull)
     bounds_g = np.ldexp(np.asarray(scene.bounds, dtype=np.float64), -grid.exponent)
     bodies, sources = [], {}
     for sb in scene.obstacles:
@@ -608,7 +631,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         sources[sb.name] = counts
         for k, faces in enumerate(split):
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
-            bodies.append(_classify(name, sb.name, ints, F[faces], minus_r, bounds_g, grid))
+            bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid))
         if not split:
             bodies.append(BodyModel(sb.name, sb.name, "dropped",
                                     f"empty: all {len(sb.faces)} triangles collapse when welded "

@@ -26,23 +26,19 @@ differs from the unsnapped ``O ⊕ (c - R)`` by at most ``3 * grid.point_error_b
 
 from __future__ import annotations
 
-import math
 import os
 from fractions import Fraction
-from typing import Iterable
 
 import numpy as np
 
 from .convex import ConvexPolytope, convex_minkowski_sum
 from .errors import InvalidMeshError, NonFiniteError, NotConvexError
-from .exact import _EPS, _FILTER, Grid
+from .exact import _EPS, _FILTER, _TINY, Grid, _dyadic
 
 __all__ = ["CSpaceObstacle", "CSpace"]
 
 # _FILTER (16 eps, from the kernel) also covers the 4-term products here (3 coordinates and
 # the offset, from rounded inputs): they need about 6 eps times the permanent.
-# Absolute slack covering underflow of the scaled queries (ldexp to subnormals).
-_TINY = 2.0**-1000
 # Rows x facets evaluated at once (memory and cache).
 _CHUNK = 1 << 17
 
@@ -66,15 +62,71 @@ def _translations(q, what: str = "q") -> tuple[np.ndarray, bool]:
     return a, single
 
 
-def _dyadic(values: Iterable[float]) -> tuple[list[int], int]:
-    """Floats as integers times one common power of two: ``v_i = ints[i] * 2**exp``."""
-    ints, exps = [], []
-    for v in values:
-        m, x = math.frexp(float(v))
-        ints.append(int(m * 9007199254740992.0))  # m * 2**53 is an exact integer
-        exps.append(x - 53)
-    lo = min(exps)
-    return [i << (x - lo) for i, x in zip(ints, exps)], lo
+# --------------------------------------------------------------------------------------
+# exact plane tests shared by the convex engines (one polytope here; pieces elsewhere)
+
+
+def exact_plane_sign(n, d: int, exponent: int, q) -> int:
+    """Exact sign of ``n . q - d * 2**exponent`` for integer ``n`` (3 ints), integer ``d`` and
+    one float64 row ``q``: the side of ``q`` against the plane ``n . k = d`` (``k = q / step``)."""
+    X, lo = _dyadic(list(q))
+    s = min(lo, exponent)
+    lhs = (n[0] * X[0] + n[1] * X[1] + n[2] * X[2]) << (lo - s)
+    rhs = d << (exponent - s)
+    return (lhs > rhs) - (lhs < rhs)
+
+
+def exact_segment_entry(planes, exponent: int, a, b):
+    """Entry parameter (Fraction) of the closed segment ``a -> b`` into the polytope
+    ``n . k <= d`` over ``planes`` (``(n, d)`` integer pairs, ``k = x / step``), or None."""
+    X, lo = _dyadic(list(a) + list(b))
+    s = min(lo, exponent)
+    X0, X1 = X[:3], X[3:]
+    lo_t, hi_t = Fraction(0), Fraction(1)
+    for n, d in planes:
+        D = d << (exponent - s)
+        w0 = ((n[0] * X0[0] + n[1] * X0[1] + n[2] * X0[2]) << (lo - s)) - D
+        w1 = ((n[0] * X1[0] + n[1] * X1[1] + n[2] * X1[2]) << (lo - s)) - D
+        if w0 > 0 and w1 > 0:
+            return None
+        if w0 > 0:  # entering: (1 - t) w0 + t w1 <= 0 iff t >= w0 / (w0 - w1)
+            lo_t = max(lo_t, Fraction(w0, w0 - w1))
+        elif w1 > 0:  # leaving: t <= w0 / (w0 - w1) = -w0 / (w1 - w0)
+            hi_t = min(hi_t, Fraction(-w0, w1 - w0))
+        if lo_t > hi_t:
+            return None
+    return lo_t
+
+
+def segment_filter(v0, v1, e0, e1):
+    """Float filter of closed segments against convex polytopes, one row per (segment,
+    polytope): plane values at both ends ``v0, v1`` with rigorous bounds ``e0, e1`` (k, f).
+
+    Returns ``(free, sure_hit, t, terr, enter)``: rows certainly free, rows certainly hitting,
+    and per plane the crossing parameter ``t`` with its bound ``terr`` and whether the
+    segment enters through it. Rows in neither set need the exact test.
+    """
+    fin0, fin1 = np.isfinite(v0) & np.isfinite(e0), np.isfinite(v1) & np.isfinite(e1)
+    pos0, neg0 = (v0 > e0) & fin0, (v0 < -e0) & fin0
+    pos1, neg1 = (v1 > e1) & fin1, (v1 < -e1) & fin1
+    # Both ends beyond one plane: free (the common case).
+    free = (pos0 & pos1).any(axis=1)
+    unknown = (~(pos0 | neg0) | ~(pos1 | neg1)).any(axis=1)
+    # Plane j holds on [0, t_j] (leaving) or [t_j, 1] (entering), t_j = |v0| / (|v0| + |v1|)
+    # with both signs certain; terr bounds |t_j - exact| (rounding of v0, v1 and of t_j).
+    A0, A1 = np.abs(v0), np.abs(v1)
+    ssum = A0 + A1
+    t = A0 / ssum
+    terr = 2.0 * (e0 * A1 + e1 * A0) / (ssum * (ssum - e0 - e1)) + 8 * _EPS * t
+    enter = pos0 & neg1
+    leave = neg0 & pos1
+    lo_dn = np.maximum(0.0, np.where(enter, t - terr, -np.inf).max(axis=1))
+    lo_up = np.maximum(0.0, np.where(enter, t + terr, -np.inf).max(axis=1))
+    hi_dn = np.minimum(1.0, np.where(leave, t - terr, np.inf).min(axis=1))
+    hi_up = np.minimum(1.0, np.where(leave, t + terr, np.inf).min(axis=1))
+    free |= lo_dn > hi_up
+    sure_hit = ~free & ~unknown & (lo_up <= hi_dn)
+    return free, sure_hit, t, terr, enter
 
 
 # --------------------------------------------------------------------------------------
@@ -147,13 +199,7 @@ class _ConvexCO:
 
     def _exact_sign(self, q: np.ndarray, j: int) -> int:
         """Exact sign of ``n_j . q - d_j * step`` for one float64 row ``q``."""
-        X, lo = _dyadic(q.tolist())
-        e = self.exponent
-        s = min(lo, e)
-        n = self.n_int[j]
-        lhs = (n[0] * X[0] + n[1] * X[1] + n[2] * X[2]) << (lo - s)
-        rhs = self.d_int[j] << (e - s)
-        return (lhs > rhs) - (lhs < rhs)
+        return exact_plane_sign(self.n_int[j], self.d_int[j], self.exponent, q.tolist())
 
     def plane_signs(self, q: np.ndarray) -> np.ndarray:
         """Exact ``(k, f)`` int8 signs of ``n . q - d * step`` (positive: outside that plane)."""
@@ -260,30 +306,10 @@ class _ConvexCO:
     def _segments_chunk(self, a: np.ndarray, b: np.ndarray, want_t: bool):
         m = len(a)
         val, err = self._values(self._scaled(np.vstack([a, b])))
-        fin = np.isfinite(val) & np.isfinite(err)
-        pos, neg = (val > err) & fin, (val < -err) & fin
-        v0, v1, e0, e1 = val[:m], val[m:], err[:m], err[m:]
-        pos0, pos1, neg0, neg1 = pos[:m], pos[m:], neg[:m], neg[m:]
         tt = np.full(m, np.nan)
-        # Both ends beyond one facet plane: free (the common case, decided first).
-        free = (pos0 & pos1).any(axis=1)
+        free, sure_hit, t, terr, enter = segment_filter(val[:m], val[m:], err[:m], err[m:])
         if free.all():
             return np.zeros(m, dtype=bool), tt
-        unknown = (~(pos0 | neg0) | ~(pos1 | neg1)).any(axis=1)
-        # Facet j holds on [0, t_j] (leaving) or [t_j, 1] (entering), t_j = |v0| / (|v0| + |v1|)
-        # with both signs certain; terr bounds |t_j - exact| (rounding of v0, v1 and of t_j).
-        A0, A1 = np.abs(v0), np.abs(v1)
-        ssum = A0 + A1
-        t = A0 / ssum
-        terr = 2.0 * (e0 * A1 + e1 * A0) / (ssum * (ssum - e0 - e1)) + 8 * _EPS * t
-        enter = pos0 & neg1
-        leave = neg0 & pos1
-        lo_up = np.maximum(0.0, np.where(enter, t + terr, -np.inf).max(axis=1))
-        lo_dn = np.maximum(0.0, np.where(enter, t - terr, -np.inf).max(axis=1))
-        hi_dn = np.minimum(1.0, np.where(leave, t - terr, np.inf).min(axis=1))
-        hi_up = np.minimum(1.0, np.where(leave, t + terr, np.inf).min(axis=1))
-        free |= lo_dn > hi_up
-        sure_hit = ~free & ~unknown & (lo_up <= hi_dn)
         h = sure_hit.copy()
         todo = np.nonzero(~free & ~sure_hit)[0].tolist()
         if want_t and sure_hit.any():
@@ -321,24 +347,8 @@ class _ConvexCO:
 
     def _exact_segment(self, a: np.ndarray, b: np.ndarray):
         """Entry parameter (Fraction) of the closed segment a -> b into the polytope, or None."""
-        X, lo = _dyadic(a.tolist() + b.tolist())
-        e = self.exponent
-        s = min(lo, e)
-        X0, X1 = X[:3], X[3:]
-        lo_t, hi_t = Fraction(0), Fraction(1)
-        for n, d in zip(self.n_int, self.d_int):
-            D = d << (e - s)
-            w0 = ((n[0] * X0[0] + n[1] * X0[1] + n[2] * X0[2]) << (lo - s)) - D
-            w1 = ((n[0] * X1[0] + n[1] * X1[1] + n[2] * X1[2]) << (lo - s)) - D
-            if w0 > 0 and w1 > 0:
-                return None
-            if w0 > 0:  # entering: (1 - t) w0 + t w1 <= 0 iff t >= w0 / (w0 - w1)
-                lo_t = max(lo_t, Fraction(w0, w0 - w1))
-            elif w1 > 0:  # leaving: t <= w0 / (w0 - w1) = -w0 / (w1 - w0)
-                hi_t = min(hi_t, Fraction(-w0, w1 - w0))
-            if lo_t > hi_t:
-                return None
-        return lo_t
+        return exact_segment_entry(zip(self.n_int, self.d_int), self.exponent, a.tolist(),
+                                   b.tolist())
 
 
 # --------------------------------------------------------------------------------------

@@ -36,12 +36,14 @@ inside or outside it, so the terms complete the union exactly.
 Flat pieces: ``s ⊕ (c - t)`` of two parallel triangles is a flat polygon. When either operand
 is closed such a piece adds nothing: a contact of two coplanar faces reaches the edge of the
 coplanar face region of the closed operand, where a non-parallel neighbour triangle meets the
-other operand too (or a containment term holds). Those pieces are left out. When both are open
-surfaces the flat piece is needed, and it is built as the hull of its sums moved by one grid
-step along each axis (the polygon ⊕ an octahedron of radius one step): it contains the exact
-piece and lies within one grid step of it, a false collision within that bound and never a
-false free. :attr:`PairPieces.thickened` counts them, and the stated error bound grows by one
-grid step where it is non-zero.
+other operand too (or a containment term holds). Those pairs are left out. When both are open
+surfaces the flat piece is needed and kept, exactly.
+
+Pairs are held as index arrays (:class:`PairObstacle`): each piece is the intersection of 17
+slabs whose normals come from the two triangles alone (:func:`pair_planes`), so no hull is
+built; queries evaluate the slabs of the pairs near them with a float filter and settle what
+it leaves with Python integers. :func:`triangle_pair_pieces` builds one exact hull per pair
+instead, the reference the fast path is tested against (0.6 ms a pair).
 
 All coordinates are grid integers of the scene grid (robot frame for the robot part, the
 reference point ``c`` snapped); sums and differences of grid integers are exact.
@@ -57,9 +59,12 @@ from scipy.sparse.csgraph import connected_components
 
 from .convex import ConvexPolytope
 from .errors import DegenerateError
+from .exact import _FILTER, _TINY
+from .obstacle import CSpaceObstacle, exact_plane_sign, exact_segment_entry, segment_filter
 
-__all__ = ["CONSTRUCTIONS", "pair_construction", "PairPieces", "triangle_pair_pieces",
-           "convex_triangle_pieces", "component_points", "containment_meshes"]
+__all__ = ["CONSTRUCTIONS", "pair_construction", "PairPieces", "TrianglePairs",
+           "triangle_pairs", "triangle_pair_pieces", "PairObstacle", "convex_triangle_pieces",
+           "component_points", "containment_meshes"]
 
 #: Every construction a pair can get, with what it computes.
 CONSTRUCTIONS = {
@@ -76,6 +81,11 @@ CONSTRUCTIONS = {
 
 # Robot triangles handled per vectorised block of triangle pairs (memory).
 _BLOCK = 1 << 18
+# Candidate (query, pair) rows evaluated at once; padding value of unused slab sides.
+_PAIRS = 1 << 12
+_PAD = -1e300
+# Pairs whose slab columns are kept in memory (about 2 KB a pair).
+_KEEP = 1 << 15
 
 
 def pair_construction(obstacle_kind: str, robot_kind: str) -> str:
@@ -128,9 +138,38 @@ _OCTAHEDRON = np.array([[0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0],
                         [0, 0, -1]], dtype=np.int64)
 
 
-def triangle_pair_pieces(o_ints, o_faces, r_ints, r_faces, c_ints, grid, bounds_g, *,
-                         closed: bool, progress=None) -> PairPieces:
-    """The pieces ``s ⊕ (c - t)`` of every obstacle triangle s and robot triangle t.
+@dataclass(eq=False)
+class TrianglePairs:
+    """The triangle pairs of an (obstacle, robot part) pair that can matter.
+
+    Attributes
+    ----------
+    S : (m, 3, 3) int64
+        Obstacle triangles (grid units, world frame).
+    T : (l, 3, 3) int64
+        ``c - t`` for the robot triangles t (grid units): the piece of pair ``(i, j)`` is
+        ``S[i] ⊕ T[j]``.
+    pairs : (p, 2) int64
+        The kept ``(i, j)``.
+    flat : (p,) bool
+        Pieces of parallel triangles (flat polygons).
+    flat_skipped, out_of_bounds : int
+        Pairs left out: flat with a closed operand (redundant), or whose piece box misses the
+        planning bounds (decided exactly).
+    """
+
+    S: np.ndarray
+    T: np.ndarray
+    pairs: np.ndarray
+    flat: np.ndarray
+    flat_skipped: int = 0
+    out_of_bounds: int = 0
+
+
+def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
+                   closed: bool) -> TrianglePairs:
+    """The pairs (obstacle triangle s, robot triangle t) whose piece ``s ⊕ (c - t)`` can meet
+    the bounds; flat ones are left out when either operand is closed (see the module).
 
     Parameters
     ----------
@@ -140,21 +179,18 @@ def triangle_pair_pieces(o_ints, o_faces, r_ints, r_faces, c_ints, grid, bounds_
         Robot part (grid units, robot frame).
     c_ints : (3,) int64
         The snapped reference point.
-    grid : Grid
     bounds_g : (2, 3) float64
-        Planning bounds in grid units; pieces whose box misses them are left out.
+        Planning bounds in grid units.
     closed : bool
-        Whether either operand is closed (flat pieces are then left out, else thickened).
-    progress : callable, optional
-        ``progress(fraction)`` while pieces are built.
+        Whether either operand is closed.
     """
-    S = np.asarray(o_ints, np.int64)[np.asarray(o_faces, np.int64)]          # (m, 3, 3)
+    S = np.asarray(o_ints, np.int64)[np.asarray(o_faces, np.int64)]
     T = np.asarray(c_ints, np.int64) - np.asarray(r_ints, np.int64)[np.asarray(r_faces, np.int64)]
-    out = PairPieces([])
     ns, nt = _primitive_normals(S), _primitive_normals(-T)
     s_lo, s_hi, t_lo, t_hi = S.min(axis=1), S.max(axis=1), T.min(axis=1), T.max(axis=1)
     per = max(1, _BLOCK // max(1, len(T)))
-    todo = []
+    out = TrianglePairs(S, T, np.zeros((0, 2), np.int64), np.zeros(0, bool))
+    kept, flats = [], []
     for a in range(0, len(S), per):
         i = np.arange(a, min(a + per, len(S)))
         ii, jj = np.repeat(i, len(T)), np.tile(np.arange(len(T)), len(i))
@@ -165,16 +201,28 @@ def triangle_pair_pieces(o_ints, o_faces, r_ints, r_faces, c_ints, grid, bounds_
         if closed:
             out.flat_skipped += int(flat.sum())
             ii, jj, flat = ii[~flat], jj[~flat], flat[~flat]
-        todo.append((ii, jj, flat))
-    total = sum(len(ii) for ii, _, _ in todo)
-    done = 0
-    for ii, jj, flat in todo:
-        for i, j, f in zip(ii.tolist(), jj.tolist(), flat.tolist()):
-            pts = (S[i][:, None, :] + T[j][None, :, :]).reshape(-1, 3)
-            out.pieces.append(_piece(pts, f, grid, out, f"pair {i}x{j}"))
-            done += 1
-            if progress is not None and done % 256 == 0:
-                progress(done / total)
+        kept.append(np.stack([ii, jj], axis=1))
+        flats.append(flat)
+    if kept:
+        out.pairs, out.flat = np.concatenate(kept), np.concatenate(flats)
+    return out
+
+
+def triangle_pair_pieces(o_ints, o_faces, r_ints, r_faces, c_ints, grid, bounds_g, *,
+                         closed: bool, progress=None) -> PairPieces:
+    """Reference construction: one exact hull per triangle pair of :func:`triangle_pairs`.
+
+    About 0.6 ms a pair; :class:`PairObstacle` answers the same queries from the pairs alone
+    and is tested against these hulls. Flat pieces (two open operands) are thickened by one
+    grid step here, so that each is a polytope.
+    """
+    tp = triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, closed=closed)
+    out = PairPieces([], flat_skipped=tp.flat_skipped, out_of_bounds=tp.out_of_bounds)
+    for k, ((i, j), f) in enumerate(zip(tp.pairs.tolist(), tp.flat.tolist())):
+        pts = (tp.S[i][:, None, :] + tp.T[j][None, :, :]).reshape(-1, 3)
+        out.pieces.append(_piece(pts, f, grid, out, f"pair {i}x{j}"))
+        if progress is not None and k % 256 == 255:
+            progress((k + 1) / len(tp.pairs))
     return out
 
 
@@ -233,3 +281,385 @@ def containment_meshes(points, solid_ints, solid_faces, c_ints, *, robot_solid: 
         else:
             out.append((V + c - p, F))
     return out
+
+
+# --------------------------------------------------------------------------------------
+# triangle pairs held as arrays: exact queries without a hull per pair
+
+
+def _edges(tri: np.ndarray) -> np.ndarray:
+    """``(k, 3, 3)`` edge vectors ``p1 - p0, p2 - p1, p0 - p2`` of grid triangles."""
+    return tri[:, [1, 2, 0]] - tri
+
+
+def pair_planes(S: np.ndarray, T: np.ndarray) -> np.ndarray:
+    """``(k, 17, 3)`` int64 normals whose slabs bound the pieces ``s ⊕ t`` exactly.
+
+    For triangles ``s`` (rows of S) and ``t`` (rows of T), grid integers: the two triangle
+    normals, the nine cross products of an edge of each (every facet normal of a 3D sum of two
+    polytopes is a facet normal of one or such a cross product), and the six edges turned a
+    quarter about the coordinate axis nearest to ``s``'s normal (``e_axis x edge``): in the
+    plane of two parallel triangles these bound the flat polygon ``s ⊕ t``. With the slabs
+    ``min over the piece <= N . x <= max over the piece`` of every normal the piece is exactly
+    their intersection, flat or not. Zero rows (parallel edges) bound nothing. Exact: edges of
+    28-bit coordinates give entries below 2**58.
+    """
+    Es, Et = _edges(S), _edges(T)
+    ns = np.cross(Es[:, 0], -Es[:, 2])
+    nt = np.cross(Et[:, 0], -Et[:, 2])
+    cross = np.cross(Es[:, :, None, :], Et[:, None, :, :]).reshape(len(S), 9, 3)
+    ref = np.where(ns.any(axis=1)[:, None], ns, nt)
+    axis = np.abs(ref).argmax(axis=1)
+    unit = np.zeros((len(S), 3), dtype=np.int64)
+    unit[np.arange(len(S)), axis] = 1
+    turned = np.cross(unit[:, None, :], np.concatenate([Es, Et], axis=1))
+    return np.concatenate([ns[:, None], nt[:, None], cross, turned], axis=1)
+
+
+def _tri_support(N: np.ndarray, tri: np.ndarray):
+    """Float min and max of ``N . p`` over a triangle's corners, and the permanent bound
+    ``sum |N_k| max |p_k|`` (k, K)."""
+    d = np.einsum("kmj,kaj->kma", N, tri)
+    perm = np.einsum("kmj,kj->km", np.abs(N), np.abs(tri).max(axis=1))
+    return d.min(axis=2), d.max(axis=2), perm
+
+
+class _PairsCO:
+    """Exact queries on ``∪ s_i ⊕ t_j`` over given triangle pairs (the engine interface of
+    :mod:`cspace.obstacle`), with no hull built per pair.
+
+    Each pair's piece is the intersection of 17 slabs (:func:`pair_planes`). Queries find the
+    pairs whose piece box holds them (a uniform grid of cells, as for surface pieces), compute
+    the slab values in float with a rigorous bound (16 unit roundoffs of the sum of absolute
+    products, the normals and supports rounded to float included), and settle what the bound
+    leaves with Python integers. Touching counts as inside.
+    """
+
+    def __init__(self, S: np.ndarray, T: np.ndarray, pairs: np.ndarray, grid):
+        from .surface import _CellGrid
+
+        self.S, self.T = np.asarray(S, np.int64), np.asarray(T, np.int64)
+        self.pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+        if not len(self.pairs):
+            raise ValueError("a triangle-pair C-obstacle needs at least one pair")
+        self.grid, self.exponent = grid, grid.exponent
+        i, j = self.pairs[:, 0], self.pairs[:, 1]
+        self.lo = grid.to_float(self.S[i].min(axis=1) + self.T[j].min(axis=1))
+        self.hi = grid.to_float(self.S[i].max(axis=1) + self.T[j].max(axis=1))
+        self.cells = _CellGrid(self.lo, self.hi)
+        # Slab columns of every pair up front when they fit in about 64 MB, else per query.
+        self._all = self._columns(np.arange(len(self.pairs))) if len(self.pairs) <= _KEEP else None
+
+    # ---- slabs ------------------------------------------------------------------------
+
+    def _columns(self, p: np.ndarray):
+        """Upper and lower slab sides of pairs ``p`` as columns ``a . [k, 1] <= 0``:
+        ``(A (n, 4, 34), absA (n, 4, 34))`` float, zero normals padded out."""
+        S, T = self.S[self.pairs[p, 0]], self.T[self.pairs[p, 1]]
+        N = pair_planes(S, T)
+        Nf = N.astype(np.float64)
+        s_lo, s_hi, s_perm = _tri_support(Nf, S.astype(np.float64))
+        t_lo, t_hi, t_perm = _tri_support(Nf, T.astype(np.float64))
+        valid = N.any(axis=2)
+        A = np.zeros((len(p), 4, 34))
+        A[:, :3, :17] = Nf.transpose(0, 2, 1)
+        A[:, 3, :17] = -(s_hi + t_hi)
+        A[:, :3, 17:] = -Nf.transpose(0, 2, 1)
+        A[:, 3, 17:] = s_lo + t_lo
+        absA = np.abs(A)
+        # The supports are rounded sums of rounded products: their error is covered by the
+        # permanent (bounded below like the products of the query itself).
+        absA[:, 3, :17] += s_perm + t_perm
+        absA[:, 3, 17:] += s_perm + t_perm
+        pad = ~np.concatenate([valid, valid], axis=1)
+        A[:, :3, :][np.repeat(pad[:, None, :], 3, axis=1)] = 0.0
+        A[:, 3, :][pad] = _PAD
+        absA[pad[:, None, :].repeat(4, axis=1)] = 0.0
+        return A, absA
+
+    def _exact_planes(self, p: int):
+        """``(n, d)`` Python-int half-spaces ``n . k <= d`` of pair ``p``'s piece."""
+        S, T = self.S[self.pairs[p, 0]], self.T[self.pairs[p, 1]]
+        N = pair_planes(S[None], T[None])[0]
+        out = []
+        for n in N.tolist():
+            if not any(n):
+                continue
+            vs = [sum(a * b for a, b in zip(n, v)) for v in S.tolist()]
+            vt = [sum(a * b for a, b in zip(n, v)) for v in T.tolist()]
+            out.append((n, max(vs) + max(vt)))
+            out.append(([-x for x in n], -(min(vs) + min(vt))))
+        return out
+
+    def _columns_of(self, p: np.ndarray):
+        if self._all is not None:
+            return self._all[0][p], self._all[1][p]
+        unique, inverse = np.unique(p, return_inverse=True)
+        A, absA = self._columns(unique)
+        return A[inverse], absA[inverse]
+
+    def _values(self, q: np.ndarray, p: np.ndarray):
+        A, absA = self._columns_of(p)
+        Q = np.ones((len(q), 1, 4))
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+            np.ldexp(q, -self.exponent, out=Q[:, 0, :3])
+            val = np.matmul(Q, A)[:, 0, :]
+            err = _FILTER * np.matmul(np.abs(Q), absA)[:, 0, :] + _TINY
+        return val, err
+
+    # ---- queries ----------------------------------------------------------------------
+
+    def candidates(self, q: np.ndarray):
+        rows, p = self.cells.pairs(q)
+        keep = ((self.lo[p] <= q[rows]) & (q[rows] <= self.hi[p])).all(axis=1)
+        return rows[keep], p[keep]
+
+    def contains(self, q: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(q), dtype=bool)
+        rows, ps = self.candidates(q)
+        for s in range(0, len(rows), _PAIRS):
+            r, p = rows[s:s + _PAIRS], ps[s:s + _PAIRS]
+            val, err = self._values(q[r], p)
+            fin = np.isfinite(val) & np.isfinite(err)
+            inside = ((val < -err) & fin).all(axis=1)
+            unsure = ~inside & ~((val > err) & fin).any(axis=1)
+            for k in np.nonzero(unsure)[0].tolist():
+                if not out[r[k]] and not inside[k]:
+                    x = q[r[k]].tolist()
+                    inside[k] = all(exact_plane_sign(n, d, self.exponent, x) <= 0
+                                    for n, d in self._exact_planes(int(p[k])))
+            out[r[inside]] = True
+        return out
+
+    def _segment_candidates(self, a: np.ndarray, b: np.ndarray):
+        """``(row, pair)`` whose piece box meets the segment's box (cells first, then exact)."""
+        rows, ps = [], []
+        lo, hi = np.minimum(a, b), np.maximum(a, b)
+        if len(a) * len(self.lo) <= (1 << 22) or len(self.lo) <= _KEEP // 8:
+            step = max(1, (1 << 20) // len(self.lo))
+            for s in range(0, len(a), step):
+                m = ((self.lo[None] <= hi[s:s + step, None])
+                     & (lo[s:s + step, None] <= self.hi[None])).all(axis=2)
+                r, p = np.nonzero(m)
+                rows.append(r + s)
+                ps.append(p)
+            return np.concatenate(rows), np.concatenate(ps)
+        c0, c1 = self.cells.cells(lo), self.cells.cells(hi)
+        n = self.cells.n
+        for r in range(len(a)):
+            ranges = [np.arange(c0[r, k], c1[r, k] + 1) for k in range(3)]
+            cell = ((ranges[0][:, None, None] * n[1] + ranges[1][None, :, None]) * n[2]
+                    + ranges[2][None, None, :]).ravel()
+            starts, ends = self.cells.starts[cell], self.cells.starts[cell + 1]
+            idx = np.unique(np.concatenate([self.cells.boxes[s:e] for s, e in zip(starts, ends)]))
+            keep = ((self.lo[idx] <= hi[r]) & (lo[r] <= self.hi[idx])).all(axis=1)
+            ps.append(idx[keep])
+            rows.append(np.full(int(keep.sum()), r, dtype=np.int64))
+        return np.concatenate(rows), np.concatenate(ps)
+
+    def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
+        hit = np.zeros(len(q0), dtype=bool)
+        tout = np.full(len(q0), np.nan)
+        rows, ps = self._segment_candidates(q0, q1)
+        for s in range(0, len(rows), _PAIRS):
+            r, p = rows[s:s + _PAIRS], ps[s:s + _PAIRS]
+            if not want_t:
+                keep = ~hit[r]
+                r, p = r[keep], p[keep]
+                if not len(r):
+                    continue
+            v0, e0 = self._values(q0[r], p)
+            v1, e1 = self._values(q1[r], p)
+            with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+                free, sure, _, _, _ = segment_filter(v0, v1, e0, e1)
+            hit[r[sure]] = True
+            todo = ~free & (~sure | want_t)
+            for k in np.nonzero(todo)[0].tolist():
+                if not want_t and hit[r[k]]:
+                    continue
+                entry = exact_segment_entry(self._exact_planes(int(p[k])), self.exponent,
+                                            q0[r[k]].tolist(), q1[r[k]].tolist())
+                if entry is not None:
+                    hit[r[k]] = True
+                    if want_t:
+                        tout[r[k]] = np.fmin(tout[r[k]], float(entry))
+        return hit, tout
+
+    def signed_distance(self, q: np.ndarray) -> np.ndarray:
+        inside = self.contains(q)
+        out = np.zeros(len(q))
+        if inside.any():
+            out[inside] = -self._depth(q[inside])
+        if (~inside).any():
+            out[~inside] = self._distance_outside(q[~inside])
+        return out
+
+    def _depth(self, q: np.ndarray) -> np.ndarray:
+        """Deepest containing piece: the least slab distance (every slab side supports the
+        piece, and its facets' are among them), a lower bound on the union's depth."""
+        depth = np.zeros(len(q))
+        rows, ps = self.candidates(q)
+        if not len(rows):
+            return depth
+        val, err = self._values(q[rows], ps)
+        A, _ = self._columns_of(ps)
+        norm = np.linalg.norm(A[:, :3, :], axis=1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            d = np.where(norm > 0, -val / norm, np.inf) * self.grid.step
+        inside = (val <= err).all(axis=1)
+        best = np.where(inside, np.maximum(d.min(axis=1), 0.0), 0.0)
+        np.maximum.at(depth, rows, best)
+        return depth
+
+    def _distance_outside(self, q: np.ndarray) -> np.ndarray:
+        """Distance to the nearest piece: the distance between triangle ``s`` and the
+        triangle ``q - t`` (disjoint outside the piece). The nearest box's pair gives an upper
+        bound; then only pairs whose box is nearer are evaluated (float; not a decision)."""
+        S = self.grid.to_float(self.S.reshape(-1, 3)).reshape(self.S.shape)
+        T = self.grid.to_float(self.T.reshape(-1, 3)).reshape(self.T.shape)
+        best = np.full(len(q), np.inf)
+        step = max(1, (1 << 20) // len(self.lo))
+        for s in range(0, len(q), step):
+            x = q[s:s + step]
+            gap = np.maximum(np.maximum(self.lo[None] - x[:, None], x[:, None] - self.hi[None]),
+                             0.0)
+            box = np.sqrt(np.einsum("kpj,kpj->kp", gap, gap))
+            first = box.argmin(axis=1)
+            b = self._pair_distance(S, T, x, np.arange(len(x)), first)
+            rows, ps = np.nonzero(box < b[:, None])
+            for c in range(0, len(rows), 1 << 16):
+                r, p = rows[c:c + (1 << 16)], ps[c:c + (1 << 16)]
+                np.minimum.at(b, r, self._pair_distance(S, T, x, r, p))
+            best[s:s + step] = b
+        return best
+
+    def _pair_distance(self, S, T, x, rows, ps):
+        i, j = self.pairs[ps, 0], self.pairs[ps, 1]
+        return _tri_tri_distance(S[i], x[rows][:, None, :] - T[j])
+
+
+def _point_segment_d2(p, a, b):
+    ab = b - a
+    t = np.clip(np.einsum("kj,kj->k", p - a, ab) / np.maximum(np.einsum("kj,kj->k", ab, ab),
+                                                                1e-300), 0.0, 1.0)
+    d = p - (a + t[:, None] * ab)
+    return np.einsum("kj,kj->k", d, d)
+
+
+def _point_triangle_d2(p, tri):
+    """Squared distance from points to triangles (k,), float."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    n = np.cross(b - a, c - a)
+    nn = np.einsum("kj,kj->k", n, n)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        h = np.einsum("kj,kj->k", p - a, n) / nn
+    proj = p - h[:, None] * n
+    inside = np.ones(len(p), dtype=bool)
+    for u, v in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("kj,kj->k", np.cross(v - u, proj - u), n) >= 0
+    inside &= nn > 0
+    plane = np.where(inside, h * h * nn, np.inf)
+    edges = np.minimum.reduce([_point_segment_d2(p, a, b), _point_segment_d2(p, b, c),
+                               _point_segment_d2(p, c, a)])
+    return np.minimum(plane, edges)
+
+
+def _segment_segment_d2(p1, q1, p2, q2):
+    """Squared distance between segments (Ericson, Real-Time Collision Detection 5.1.9)."""
+    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
+    a = np.einsum("kj,kj->k", d1, d1)
+    e = np.einsum("kj,kj->k", d2, d2)
+    f = np.einsum("kj,kj->k", d2, r)
+    c = np.einsum("kj,kj->k", d1, r)
+    b = np.einsum("kj,kj->k", d1, d2)
+    denom = a * e - b * b
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.where(denom > 0, np.clip((b * f - c * e) / denom, 0.0, 1.0), 0.0)
+        t = np.where(e > 0, (b * s + f) / e, 0.0)
+        s = np.where(t < 0, np.where(a > 0, np.clip(-c / a, 0.0, 1.0), 0.0), s)
+        s = np.where(t > 1, np.where(a > 0, np.clip((b - c) / a, 0.0, 1.0), 0.0), s)
+    t = np.clip(t, 0.0, 1.0)
+    d = (p1 + s[:, None] * d1) - (p2 + t[:, None] * d2)
+    return np.einsum("kj,kj->k", d, d)
+
+
+def _tri_tri_distance(A: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """Distance between disjoint triangles (k,): the least of the corner-triangle and
+    edge-edge distances, float."""
+    d2 = [_point_triangle_d2(A[:, i], B) for i in range(3)]
+    d2 += [_point_triangle_d2(B[:, i], A) for i in range(3)]
+    for i in range(3):
+        for j in range(3):
+            d2.append(_segment_segment_d2(A[:, i], A[:, (i + 1) % 3], B[:, j],
+                                          B[:, (j + 1) % 3]))
+    return np.sqrt(np.minimum.reduce(d2))
+
+
+class PairObstacle(CSpaceObstacle):
+    """The C-obstacle ``∪ s ⊕ (c - t)`` of triangle pairs, exact, with no hull per pair.
+
+    Built by :func:`cspace.model.model_scene` for the ``triangle pairs`` construction. Answers
+    ``contains``, ``segment_free``, ``first_contact`` and ``signed_distance`` like every
+    C-obstacle (touching counts; inside, ``signed_distance`` is minus the deepest containing
+    piece's depth, a lower bound on the union's).
+
+    Attributes
+    ----------
+    pairs : TrianglePairs
+    obstacle, robot :
+        The operands (for FCL cross-checks); ``semantics`` says which are solid.
+    kind : 'pairs'
+    """
+
+    kind = "pairs"
+
+    def __init__(self, pairs: TrianglePairs, *, obstacle, robot, reference_point, grid):
+        self.pairs = pairs
+        self.polytope = None
+        self.obstacle = obstacle
+        self.robot = robot
+        self.reference_point = np.asarray(reference_point, dtype=np.float64).reshape(3)
+        self.grid = grid
+        self.sum = None
+        self._impl = _PairsCO(pairs.S, pairs.T, pairs.pairs, grid)
+        self._mesh = None
+
+    @property
+    def n_facets(self) -> int:
+        """Slab sides over all pairs (17 slabs, 34 sides, a pair)."""
+        return 34 * len(self.pairs.pairs)
+
+    def _hulls(self):
+        """Every piece as a hull (flat ones thickened by a grid step): for drawing and for
+        sampling near the surface only; about 0.6 ms a pair."""
+        if self._mesh is None:
+            tp, V, F, n = self.pairs, [], [], 0
+            scratch = PairPieces([])
+            for (i, j), f in zip(tp.pairs.tolist(), tp.flat.tolist()):
+                pts = (tp.S[i][:, None, :] + tp.T[j][None, :, :]).reshape(-1, 3)
+                piece = _piece(pts, f, self.grid, scratch, "piece")
+                V.append(piece.vertices)
+                F.append(piece.faces + n)
+                n += len(piece.vertices)
+            self._mesh = (np.vstack(V), np.vstack(F))
+        return self._mesh
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64 vertices of every piece's hull (overlapping; built on first use)."""
+        return self._hulls()[0]
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(m, 3) int64 triangles of every piece's hull (overlapping; built on first use)."""
+        return self._hulls()[1]
+
+    @property
+    def bounds(self) -> np.ndarray:
+        return np.stack([self._impl.lo.min(axis=0), self._impl.hi.max(axis=0)])
+
+    def __repr__(self) -> str:
+        return f"PairObstacle(pairs={len(self.pairs.pairs)})"
+
+    def plane_signs(self, q) -> np.ndarray:
+        raise TypeError("plane_signs is defined for a convex C-obstacle, not triangle pairs")

@@ -26,13 +26,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from .convex import ConvexPolytope
-from .exact import _FILTER, Grid
+from .exact import _FILTER, _TINY, Grid
 from .obstacle import CSpaceObstacle, _ConvexCO
 
 __all__ = ["SurfaceMesh", "SurfaceObstacle", "surface_pieces"]
 
-# Absolute slack for underflow of scaled queries (as in obstacle.py's convex engine).
-_TINY = 2.0**-1000
 # Candidate (query, piece) pairs evaluated at once.
 _PAIRS = 1 << 12
 # Padding plane value: never the maximum of a piece's real facet values.

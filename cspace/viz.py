@@ -823,7 +823,6 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the scene already warned when it was loaded
         m = model_scene(scene)
-    minus_r = m.robot.reflected(scene.reference_point)
     report: dict[str, str] = {}
     for body in m.bodies:
         view.add_obstacle(body.name, body.vertices, body.faces)
@@ -836,9 +835,10 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
             how = ", ".join(sorted({p.construction for p in body.pairs}))
             report[body.name] = (f"C-obstacle ({how}, {sum(co.n_facets for co in cos)} facets"
                                  + (f" in {len(cos)} parts" if len(cos) > 1 else "") + ")")
-        elif body.error and superset:
+        elif body.error and superset and m.robot is not None:
             try:
-                S = minkowski_superset((body.vertices, body.faces), minus_r)
+                S = minkowski_superset((body.vertices, body.faces),
+                                       m.robot.reflected(scene.reference_point))
             except InvalidMeshError as e:
                 report[body.name] = f"obstacle only: {e}"
                 continue

@@ -14,7 +14,7 @@ from cspace.errors import SceneError
 from cspace.meshfile import UP_AXIS_MATRICES, read_mesh_file
 
 collada = pytest.importorskip("collada")  # a core dependency: present on every install
-from collada import asset, geometry, material, scene, source  # noqa: E402
+from collada import geometry, material, scene, source  # noqa: E402
 
 TETRA = np.array([[0.0, 0.0, 0.0], [1.5, 0.0, 0.0], [0.0, 2.0, 0.0], [0.25, 0.5, 3.0]])
 TETRA_FACES = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])

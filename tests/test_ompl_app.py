@@ -14,13 +14,12 @@ import sys
 
 import numpy as np
 import pytest
+from test_meshfile import _doc, _geometry, _instance, _write  # tests/ is on sys.path
+from test_robot_parts import _box, _u_robot
 
 from cspace import load_scene, model_scene
 from cspace.fcl_check import FclOracle
 from cspace.meshfile import read_mesh_file
-
-from test_meshfile import _doc, _geometry, _instance, _write  # tests/ is on sys.path
-from test_robot_parts import _box, _u_robot
 
 collada = pytest.importorskip("collada")
 from collada import scene as cs  # noqa: E402

@@ -11,14 +11,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import trimesh
+from zoo import l_shape, voxel_solid
 
 from cspace import model_scene
 from cspace.fcl_check import _oracle, cross_check, path_collisions
 from cspace.ompl_plugin import plan
-from cspace.pairs import pair_construction
+from cspace.pairs import pair_construction, triangle_pair_pieces
 from cspace.scene import Body, Scene
-
-from zoo import l_shape, voxel_solid
+from cspace.surface import SurfaceObstacle
 
 
 def _u_robot(size=0.5):
@@ -60,7 +60,7 @@ CASES = {
     "open box x U (triangle pairs)": (_open(_box((1.0, 1.0, 1.0))), _u_robot(0.4), "surface",
                                       "solid"),
     "L x open U (triangle pairs)": (L_SOLID, _open(_u_robot(0.4)), "solid", "surface"),
-    "open box x open U (flat pieces thickened)": (_open(_box((1.0, 1.0, 1.0))),
+    "open box x open U (flat pieces)": (_open(_box((1.0, 1.0, 1.0))),
                                                   _open(_u_robot(0.4), side=-1), "surface",
                                                   "surface"),
 }
@@ -78,19 +78,53 @@ def test_pairing_agrees_with_fcl(name):
     cs = m.cspace()
     r = cross_check(cs, n=10000, seed=3, band=1e-9)
     assert 500 < r["n_inside"] < 9500
-    thickened = "thickened" in body.pairs[0].detail
-    assert thickened == (o_kind == r_kind == "surface")
-    if not thickened:
-        assert r["n_disagree"] == 0, r["disagreements"][:5]
-        assert r["max_distance_error"] <= 1e-9 * r["scene_size"]
-        return
-    # Flat pieces of two open surfaces are grown by one grid step: false collisions within
-    # that step of the exact C-obstacle, never a false free.
-    q = r["disagreements"]
-    assert len(q) and cs.contains(q).all()
+    assert r["n_disagree"] == 0, r["disagreements"][:5]
+    assert r["max_distance_error"] <= 1e-9 * r["scene_size"]
+
+
+def test_triangle_pairs_equal_their_reference_hulls():
+    # PairObstacle (slabs of each pair, no hull) against the reference construction (one
+    # exact hull per pair, queried by the surface-piece engine): the same answers, exactly.
+    obstacle, robot = L_SOLID, _u_robot(0.4)
+    m = model_scene(_scene(obstacle, robot))
+    (pair,) = m.bodies[0].pairs
+    fast = next(co for co in pair.cos if co.kind == "pairs")
+    (part,) = m.robot_parts
+    b = m.bodies[0]
+    ref = triangle_pair_pieces(b._solid.ints, b._solid.faces, part.ints, part.faces,
+                               m.grid.snap(np.zeros(3)), m.grid,
+                               np.ldexp(np.asarray(m.scene.bounds), -m.grid.exponent),
+                               closed=True)
+    assert len(ref.pieces) == len(fast.pairs.pairs) and ref.thickened == 0
+    slow = SurfaceObstacle(ref.pieces, obstacle=None, robot=None, reference_point=np.zeros(3),
+                           grid=m.grid)
+    rng = np.random.default_rng(11)
+    q = np.vstack([rng.uniform(-2, 2, (1500, 3)), fast.vertices[rng.integers(0, len(
+        fast.vertices), 500)]])  # hull corners: on piece boundaries, exact ties
+    assert np.array_equal(fast.contains(q), slow.contains(q))
+    q1 = q + rng.normal(scale=0.3, size=q.shape)
+    assert np.array_equal(fast.segment_free(q, q1), slow.segment_free(q, q1))
+    assert np.array_equal(fast.first_contact(q[:500], q1[:500]),
+                          slow.first_contact(q[:500], q1[:500]), equal_nan=True)
+    d_fast, d_slow = fast.signed_distance(q[:400]), slow.signed_distance(q[:400])
+    assert np.array_equal(np.sign(d_fast), np.sign(d_slow))
+    assert np.allclose(d_fast, d_slow, rtol=0, atol=1e-12)
+
+
+def test_coplanar_open_triangles_touch_only_in_their_plane():
+    # Two open triangles in one plane: only the flat piece records their contact, exactly.
+    tri = (np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), np.array([[0, 1, 2]]))
+    m = model_scene(_scene(tri, tri))
+    assert [p.construction for p in m.bodies[0].pairs] == ["triangle pairs"]
+    cs = m.cspace()
+    q = np.array([[0.2, 0.2, 0.0], [0.2, 0.2, 2.0**-30], [-0.5, 0.5, 0.0], [1.0, 0.0, 0.0],
+                  [1.0 + 2.0**-30, 0.0, 0.0]])
+    assert cs.contains(q).tolist() == [True, False, True, True, False]
     oracle = _oracle(cs.obstacles[0])
-    assert not oracle.collides(q).any()
-    assert (oracle.distance(q) <= m.grid.step * (1 + 1e-6)).all()
+    assert oracle.collides(q[[0, 1, 2]]).tolist() == [True, False, True]
+    # A translation through the plane is a collision; one beside it is not.
+    assert not cs.segment_free([0.2, 0.2, -1.0], [0.2, 0.2, 1.0])
+    assert cs.segment_free([3.0, 3.0, -1.0], [3.0, 3.0, 1.0])
 
 
 def test_u_robot_around_a_post_is_free_where_its_hull_collides():
