@@ -115,3 +115,33 @@ def test_2d_cfg_plans(tmp_path):
     assert out.returncode == 0, out.stdout + out.stderr
     r = json.loads((tmp_path / "r.json").read_text())
     assert r["solved"] and np.array(r["path"])[:, 2].tolist() == [0.0] * len(r["path"])
+
+
+@pytest.mark.parametrize("rel", [
+    "bug_trap1.0/bug-trap.env",
+    pytest.param("alpha1.6/alpha.env", marks=pytest.mark.slow),
+    pytest.param("flange_1.0/flange.env", marks=pytest.mark.slow),
+])
+def test_real_robots_start_and_goal_agree_with_fcl(shared_data, rel):
+    # Parasol's problems with their real, non-convex robots (the stick bug, the alpha robot,
+    # the three-part flange), modelled exactly: start and goal validity as FCL sees them with
+    # the actual robot mesh (BVH, plus containment), and near the start.
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        scene = load_scene(shared_data / "parasol_open_ppl_env" / rel)
+    m = model_scene(scene)
+    assert all(p.kind != "convex" for p in m.robot_parts)
+    space = m.cspace()
+    rng = np.random.default_rng(4)
+    q = np.vstack([scene.start, scene.goal, scene.start + rng.normal(scale=2.0, size=(40, 3))])
+    q = q[((scene.bounds[0] <= q) & (q <= scene.bounds[1])).all(axis=1)]
+    robot, hit = scene.robot, np.zeros(len(q), dtype=bool)
+    for body in scene.obstacles:
+        oracle = FclOracle(body.vertices, body.faces, robot.vertices, robot.faces,
+                           scene.reference_point, convex=False,
+                           robot_kind=m.robot_parts[0].kind)
+        hit |= oracle.collides(q)
+    assert not hit[:2].any()  # a valid problem: start and goal free
+    assert np.array_equal(space.contains(q), hit), (hit.sum(), space.contains(q).sum())
