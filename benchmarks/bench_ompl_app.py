@@ -66,6 +66,14 @@ def problems(tmp: Path) -> dict:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             out["FCL env.obj with rob.obj"] = load_scene(fcl_env)
+    parasol = ROOT.parent / "shared" / "data" / "parasol_open_ppl_env"
+    for rel, label in (("bug_trap1.0/bug-trap.env", "Parasol bug trap (stick bug)"),
+                       ("alpha1.6/alpha.env", "Parasol alpha 1.6 (alpha robot)"),
+                       ("flange_1.0/flange.env", "Parasol flange (3-part robot)")):
+        if (parasol / rel).is_file():
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                out[label] = load_scene(parasol / rel)
     del shared, Scene
     return out
 

@@ -26,6 +26,12 @@ scene grid (``Grid.for_extent(scene.extent())``):
 6. **Build** (``build=True``) each kept body's C-obstacle, through the disk cache
    (:mod:`cspace.cache`) when one is given.
 
+The robot goes through steps 1-3 and 5 too (nothing of it is dropped): its parts
+(:class:`RobotPart`) are ``convex``, ``solid`` or ``surface``, and every (kept body, robot
+part) pair gets the construction :func:`cspace.pairs.pair_construction` names for its kinds
+(:class:`PairModel`). A convex robot is one convex part and steps 5-6 are as described above;
+``robot_hull=True`` makes the robot's convex hull its one part instead.
+
 Surface semantics equals FCL's mesh collision: a robot wholly inside an unclosed surface
 meets nothing.
 """
@@ -399,7 +405,8 @@ def _closed_kind(name, P, F, grid):
     return "convex", f"closed and convex ({poly.n_facets} facets)", poly
 
 
-def _classify(name, source, ints, F, minus_r_box, bounds_g, grid) -> BodyModel:
+def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
+              convex_robot: bool = True) -> BodyModel:
     used, local = np.unique(F, return_inverse=True)
     P, F = ints[used], local.reshape(-1, 3)
     V = grid.to_float(P)
@@ -413,7 +420,9 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid) -> BodyModel:
     kind, why, operand = _closed_kind(name, P, F, grid)
     if kind != "surface":
         body.kind, body._solid = kind, operand
-        body.reason = why + (": CVMS" if kind == "convex" else ": NCC-CVMS")
+        # With a convex robot the body's kind names its algorithm; else each pair's line does.
+        body.reason = why + ((": CVMS" if kind == "convex" else ": NCC-CVMS") if convex_robot
+                             else "")
         return body
     # Surface semantics; leave out triangles whose piece cannot meet the bounds.
     tri = P[F]
@@ -422,6 +431,9 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid) -> BodyModel:
     body.reason = (f"{why}: surface semantics, the union of triangle ⊕ (-R) over "
                    f"{int(keep.sum())} triangles" + (f" ({int((~keep).sum())} more cannot "
                                                      "reach the bounds)" if (~keep).any() else ""))
+    if not convex_robot:
+        body.reason = (f"{why}: surface semantics (FCL's mesh collision), "
+                       f"{int(keep.sum())} triangles can reach the bounds")
     return body
 
 
@@ -631,7 +643,8 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         sources[sb.name] = counts
         for k, faces in enumerate(split):
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
-            bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid))
+            bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
+                                    len(parts) == 1 and parts[0].kind == "convex"))
         if not split:
             bodies.append(BodyModel(sb.name, sb.name, "dropped",
                                     f"empty: all {len(sb.faces)} triangles collapse when welded "
