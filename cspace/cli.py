@@ -137,7 +137,7 @@ def _check(args: argparse.Namespace) -> int:
     from .scene import load_scene
 
     scene = load_scene(args.scene)
-    cs = CSpace.from_scene(scene)
+    cs = CSpace.from_scene(scene, robot_hull=args.robot_hull)
     r = cross_check(cs, n=args.n, seed=args.seed, band=args.band)
     print(f"{scene.name}: {r['n']} translations, {r['n_inside']} in collision (FCL: {r['n_inside_fcl']})")
     print(f"membership disagreements beyond {args.band:g} of the surface: {r['n_disagree']} "
@@ -175,6 +175,10 @@ def _model(args: argparse.Namespace):
 
     scene = load_scene(args.scene)
     cache = None if args.no_cache else (args.cache_dir or True)
+    if args.robot_hull:
+        print(f"cspace: note: robot {scene.robot.name!r} is replaced by its convex hull "
+              "(--robot-hull): collisions may be reported where the real robot is free",
+              file=sys.stderr)
     return model_scene(scene, cache=cache, progress=_Progress(args.quiet),
                        robot_hull=args.robot_hull)
 
@@ -344,6 +348,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("-n", type=int, default=10000, help="number of random translations")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--band", type=float, default=1e-9, help="ignore points this close to the surface")
+    p.add_argument("--robot-hull", action="store_true",
+                   help="check the C-obstacles of the robot's convex hull instead of its exact parts")
     p.set_defaults(func=_check)
     p = sub.add_parser("build", help="model a scene and build its C-obstacles (cached)")
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")

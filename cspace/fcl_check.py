@@ -307,7 +307,8 @@ class FclOracle:
 
 def _near_surface(co, n: int, rng, scale: float) -> np.ndarray:
     """Points on random boundary triangles of a C-obstacle, moved along the normal."""
-    V, F = co.vertices, co.faces
+    # Triangle pairs: the hulls of a few hundred random pieces, not of every piece.
+    V, F = co.sample_mesh(rng) if hasattr(co, "sample_mesh") else (co.vertices, co.faces)
     tri = V[F[rng.integers(0, len(F), n)]]
     w = rng.dirichlet(np.ones(3), n)
     p = np.einsum("ki,kij->kj", w, tri)

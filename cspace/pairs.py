@@ -668,20 +668,31 @@ class PairObstacle(CSpaceObstacle):
         """Slab sides over all pairs (17 slabs, 34 sides, a pair)."""
         return 34 * len(self.pairs.pairs)
 
+    def _hull_mesh(self, which) -> tuple[np.ndarray, np.ndarray]:
+        """The pieces ``which`` (indices into the pairs) as hulls in one mesh (flat ones
+        thickened by a grid step): for drawing and sampling only; about 0.6 ms a pair."""
+        tp, V, F, n = self.pairs, [], [], 0
+        scratch = PairPieces([])
+        for (i, j), f in zip(tp.pairs[which].tolist(), tp.flat[which].tolist()):
+            pts = (tp.S[i][:, None, :] + tp.T[j][None, :, :]).reshape(-1, 3)
+            piece = _piece(pts, f, self.grid, scratch, "piece")
+            V.append(piece.vertices)
+            F.append(piece.faces + n)
+            n += len(piece.vertices)
+        return np.vstack(V), np.vstack(F)
+
     def _hulls(self):
-        """Every piece as a hull (flat ones thickened by a grid step): for drawing and for
-        sampling near the surface only; about 0.6 ms a pair."""
         if self._mesh is None:
-            tp, V, F, n = self.pairs, [], [], 0
-            scratch = PairPieces([])
-            for (i, j), f in zip(tp.pairs.tolist(), tp.flat.tolist()):
-                pts = (tp.S[i][:, None, :] + tp.T[j][None, :, :]).reshape(-1, 3)
-                piece = _piece(pts, f, self.grid, scratch, "piece")
-                V.append(piece.vertices)
-                F.append(piece.faces + n)
-                n += len(piece.vertices)
-            self._mesh = (np.vstack(V), np.vstack(F))
+            self._mesh = self._hull_mesh(np.arange(len(self.pairs.pairs)))
         return self._mesh
+
+    def sample_mesh(self, rng, pieces: int = 256) -> tuple[np.ndarray, np.ndarray]:
+        """Hulls of at most ``pieces`` random pieces (for sampling near the surface without
+        building every hull)."""
+        n = len(self.pairs.pairs)
+        if n <= pieces:
+            return self._hulls()
+        return self._hull_mesh(np.sort(rng.choice(n, pieces, replace=False)))
 
     @property
     def vertices(self) -> np.ndarray:
