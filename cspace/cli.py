@@ -28,6 +28,8 @@ import sys
 import time
 from collections.abc import Sequence
 
+from .output import MESH_FORMATS, write_atomic
+
 
 def _operands(args: argparse.Namespace, a_points):
     """The grid, and B (hulled, optionally reflected), for the subcommands taking A and B files."""
@@ -37,7 +39,7 @@ def _operands(args: argparse.Namespace, a_points):
     from .convex import ConvexPolytope
     from .exact import Grid
 
-    b = np.asarray(trimesh.load(args.b, force="mesh", process=False).vertices, dtype=np.float64)
+    b = _load_points(args.b)
     grid = Grid.for_points(a_points, b, bits=args.grid_bits)
     B = ConvexPolytope.from_points(b, grid=grid, name=args.b)
     if args.reflect_b is not None:
@@ -54,6 +56,20 @@ def _closed_operands(args: argparse.Namespace):
     return A0.on_grid(grid), grid, B
 
 
+def _load_points(path: str):
+    """The vertices of a mesh file (the frame the file means), or a SceneError naming it."""
+    from .meshfile import read_mesh_file
+
+    return read_mesh_file(path, f"mesh {path!r}").vertices
+
+
+def _out(path, formats, what):
+    """The checked output path (before any work), or None."""
+    from .output import output_path
+
+    return None if path is None else output_path(path, formats, what)
+
+
 def _timed(fn, *operands, **options):
     t = time.perf_counter()
     out = fn(*operands, **options)
@@ -67,7 +83,8 @@ def _convex_sum(args: argparse.Namespace) -> int:
 
     from .convex import FACET_KINDS, ConvexPolytope, convex_minkowski_sum
 
-    a = np.asarray(trimesh.load(args.a, force="mesh", process=False).vertices, dtype=np.float64)
+    out = _out(args.output, MESH_FORMATS, "-o")
+    a = _load_points(args.a)
     grid, B = _operands(args, a)
     A = ConvexPolytope.from_points(a, grid=grid, name=args.a)
     S, dt = _timed(convex_minkowski_sum, A, B)
@@ -77,15 +94,16 @@ def _convex_sum(args: argparse.Namespace) -> int:
     print(f"A ⊕ B: {S.polytope.n_facets} facets ({kinds}), {len(S.vertices)} vertices, volume {S.volume:.9g}")
     print(f"grid step {grid.step:.3g}; snapping moved each input point by at most {S.error_bound:.3g}")
     print(f"time {dt * 1e3:.2f} ms")
-    if args.output:
-        S.polytope.to_trimesh().export(args.output)
-        print(f"wrote {args.output}")
+    if out:
+        write_atomic(out, lambda p: S.polytope.to_trimesh().export(p))
+        print(f"wrote {out}")
     return 0
 
 
 def _sum(args: argparse.Namespace) -> int:
     from .trim import minkowski_sum
 
+    out = _out(args.output, MESH_FORMATS, "-o")
     A, grid, B = _closed_operands(args)
 
     def progress(stage: str, fraction: float) -> None:
@@ -104,9 +122,9 @@ def _sum(args: argparse.Namespace) -> int:
     if args.stats:
         for k, v in S.stats.items():
             print(f"  {k}: {v:.4f} s" if isinstance(v, float) else f"  {k}: {v}")
-    if args.output:
-        S.to_trimesh().export(args.output)
-        print(f"wrote {args.output}")
+    if out:
+        write_atomic(out, lambda p: S.to_trimesh().export(p))
+        print(f"wrote {out}")
     return 0
 
 
@@ -115,6 +133,7 @@ def _superset(args: argparse.Namespace) -> int:
 
     from .superset import SUPERSET_KINDS, minkowski_superset
 
+    out = _out(args.output, MESH_FORMATS, "-o")
     A, grid, B = _closed_operands(args)
     S, dt = _timed(minkowski_superset, A, B)
     kinds = ", ".join(f"{int((S.kind == k).sum())} {name}" for k, name in enumerate(SUPERSET_KINDS))
@@ -124,10 +143,10 @@ def _superset(args: argparse.Namespace) -> int:
     if corner.size:
         print(f"corner multiplicities from {int(corner.min())} to {int(corner.max())}")
     print(f"grid step {grid.step:.3g}; time {dt * 1e3:.1f} ms")
-    if args.output:
+    if out:
         faces, _, _ = S.triangles()
-        trimesh.Trimesh(S.vertices, faces, process=False).export(args.output)
-        print(f"wrote {args.output} (triangle soup; multiplicities are not stored)")
+        write_atomic(out, lambda p: trimesh.Trimesh(S.vertices, faces, process=False).export(p))
+        print(f"wrote {out} (triangle soup; multiplicities are not stored)")
     return 0
 
 
@@ -186,6 +205,7 @@ def _model(args: argparse.Namespace):
 def _build(args: argparse.Namespace) -> int:
     import numpy as np
 
+    out = _out(args.output, ("npz",), "-o")
     m = _model(args)
     built = [(f"{b.name} x {p.part}" if len(m.robot_parts) > 1 else b.name, b.kind, co, p.cache)
              for b in m.bodies for p in b.pairs for co in p.cos]
@@ -200,14 +220,17 @@ def _build(args: argparse.Namespace) -> int:
     failed = [b for b in m.bodies if b.error]
     for b in failed:
         print(f"cspace: error: body {b.name!r} ({b.kind}): {b.error}", file=sys.stderr)
-    if args.output:
+    if out and failed:
+        print(f"cspace: error: {out} not written: {len(failed)} bodies failed to build",
+              file=sys.stderr)
+    elif out:
         arrays = {"names": np.array([name for name, _, _, _ in built]),
                   "kinds": np.array([kind for _, kind, _, _ in built])}
         for i, (_, _, co, _) in enumerate(built):
             arrays[f"vertices_{i}"] = co.vertices
             arrays[f"faces_{i}"] = co.faces
-        np.savez_compressed(args.output, **arrays)
-        print(f"wrote {args.output} (per C-obstacle: vertices_<i>, faces_<i>; names, kinds)")
+        write_atomic(out, lambda p: np.savez_compressed(p, **arrays))
+        print(f"wrote {out} (per C-obstacle: vertices_<i>, faces_<i>; names, kinds)")
     return 1 if failed else 0
 
 
@@ -216,6 +239,9 @@ def _plan(args: argparse.Namespace) -> int:
 
     from .ompl_plugin import plan
 
+    path_out = _out(args.output, ("txt", "csv", "npy"), "-o")
+    result_out = _out(args.result, ("json",), "--result")
+    html_out = _out(args.html, ("html",), "--html")
     m = _model(args)
     if args.explain:
         print(m.explain())
@@ -223,45 +249,56 @@ def _plan(args: argparse.Namespace) -> int:
     cs = m.cspace()
     r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner=args.planner,
              time=args.time, seed=args.seed, sampler=args.sampler)
-    status = "solved" if r.solved else "NOT solved (approximate path)"
+    status = "solved" if r.solved else f"NOT solved ({r.status})"
     print(f"{scene.name}: {args.planner} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
           f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
     fcl = None
-    if args.fcl_check and len(r.path):
+    if args.fcl_check and r.solved:
         from .fcl_check import path_collisions
 
         bad, n = path_collisions(cs, r.path)
         fcl = {"colliding_samples": int(len(bad)), "samples": n}
         print(f"FCL re-check: {len(bad)} colliding of {n} samples along the path")
-    if args.output:
-        np.savetxt(args.output, r.path)
-        print(f"wrote {args.output}")
-    if args.result:
+    proved = r.solved and not (fcl and fcl["colliding_samples"])
+    # A path file is a solution: written only for a solved, proved path.
+    written = None
+    if path_out and proved:
+        if path_out.suffix.lower() == ".npy":
+            write_atomic(path_out, lambda p: np.save(p, r.path))
+        else:
+            delimiter = "," if path_out.suffix.lower() == ".csv" else " "
+            write_atomic(path_out, lambda p: np.savetxt(p, r.path, delimiter=delimiter))
+        written = str(path_out)
+        print(f"wrote {path_out}")
+    elif path_out:
+        print(f"no path written to {path_out}: the problem was not solved", file=sys.stderr)
+    if result_out:
         import json
-        from pathlib import Path
 
         result = {
             "scene": scene.name, "scene_file": str(args.scene), "planner": args.planner,
             "seed": args.seed, "time_budget": args.time, "solved": r.solved, "exact": r.exact,
             "valid_exact_recheck": r.valid, "status": r.status, "seconds": r.time,
-            "length": r.length, "path": r.path.tolist(), "fcl_recheck": fcl,
+            "length": r.length, "path": r.path.tolist() if proved else None,
+            "approximate_path": None if proved else r.path.tolist(),
+            "path_file": written, "fcl_recheck": fcl,
             "model": {"counts": m.counts(), "model_seconds": m.seconds["model"],
-                      "build_seconds": m.seconds["build"],
+                      "build_seconds": m.seconds["build"], "robot_hull": m.robot_hull,
+                      "robot_parts": [{"name": p.name, "kind": p.kind} for p in m.robot_parts],
                       "bodies": [{"name": b.name, "kind": b.kind, "reason": b.reason,
+                                  "constructions": [p.construction for p in b.pairs],
                                   "cache": b.cache, "seconds": b.seconds} for b in m.bodies]},
         }
-        Path(args.result).parent.mkdir(parents=True, exist_ok=True)
-        Path(args.result).write_text(json.dumps(result, indent=1))
-        print(f"wrote {args.result}")
-    if fcl is not None and fcl["colliding_samples"]:
-        return 1
-    if args.html:
+        write_atomic(result_out, lambda p: p.write_text(json.dumps(result, indent=1)))
+        print(f"wrote {result_out}")
+    if html_out:
         from .viz import SceneView, draw_scene
 
         view = SceneView()
-        draw_scene(view, scene, path=r.path)
-        print(f"wrote {view.save(args.html)}")
-    return 0 if r.solved else 1
+        draw_scene(view, scene, path=r.path if proved else None)
+        write_atomic(html_out, lambda p: view.save(p))
+        print(f"wrote {html_out}" + ("" if proved else " (the scene only: no solution)"))
+    return 0 if proved else 1
 
 
 def _view(args: argparse.Namespace) -> int:
@@ -272,6 +309,8 @@ def _view(args: argparse.Namespace) -> int:
     from .scene import load_scene
     from .viz import SceneView, draw_scene, screenshot
 
+    _out(args.output or f"{Path(args.scene).stem}.html", ("html",), "-o")
+    _out(args.screenshot, ("png",), "--screenshot")
     scene = load_scene(args.scene)
     path = None
     if args.path:
@@ -292,7 +331,8 @@ def _view(args: argparse.Namespace) -> int:
             view.close()
         return 0
     out = Path(args.output or f"{Path(args.scene).stem}.html")
-    print(f"wrote {view.save(out)} (self-contained; open it in a browser)")
+    write_atomic(out, lambda p: view.save(p))
+    print(f"wrote {out} (self-contained; open it in a browser)")
     if args.screenshot:
         print(f"wrote {screenshot(out, args.screenshot)}")
     return 0
@@ -323,11 +363,31 @@ def _operand_arguments(p: argparse.ArgumentParser, a_help: str, output_help: str
     p.add_argument("--grid-bits", type=int, default=26, help="snapped coordinates satisfy |k| <= 2**bits")
 
 
+def _number(kind, test, what):
+    def parse(text: str):
+        try:
+            value = kind(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what}") from None
+        if not test(value):
+            raise argparse.ArgumentTypeError(f"{text!r} is not {what}")
+        return value
+    return parse
+
+
+_positive_int = _number(int, lambda v: v >= 1, "a whole number >= 1")
+_seed = _number(int, lambda v: 0 <= v < 2**31, "a seed (a whole number from 0 to 2**31 - 1)")
+_positive = _number(float, lambda v: 0 < v < float("inf"), "a positive number")
+_non_negative = _number(float, lambda v: 0 <= v < float("inf"), "a number >= 0")
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
-    from .errors import BuildError
+    from .errors import CspaceError
 
     parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
+    parser.add_argument("--debug", action="store_true",
+                        help="show Python tracebacks (for reporting a bug in cspace)")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("convex-sum", help="exact Minkowski sum of two convex shapes (CVMS)")
     _operand_arguments(p, "mesh file of A (its convex hull is used)", "write the sum as a mesh file")
@@ -339,15 +399,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     _operand_arguments(p, "closed mesh file of A (validated; any genus, non-convex)",
                        "write the sum as a mesh file (any format trimesh exports)")
     p.add_argument("--stats", action="store_true", help="print the time of each stage")
-    p.add_argument("--workers", type=int, default=None, metavar="N",
+    p.add_argument("--workers", type=_positive_int, default=None, metavar="N",
                    help="processes for the large stages (default: $CSPACE_WORKERS, else the CPUs)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=_sum)
     p = sub.add_parser("check", help="cross-check a scene's C-obstacles against FCL")
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
-    p.add_argument("-n", type=int, default=10000, help="number of random translations")
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument("--band", type=float, default=1e-9, help="ignore points this close to the surface")
+    p.add_argument("-n", type=_positive_int, default=10000,
+                   help="number of random translations (default 10000)")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
+    p.add_argument("--band", type=_non_negative, default=1e-9,
+                   help="ignore points this close to the surface (default 1e-9)")
     p.add_argument("--robot-hull", action="store_true",
                    help="check the C-obstacles of the robot's convex hull instead of its exact parts")
     p.set_defaults(func=_check)
@@ -360,8 +422,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     _model_options(p)
     p.add_argument("--planner", default="RRTConnect", help="any bound OMPL geometric planner")
-    p.add_argument("--time", type=float, default=5.0, help="planning time budget in seconds")
-    p.add_argument("--seed", type=int, default=None, help="OMPL random seed")
+    p.add_argument("--time", type=_positive, default=5.0,
+                   help="planning time budget in seconds (default 5)")
+    p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (default: none)")
     p.add_argument("-o", "--output", help="write the path (n x 3 text)")
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
     p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),
@@ -382,6 +445,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return args.func(args)
-    except (ValueError, FileNotFoundError, BuildError) as e:
+    except KeyboardInterrupt:
+        print("cspace: interrupted", file=sys.stderr)
+        return 130
+    except (CspaceError, ValueError, OSError) as e:  # bad input, paths, files: one line
+        if args.debug:
+            raise
         print(f"cspace: error: {e}", file=sys.stderr)
         return 2
+    except Exception as e:  # a bug of cspace's: say so, traceback with --debug
+        if args.debug:
+            raise
+        print(f"cspace: internal error: {type(e).__name__}: {e} (run with --debug for the "
+              "traceback)", file=sys.stderr)
+        return 1

@@ -20,6 +20,7 @@ __all__ = [
     "ExactnessError",
     "SceneError",
     "BuildError",
+    "OutputError",
 ]
 
 
@@ -74,3 +75,8 @@ class SceneError(CspaceError, ValueError):
 
 class BuildError(CspaceError, RuntimeError):
     """A C-obstacle of a scene body could not be built; the message names the body and why."""
+
+
+class OutputError(CspaceError, OSError):
+    """An output file cannot be written: unknown format, folder not writable, disk full.
+    Nothing is left behind: every file is written to a temporary name and then renamed."""

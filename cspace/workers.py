@@ -115,6 +115,7 @@ def forked_map(task, chunks: list, workers: int):
             yield k, task(chunks[k])
         while children:
             pid, r = children[0]
+            children[0] = (pid, None)  # _read_all closes r, also when interrupted mid-read
             data = _read_all(r)
             children.pop(0)
             _, status = os.waitpid(pid, 0)
@@ -127,10 +128,11 @@ def forked_map(task, chunks: list, workers: int):
             yield from value
     finally:
         os.close(queue)
-        for pid, r in children:  # only left on an error here: stop and reap them
+        for pid, r in children:  # only left on an error or an interrupt: stop, reap them
             try:
                 os.kill(pid, signal.SIGKILL)
             except ProcessLookupError:  # pragma: no cover - already gone
                 pass
-            os.close(r)
+            if r is not None:
+                os.close(r)
             os.waitpid(pid, 0)

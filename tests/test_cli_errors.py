@@ -1,0 +1,127 @@
+"""Bad input and interruption on the command line: one line, exit 2 (130 for Ctrl-C), no
+traceback, nothing half-written, no solution file for an unsolved problem."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import trimesh
+
+from cspace.errors import OutputError
+from cspace.output import output_path, write_atomic
+
+SCENES = Path(__file__).resolve().parents[1] / "scenes"
+
+
+def cspace(*args, timeout=120, **kw):
+    return subprocess.run([sys.executable, "-m", "cspace", *map(str, args)], capture_output=True,
+                          text=True, timeout=timeout, **kw)
+
+
+def one_line_error(r, code=2):
+    assert r.returncode == code, r.stdout + r.stderr
+    assert "Traceback" not in r.stderr
+    lines = [x for x in r.stderr.splitlines() if x.startswith("cspace: ")]
+    assert len(lines) == 1, r.stderr
+    return lines[0]
+
+
+@pytest.fixture
+def boxes(tmp_path):
+    a, b = tmp_path / "a.stl", tmp_path / "b.stl"
+    trimesh.creation.box((2, 2, 2)).export(a)
+    trimesh.creation.box((1, 1, 1)).export(b)
+    return a, b
+
+
+def test_bad_paths_and_formats_fail_before_the_work(tmp_path, boxes):
+    a, b = boxes
+    # Unknown output format: refused up front, nothing written.
+    line = one_line_error(cspace("sum", a, b, "-o", tmp_path / "out.xyz1"))
+    assert "unknown format '.xyz1'" in line
+    assert not (tmp_path / "out.xyz1").exists()
+    # A missing input file, a file that is no mesh, a folder that cannot be written.
+    assert "mesh file not found" in one_line_error(cspace("convex-sum", tmp_path / "gone.stl", b))
+    (tmp_path / "notes.txt").write_text("not a mesh\n")
+    assert "notes.txt" in one_line_error(cspace("convex-sum", tmp_path / "notes.txt", b))
+    assert "cannot create files" in one_line_error(   # (root may write anywhere: a file
+        cspace("convex-sum", a, b, "-o", tmp_path / "notes.txt" / "out.stl"))  # as a folder)
+    # Numbers out of range are argparse errors (exit 2, one usage line, no traceback).
+    r = cspace("check", SCENES / "window.toml", "-n", "0")
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "'0' is not" in r.stderr
+    r = cspace("plan", SCENES / "window.toml", "--seed", "-1")
+    assert r.returncode == 2 and "Traceback" not in r.stderr and "'-1' is not" in r.stderr
+
+
+def test_write_atomic_leaves_nothing_half_written(tmp_path):
+    target = tmp_path / "deep" / "er" / "out.txt"   # parent folders: created on write
+    write_atomic(target, lambda p: p.write_text("whole"))
+    assert target.read_text() == "whole"
+
+    def broken(p):
+        p.write_text("half")
+        raise RuntimeError("interrupted")
+
+    with pytest.raises(RuntimeError):
+        write_atomic(target, broken)
+    assert target.read_text() == "whole"                 # the old file stands
+    assert sorted(x.name for x in target.parent.iterdir()) == ["out.txt"]  # no temp left
+    with pytest.raises(OutputError, match="cannot write '/dev/full'"):
+        write_atomic("/dev/full", lambda p: p.write_text("x" * 10000))
+    with pytest.raises(OutputError, match="unknown format"):
+        output_path(tmp_path / "a.stl", ("npz",), "-o")
+    (tmp_path / "x.npz").mkdir()
+    with pytest.raises(OutputError, match="is a folder"):
+        output_path(tmp_path / "x.npz", ("npz",), "-o")
+
+
+def test_unsolved_plan_writes_no_path_and_says_so(tmp_path):
+    # The cavity's goal is behind a narrow entrance: RRTConnect for 0.05 s does not get there.
+    path, result = tmp_path / "p.txt", tmp_path / "r.json"
+    r = cspace("plan", SCENES / "cavity.toml", "--seed", "1", "--time", "0.05", "-q",
+               "-o", path, "--result", result, "--html", tmp_path / "v.html")
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert "NOT solved" in r.stdout and "no path written" in r.stderr
+    assert not path.exists()
+    import json
+
+    data = json.loads(result.read_text())
+    assert data["solved"] is False and data["path"] is None and data["path_file"] is None
+    assert (tmp_path / "v.html").exists()
+
+
+def test_ctrl_c_during_a_long_build_is_one_line_and_leaves_nothing(tmp_path):
+    # A torus sum big enough to be in its forked stages when the interrupt comes.
+    from zoo import torus
+
+    V, F = torus(sections=160, ring=80)
+    trimesh.Trimesh(V, F, process=False).export(tmp_path / "torus.stl")
+    trimesh.creation.icosphere(subdivisions=2, radius=0.1).export(tmp_path / "ball.stl")
+    out = tmp_path / "sum.stl"
+    p = subprocess.Popen([sys.executable, "-m", "cspace", "sum", str(tmp_path / "torus.stl"),
+                          str(tmp_path / "ball.stl"), "-o", str(out), "--workers", "2"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                         start_new_session=True)
+    # Interrupt in the middle of the forked arrangements (progress lines on stderr).
+    seen = []
+    for line in p.stderr:
+        seen.append(line)
+        if "arrangements" in line and len([x for x in seen if "arrangements" in x]) >= 5:
+            break
+    assert p.poll() is None, "the build finished before the interrupt"
+    os.killpg(p.pid, signal.SIGINT)  # as a terminal's Ctrl-C: the whole process group
+    _, rest = p.communicate(timeout=60)
+    err = "".join(seen) + rest
+    assert p.returncode == 130, err
+    assert "Traceback" not in err and err.strip().splitlines()[-1] == "cspace: interrupted"
+    assert not out.exists() and list(tmp_path.glob(".sum.stl*")) == []
+    # No process of that group is left.
+    time.sleep(0.5)
+    with pytest.raises(ProcessLookupError):
+        os.killpg(p.pid, 0)
