@@ -33,8 +33,6 @@ from .output import MESH_FORMATS, write_atomic
 
 def _operands(args: argparse.Namespace, a_points):
     """The grid, and B (hulled, optionally reflected), for the subcommands taking A and B files."""
-    import numpy as np
-    import trimesh
 
     from .convex import ConvexPolytope
     from .exact import Grid
@@ -78,8 +76,6 @@ def _timed(fn, *operands, **options):
 
 def _convex_sum(args: argparse.Namespace) -> int:
     # Heavy imports here so that `cspace --help` stays fast.
-    import numpy as np
-    import trimesh
 
     from .convex import FACET_KINDS, ConvexPolytope, convex_minkowski_sum
 

@@ -22,7 +22,14 @@ from typing import Any
 import numpy as np
 
 from . import exact
-from .errors import DegenerateError, EmptyMeshError, ExactnessError, NotConvexError
+from .errors import (
+    DegenerateError,
+    EmptyMeshError,
+    ExactnessError,
+    InvalidArgumentError,
+    InvalidMeshError,
+    NotConvexError,
+)
 from .exact import Grid
 
 __all__ = [
@@ -186,7 +193,7 @@ class ConvexPolytope:
     ) -> "ConvexPolytope":
         """Exact convex hull of grid-integer points (see :meth:`from_points`)."""
         if method not in ("auto", "qhull", "wrap"):
-            raise ValueError(f"'{method}' is not a valid method, must be one of 'auto', 'qhull', 'wrap'")
+            raise InvalidArgumentError(f"'{method}' is not a valid method, must be one of 'auto', 'qhull', 'wrap'")
         ints = np.unique(np.asarray(ints, dtype=np.int64).reshape(-1, 3), axis=0)
         if len(ints) == 0:
             raise EmptyMeshError(f"{name}: no points")
@@ -393,7 +400,7 @@ def _as_points(points, name: str) -> np.ndarray:
     if points.size == 0:
         raise EmptyMeshError(f"{name}: no points")
     if points.ndim != 2 or points.shape[1] != 3:
-        raise ValueError(f"{name}: points must be (n, 3), got {points.shape}")
+        raise InvalidMeshError(f"{name}: points must be (n, 3), got {points.shape}")
     return points
 
 

@@ -21,6 +21,12 @@ __all__ = [
     "SceneError",
     "BuildError",
     "OutputError",
+    "MeshFileError",
+    "MeshFileNotFoundError",
+    "OperandTypeError",
+    "InvalidQueryError",
+    "InvalidArgumentError",
+    "ArgumentTypeError",
 ]
 
 
@@ -80,3 +86,29 @@ class BuildError(CspaceError, RuntimeError):
 class OutputError(CspaceError, OSError):
     """An output file cannot be written: unknown format, folder not writable, disk full.
     Nothing is left behind: every file is written to a temporary name and then renamed."""
+
+
+class MeshFileError(SceneError, InvalidMeshError):
+    """A mesh file is missing or cannot be read as triangles; the message names the file
+    (and what named it: a scene's key, an argument)."""
+
+
+class MeshFileNotFoundError(MeshFileError, FileNotFoundError):
+    """A mesh file does not exist (also a ``FileNotFoundError``)."""
+
+
+class OperandTypeError(InvalidMeshError, TypeError):
+    """An operand is of a kind no function of cspace takes (not a mesh, points or a path)."""
+
+
+class InvalidQueryError(CspaceError, ValueError):
+    """Query translations are not ``(3,)`` or ``(k, 3)`` numbers."""
+
+
+class InvalidArgumentError(CspaceError, ValueError):
+    """An argument's value is out of its range or not one of its choices; the message names
+    the argument and what it takes."""
+
+
+class ArgumentTypeError(CspaceError, TypeError):
+    """An argument is of the wrong type; the message names the argument and what it takes."""

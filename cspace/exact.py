@@ -24,7 +24,7 @@ from typing import Iterable
 
 import numpy as np
 
-from .errors import ExactnessError, GridRangeError, NonFiniteError
+from .errors import ExactnessError, GridRangeError, InvalidArgumentError, NonFiniteError
 
 __all__ = [
     "Grid",
@@ -99,12 +99,12 @@ class Grid:
     def for_extent(cls, extent: float, *, bits: int = 26) -> "Grid":
         """Grid for a scene whose coordinates satisfy ``|x| <= extent``."""
         if not 8 <= bits <= _MAX_BITS:
-            raise ValueError(f"bits must be in [8, {_MAX_BITS}], got {bits}")
+            raise InvalidArgumentError(f"bits must be in [8, {_MAX_BITS}], got {bits}")
         extent = float(extent)
         if not math.isfinite(extent):
             raise NonFiniteError(f"grid extent is not finite: {extent}")
         if extent < 0.0:
-            raise ValueError(f"grid extent must be >= 0, got {extent}")
+            raise InvalidArgumentError(f"grid extent must be >= 0, got {extent}")
         if extent <= 0.0:
             return cls(exponent=-bits, bits=bits)
         # frexp: extent = m * 2**e with 0.5 <= m < 1, hence extent < 2**e.

@@ -18,6 +18,8 @@ import time
 
 import numpy as np
 
+from .errors import ArgumentTypeError, InvalidArgumentError, InvalidMeshError
+
 __all__ = ["FclOracle", "cross_check", "winding_number", "fcl_convex", "co_collider", "path_collisions"]
 
 
@@ -136,11 +138,11 @@ def winding_number(vertices, faces, points, *, weights=None, chunk: int = 1 << 1
     F = np.asarray(faces, dtype=np.int64)
     P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     if V.ndim != 2 or V.shape[1] != 3 or F.ndim != 2 or F.shape[1] != 3:
-        raise ValueError(f"expected (n, 3) vertices and (m, 3) faces, got {V.shape} and {F.shape}")
+        raise InvalidMeshError(f"expected (n, 3) vertices and (m, 3) faces, got {V.shape} and {F.shape}")
     m = len(F)
     w = np.ones(m) if weights is None else np.asarray(weights, dtype=np.float64).reshape(-1)
     if len(w) != m:
-        raise ValueError(f"weights has {len(w)} entries for {m} faces")
+        raise InvalidArgumentError(f"weights has {len(w)} entries for {m} faces")
     out = np.zeros(len(P))
     if m == 0 or len(P) == 0:
         return out
@@ -214,7 +216,7 @@ class FclOracle:
             except InvalidMeshError:
                 convex = False
         if robot_kind not in ("convex", "solid", "surface"):
-            raise ValueError(f"robot_kind must be 'convex', 'solid' or 'surface', got {robot_kind!r}")
+            raise InvalidArgumentError(f"robot_kind must be 'convex', 'solid' or 'surface', got {robot_kind!r}")
         self.robot_kind = robot_kind
         # Containment points: one vertex of each connected component of either mesh.
         from .pairs import component_points
@@ -359,7 +361,7 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         pad = 0.1 * (b[1] - b[0])
         cs = CSpace([cs], bounds=np.stack([b[0] - pad, b[1] + pad]))
     if not isinstance(cs, CSpace):
-        raise TypeError(f"expected a CSpace or CSpaceObstacle, got {type(cs).__name__}")
+        raise ArgumentTypeError(f"expected a CSpace or CSpaceObstacle, got {type(cs).__name__}")
     rng = np.random.default_rng(seed)
     lo, hi = cs.bounds
     size = float(np.linalg.norm(hi - lo))
@@ -429,7 +431,7 @@ def _oracle(co) -> "FclOracle":
     """The FCL oracle of one C-obstacle, with the semantics of the pair it was built for:
     a part of a non-convex robot carries ``co.semantics = (obstacle solid, robot kind)``."""
     if co.obstacle is None or co.robot is None:
-        raise ValueError("FCL checks need C-obstacles built from operands (CSpaceObstacle.build "
+        raise InvalidArgumentError("FCL checks need C-obstacles built from operands (CSpaceObstacle.build "
                          "or cspace.model_scene)")
     semantics = getattr(co, "semantics", None)
     if semantics is None:

@@ -27,6 +27,7 @@ from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from .errors import (
+    ArgumentTypeError,
     DegenerateError,
     DuplicateFaceError,
     EmptyMeshError,
@@ -35,6 +36,7 @@ from .errors import (
     NonFiniteError,
     NonManifoldError,
     OpenMeshError,
+    OperandTypeError,
 )
 from .exact import Grid, cross
 
@@ -202,8 +204,9 @@ class ClosedMesh:
         Parameters
         ----------
         path : str or os.PathLike
-            Any file trimesh can load as a triangle mesh (OBJ, STL, PLY, OFF, GLB, ...).
-            A scene of several geometries is concatenated into one mesh.
+            Any file :func:`cspace.meshfile.read_mesh_file` reads: Collada as Assimp places it,
+            BYU ``.g``, and whatever trimesh loads as a triangle mesh (OBJ, STL, PLY, OFF,
+            GLB, ...). A scene of several geometries is concatenated into one mesh.
         grid : Grid, optional
             Snapping grid; default the grid for the mesh's own coordinates.
         name : str, optional
@@ -215,10 +218,10 @@ class ClosedMesh:
 
         Raises
         ------
-        FileNotFoundError
-            If ``path`` does not exist.
+        MeshFileError
+            If the file is missing or cannot be read as triangles.
         InvalidMeshError
-            If trimesh cannot read the file, or any validation error of :meth:`from_arrays`.
+            Any validation error of :meth:`from_arrays`.
 
         Notes
         -----
@@ -226,22 +229,13 @@ class ClosedMesh:
         OBJ files whose faces carry texture or normal indices come back with split vertices;
         the exact weld of :meth:`from_arrays` merges them again by position.
         """
+        from .meshfile import read_mesh_file
+
         path = Path(os.fspath(path))
         if name is None:
             name = path.name
-        if not path.exists():
-            raise FileNotFoundError(f"mesh file not found: '{path}'")
-        import trimesh
-
-        try:
-            loaded = trimesh.load(str(path), force="mesh", process=False)
-            vertices = np.asarray(loaded.vertices, dtype=np.float64)
-            faces = np.asarray(loaded.faces)
-        except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds
-            raise InvalidMeshError(
-                f"mesh {name!r}: trimesh cannot read '{path}' as a triangle mesh: "
-                f"{type(exc).__name__}: {exc}"
-            ) from exc
+        loaded = read_mesh_file(path, f"mesh {name!r}")
+        vertices, faces = loaded.vertices, loaded.faces
         return cls(vertices, faces, grid=grid, name=name)
 
     def on_grid(self, grid: Grid) -> "ClosedMesh":
@@ -259,7 +253,7 @@ class ClosedMesh:
             ``self`` if ``grid`` equals :attr:`grid`.
         """
         if not isinstance(grid, Grid):
-            raise TypeError(f"grid must be a cspace.exact.Grid, got {type(grid).__name__}")
+            raise ArgumentTypeError(f"grid must be a cspace.exact.Grid, got {type(grid).__name__}")
         if grid == self._grid:
             return self
         return type(self)(self._vertices, self._faces, grid=grid, name=self._name)
@@ -364,8 +358,8 @@ def as_mesh(obj, *, grid: Grid | None = None, name: str | None = None) -> Closed
 
     Raises
     ------
-    TypeError
-        If ``obj`` is none of the above.
+    OperandTypeError
+        If ``obj`` is none of the above (also a ``TypeError``).
     InvalidMeshError
         Any validation error of :meth:`ClosedMesh.from_arrays`.
     """
@@ -387,7 +381,7 @@ def as_mesh(obj, *, grid: Grid | None = None, name: str | None = None) -> Closed
     if isinstance(obj, (tuple, list)) and len(obj) == 2:
         vertices, faces = obj
         return ClosedMesh.from_arrays(vertices, faces, grid=grid, name=name or "mesh")
-    raise TypeError(
+    raise OperandTypeError(
         f"cannot make a mesh from {type(obj).__name__}: expected a ClosedMesh, an object with "
         "`.vertices` and `.faces` (e.g. trimesh.Trimesh), a (vertices, faces) pair or a path"
     )
@@ -472,7 +466,7 @@ def _validate(vertices, faces, grid, name):
     if grid is None:
         grid = Grid.for_points(v[used])
     elif not isinstance(grid, Grid):
-        raise TypeError(f"grid must be a cspace.exact.Grid, got {type(grid).__name__}")
+        raise ArgumentTypeError(f"grid must be a cspace.exact.Grid, got {type(grid).__name__}")
     try:
         snapped = grid.snap(v[used])
     except GridRangeError as exc:

@@ -51,7 +51,7 @@ from pathlib import Path
 import numpy as np
 
 from .convex import fan_triangles
-from .errors import SceneError
+from .errors import MeshFileError, MeshFileNotFoundError
 from .transform import axis_angle_degrees, transform
 
 __all__ = ["MeshFile", "read_mesh_file", "UP_AXIS_MATRICES"]
@@ -104,14 +104,15 @@ def read_mesh_file(path, where: str = "") -> MeshFile:
 
     Raises
     ------
-    SceneError
+    MeshFileError
         The file is missing, unreadable, holds no triangles, or has a non-finite vertex; the
-        message names the file (and the line, for BYU).
+        message names the file (and the line, for BYU). A :class:`~cspace.errors.SceneError`
+        and an :class:`~cspace.errors.InvalidMeshError`.
     """
     path = Path(path)
     where = where or str(path)
     if not path.is_file():
-        raise SceneError(f"{where}: mesh file not found: '{path}'")
+        raise MeshFileNotFoundError(f"{where}: mesh file not found: '{path}'")
     suffix = path.suffix.lower()
     if suffix == ".dae":
         vertices, faces, centre = _read_collada(path, where)
@@ -122,10 +123,10 @@ def read_mesh_file(path, where: str = "") -> MeshFile:
             vertices, faces = _read_trimesh(path, where)
         centre = None
     if len(faces) == 0 or len(vertices) == 0:
-        raise SceneError(f"{where}: '{path}' holds no triangles")
+        raise MeshFileError(f"{where}: '{path}' holds no triangles")
     if not np.isfinite(vertices).all():
         row = int(np.argmin(np.isfinite(vertices).all(axis=1)))
-        raise SceneError(f"{where}: '{path}': vertex {row} is not finite: "
+        raise MeshFileError(f"{where}: '{path}': vertex {row} is not finite: "
                          f"{vertices[row].tolist()}")
     if centre is None:
         total, count = _corner_centre(vertices[faces], None, ())
@@ -145,12 +146,12 @@ def _read_trimesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
         vertices = np.array(loaded.vertices, dtype=np.float64).reshape(-1, 3)
         faces = np.array(loaded.faces, dtype=np.int64)
     except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds
-        raise SceneError(
+        raise MeshFileError(
             f"{where}: trimesh cannot read '{path}' as a triangle mesh: "
             f"{type(exc).__name__}: {exc}"
         ) from exc
     if faces.ndim != 2 or faces.shape[1] != 3:
-        raise SceneError(f"{where}: '{path}' holds no triangles")
+        raise MeshFileError(f"{where}: '{path}' holds no triangles")
     return vertices, faces
 
 
@@ -237,7 +238,7 @@ def _read_collada(path: Path, where: str):
         import collada
         from collada import lineset, polylist, triangleset
     except ImportError as exc:  # a dependency: only a broken install gets here
-        raise SceneError(f"{where}: reading '{path}' needs pycollada ({exc})") from exc
+        raise MeshFileError(f"{where}: reading '{path}' needs pycollada ({exc})") from exc
     try:
         dae = collada.Collada(str(path), ignore=[collada.common.DaeUnsupportedError,
                                                  collada.common.DaeBrokenRefError])
@@ -279,13 +280,13 @@ def _read_collada(path: Path, where: str):
                 if index.shape[1] == 3:
                     flat = corners.reshape(-1, 3)
                     vertices.append(transform(flat, matrix[:3, :3], matrix[:3, 3]))
-    except SceneError:
+    except MeshFileError:
         raise
     except Exception as exc:  # noqa: BLE001 - pycollada and lxml raise many kinds
-        raise SceneError(f"{where}: cannot read '{path}' as Collada: "
+        raise MeshFileError(f"{where}: cannot read '{path}' as Collada: "
                          f"{type(exc).__name__}: {exc}") from exc
     if not vertices:
-        raise SceneError(f"{where}: '{path}' holds no triangles in its scene")
+        raise MeshFileError(f"{where}: '{path}' holds no triangles in its scene")
     corners = np.concatenate(vertices) + 0.0
     # One row per distinct position (exact equality only): compact, nothing moved.
     unique, inverse = np.unique(corners, axis=0, return_inverse=True)
@@ -304,9 +305,9 @@ def _read_byu(path: Path) -> tuple[np.ndarray, np.ndarray]:
         tokens += words
         lines += [number] * len(words)
 
-    def fail(i: int, message: str) -> SceneError:
+    def fail(i: int, message: str) -> MeshFileError:
         line = lines[min(i, len(lines) - 1)] if lines else 1
-        return SceneError(f"{path}:{line}: {message}")
+        return MeshFileError(f"{path}:{line}: {message}")
 
     def ints(start: int, count: int, what: str) -> np.ndarray:
         chunk = tokens[start:start + count]

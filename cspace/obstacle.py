@@ -32,7 +32,13 @@ from fractions import Fraction
 import numpy as np
 
 from .convex import ConvexPolytope, convex_minkowski_sum
-from .errors import InvalidMeshError, NonFiniteError, NotConvexError
+from .errors import (
+    InvalidArgumentError,
+    InvalidMeshError,
+    InvalidQueryError,
+    NonFiniteError,
+    NotConvexError,
+)
 from .exact import _EPS, _FILTER, _TINY, Grid, _dyadic
 
 __all__ = ["CSpaceObstacle", "CSpace"]
@@ -49,12 +55,16 @@ _CHUNK = 1 << 17
 
 def _translations(q, what: str = "q") -> tuple[np.ndarray, bool]:
     """``(k, 3)`` float64 translations and whether a single ``(3,)`` row was given."""
-    a = np.asarray(q, dtype=np.float64)
+    try:
+        a = np.asarray(q, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise InvalidQueryError(f"{what} must be (3,) or (k, 3) numbers, got "
+                                f"{type(q).__name__}") from None
     single = a.ndim == 1
     if single:
         a = a[None, :]
     if a.ndim != 2 or a.shape[1] != 3:
-        raise ValueError(f"{what} must be (3,) or (k, 3), got shape {np.shape(q)}")
+        raise InvalidQueryError(f"{what} must be (3,) or (k, 3), got shape {np.shape(q)}")
     finite = np.isfinite(a)
     if not finite.all():
         row = int(np.nonzero(~finite.all(axis=1))[0][0])
@@ -716,7 +726,7 @@ class CSpaceObstacle:
             elif len(b) == 1:
                 b = np.broadcast_to(b, a.shape)
             else:
-                raise ValueError(f"q0 and q1 have {len(a)} and {len(b)} rows")
+                raise InvalidQueryError(f"q0 and q1 have {len(a)} and {len(b)} rows")
         return np.ascontiguousarray(a), np.ascontiguousarray(b), s0 and s1
 
 
@@ -739,7 +749,7 @@ class CSpace:
         self.name = name
         if bounds is None:
             if not self.obstacles:
-                raise ValueError("a CSpace without obstacles needs bounds")
+                raise InvalidArgumentError("a CSpace without obstacles needs bounds")
             b = np.stack([o.bounds for o in self.obstacles])
             bounds = np.stack([b[:, 0].min(axis=0), b[:, 1].max(axis=0)])
         self.bounds = np.asarray(bounds, dtype=np.float64).reshape(2, 3)

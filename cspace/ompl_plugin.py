@@ -23,6 +23,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .errors import ArgumentTypeError, InvalidArgumentError
 from .obstacle import CSpace
 
 __all__ = [
@@ -66,11 +67,11 @@ def _vec(state) -> np.ndarray:
 def _bounds(bounds) -> np.ndarray:
     b = np.array(bounds, dtype=np.float64)
     if b.shape != (2, 3):
-        raise ValueError(f"bounds must be (2, 3), got shape {b.shape}")
+        raise InvalidArgumentError(f"bounds must be (2, 3), got shape {b.shape}")
     # A flat axis (lower == upper) fixes that coordinate: a planar problem in 3D (OMPL.app's
     # 2D problems have z bounds [0, 0]). At least one axis must be free.
     if not np.isfinite(b).all() or (b[0] > b[1]).any() or not (b[0] < b[1]).any():
-        raise ValueError("bounds must be finite with lower <= upper on every axis and "
+        raise InvalidArgumentError("bounds must be finite with lower <= upper on every axis and "
                          f"lower < upper on at least one, got {b.tolist()}")
     return b
 
@@ -401,24 +402,24 @@ def _as_cspace(scene_or_cspace, cache=None, robot_hull: bool = False):
     if hasattr(scene_or_cspace, "obstacles") and hasattr(scene_or_cspace, "robot"):
         return (CSpace.from_scene(scene_or_cspace, cache=cache, robot_hull=robot_hull),
                 scene_or_cspace)
-    raise TypeError(f"expected a Scene or a CSpace, got {type(scene_or_cspace).__name__}")
+    raise ArgumentTypeError(f"expected a Scene or a CSpace, got {type(scene_or_cspace).__name__}")
 
 
 def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
     if q is None:
-        raise ValueError(f"{what} is required when planning on a CSpace (no scene to take it from)")
+        raise InvalidArgumentError(f"{what} is required when planning on a CSpace (no scene to take it from)")
     a = np.array(q, dtype=np.float64)
     if a.shape != (3,) or not np.isfinite(a).all():
-        raise ValueError(f"{what} must be a finite (3,) translation, got {np.asarray(q).tolist()}")
+        raise InvalidArgumentError(f"{what} must be a finite (3,) translation, got {np.asarray(q).tolist()}")
     if not _in_bounds(a, b)[0]:
-        raise ValueError(f"{what} {a.tolist()} is outside the bounds {b.tolist()}")
+        raise InvalidArgumentError(f"{what} {a.tolist()} is outside the bounds {b.tolist()}")
     hits = [i for i, o in enumerate(cspace.obstacles) if o.contains(a)]
     if hits:
         names = []
         for i in hits:
             o = cspace.obstacles[i].obstacle
             names.append(repr(getattr(o, "name", None) or f"#{i}"))
-        raise ValueError(
+        raise InvalidArgumentError(
             f"{what} {a.tolist()} is in collision (in the closed C-obstacle of "
             f"{', '.join(names)}; touching counts)"
         )
@@ -489,14 +490,14 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
     ob, og, ou = _ompl()
     names = planner_names()
     if planner not in names:
-        raise ValueError(f"{planner!r} is not a valid planner, must be one of {', '.join(names)}")
+        raise InvalidArgumentError(f"{planner!r} is not a valid planner, must be one of {', '.join(names)}")
     if sampler not in SAMPLERS:
-        raise ValueError(f"{sampler!r} is not a valid sampler, must be one of "
+        raise InvalidArgumentError(f"{sampler!r} is not a valid sampler, must be one of "
                          f"{', '.join(SAMPLERS)}")
     if motion not in MOTIONS:
-        raise ValueError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
+        raise InvalidArgumentError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
     if not (time > 0):
-        raise ValueError(f"time must be positive, got {time}")
+        raise InvalidArgumentError(f"time must be positive, got {time}")
     cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull)
     if bounds is None:
         bounds = scene.bounds if scene is not None else cs.bounds

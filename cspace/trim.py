@@ -32,7 +32,7 @@ from .arrangement import (
     intersect_pairs,
 )
 from .convex import ConvexPolytope, convex_minkowski_sum
-from .errors import ExactnessError, NotConvexError
+from .errors import ExactnessError, InvalidMeshError, NotConvexError
 from .exact import Grid
 from .mesh import ClosedMesh, as_mesh
 from .planar import (
@@ -127,7 +127,7 @@ class SumPolyhedron:
         """Exact enclosed volume (holes subtracted) of the exact surface, scene units cubed."""
         if self.convex:
             P = self.points_exact
-            return Fraction(P.volume6()) / 6 * Fraction(2) ** (3 * self.grid.exponent)
+            return ExactVolume(Fraction(P.volume6()) / 6 * Fraction(2) ** (3 * self.grid.exponent))
         pts = self.points_exact
         num, den = 0, 1
         for a, b, c in self.faces.tolist():
@@ -137,7 +137,7 @@ class SumPolyhedron:
                 w = P[3] * Q[3] * R[3]
                 g = gcd(den, w)
                 num, den = num * (w // g) + det * (den // g), den * (w // g)
-        return Fraction(num, den) / 6 * Fraction(2) ** (3 * self.grid.exponent)
+        return ExactVolume(Fraction(num, den) / 6 * Fraction(2) ** (3 * self.grid.exponent))
 
     @property
     def volume(self) -> float:
@@ -263,33 +263,73 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
             gc.enable()
 
 
+class ExactVolume(Fraction):
+    """An exact volume: a :class:`fractions.Fraction` that prints whatever its size.
+
+    Python refuses to turn an integer of more than 4300 digits into text; the exact volume
+    of a sum with many crossing planes has numerators and denominators that long. Such a
+    volume prints as its float and the sizes of its terms; arithmetic is Fraction's.
+    """
+
+    _LIMIT_BITS = 4000 * 3  # about 3600 digits: comfortably inside Python's 4300
+
+    def _too_long(self) -> bool:
+        return max(abs(self.numerator), self.denominator).bit_length() > self._LIMIT_BITS
+
+    def _digits(self) -> str:
+        n, d = abs(self.numerator).bit_length(), self.denominator.bit_length()
+        return f"about {int(n * 0.30103) + 1} / {int(d * 0.30103) + 1} digits"
+
+    def __str__(self) -> str:
+        if self._too_long():
+            return f"{float(self)!r} (exact fraction of {self._digits()})"
+        return super().__str__()
+
+    def __repr__(self) -> str:
+        if self._too_long():
+            return f"ExactVolume({float(self)!r}, {self._digits()})"
+        return f"ExactVolume({super().__str__()})"
+
+
 def _loaded(obj):
-    """A mesh file path loaded (trimesh, no processing); anything else unchanged."""
+    """A mesh file path read (:func:`cspace.meshfile.read_mesh_file`: named errors, Collada
+    in Assimp's frame) into a trimesh (no processing); a list of points into an array;
+    anything else unchanged."""
     if isinstance(obj, (str, Path)):
         import trimesh
 
-        mesh = trimesh.load(obj, force="mesh", process=False)
-        mesh.metadata["name"] = Path(obj).name
-        return mesh
+        from .meshfile import read_mesh_file
+
+        name = Path(obj).name
+        loaded = read_mesh_file(obj, f"mesh {name!r}")
+        return trimesh.Trimesh(loaded.vertices, loaded.faces, process=False,
+                               metadata={"name": name})
+    if isinstance(obj, list) and len(obj) != 2:
+        return np.asarray(obj, dtype=np.float64)
     return obj
 
 
-def _raw_points(obj) -> np.ndarray | None:
+def _raw_points(obj, what: str = "operand") -> np.ndarray | None:
     """Unsnapped float vertices of an operand, or None when it already lives on a grid."""
     if isinstance(obj, (ClosedMesh, ConvexPolytope)):
         return None
     if isinstance(obj, np.ndarray):
-        return obj
-    if isinstance(obj, (tuple, list)) and len(obj) == 2:
-        return np.asarray(obj[0], dtype=np.float64)
-    if hasattr(obj, "vertices"):
-        return np.asarray(obj.vertices, dtype=np.float64)
-    return None
+        points = obj
+    elif isinstance(obj, (tuple, list)) and len(obj) == 2:
+        points = np.asarray(obj[0], dtype=np.float64)
+    elif hasattr(obj, "vertices"):
+        points = np.asarray(obj.vertices, dtype=np.float64)
+    else:
+        return None
+    if points.ndim != 2 or points.shape[1] != 3:
+        raise InvalidMeshError(f"{what}: vertices must be (n, 3) coordinates, got shape "
+                               f"{points.shape}")
+    return points
 
 
 def _shared_grid(A, B) -> Grid | None:
     """One grid for two unsnapped operands (None: let the operands' own grids decide)."""
-    a, b = _raw_points(A), _raw_points(B)
+    a, b = _raw_points(A, "A"), _raw_points(B, "B")
     if a is None or b is None:
         return None
     return Grid.for_points(np.asarray(a, dtype=np.float64).reshape(-1, 3),

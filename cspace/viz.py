@@ -70,7 +70,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import EmptyMeshError, InvalidMeshError, NonFiniteError
+from .errors import EmptyMeshError, InvalidArgumentError, InvalidMeshError, NonFiniteError
 
 __all__ = [
     "SceneView",
@@ -119,7 +119,7 @@ _FRONT_SIDE, _DOUBLE_SIDE = 0, 2  # three.js material sides
 
 def _name(name) -> str:
     if not isinstance(name, str) or not name or "/" in name or name.strip() != name:
-        raise ValueError(
+        raise InvalidArgumentError(
             f"name must be a non-empty string without '/' or surrounding spaces, got {name!r}"
         )
     return name
@@ -186,7 +186,7 @@ def _mesh(vertices, faces, what: str) -> tuple[np.ndarray, np.ndarray]:
 def _opacity(x) -> float:
     x = float(x)
     if not 0.0 < x <= 1.0:
-        raise ValueError(f"opacity must be in (0, 1], got {x}")
+        raise InvalidArgumentError(f"opacity must be in (0, 1], got {x}")
     return x
 
 
@@ -562,11 +562,11 @@ class SceneView:
         if k.dtype.kind in "US":
             bad = ~np.isin(k, KINDS)
             if bad.any():
-                raise ValueError(f"superset kinds must be in {KINDS}, got {k[bad][0]!r}")
+                raise InvalidArgumentError(f"superset kinds must be in {KINDS}, got {k[bad][0]!r}")
             idx = np.array([KINDS.index(s) for s in k.tolist()], dtype=np.int64)
         elif k.dtype.kind in "iu":
             if len(k) and (k.min() < 0 or k.max() >= len(KINDS)):
-                raise ValueError(
+                raise InvalidArgumentError(
                     f"superset kinds must be indices in [0, {len(KINDS) - 1}], "
                     f"got {k.min()}..{k.max()}"
                 )
@@ -602,7 +602,7 @@ class SceneView:
         if radius is None:
             radius = 0.008 * self._scale()
         elif not (np.isfinite(radius) and radius > 0):
-            raise ValueError(f"radius must be positive and finite, got {radius}")
+            raise InvalidArgumentError(f"radius must be positive and finite, got {radius}")
         if len(p) >= 2:
             self._segments(f"{base}/line", np.repeat(p, 2, axis=0)[1:-1], _hex(PATH_COLOR))
         sv, sf = _icosphere()
@@ -636,15 +636,15 @@ class SceneView:
         from meshcat.animation import Animation
 
         if name not in self._robots:
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"no robot named {name!r}; add it with add_robot first "
                 f"(have {sorted(self._robots)})"
             )
         p = _points(path, "animation path", min_rows=2)
         if not (isinstance(fps, int | np.integer) and fps > 0):
-            raise ValueError(f"fps must be a positive integer, got {fps!r}")
+            raise InvalidArgumentError(f"fps must be a positive integer, got {fps!r}")
         if not (np.isfinite(seconds_per_segment) and seconds_per_segment > 0):
-            raise ValueError(
+            raise InvalidArgumentError(
                 f"seconds_per_segment must be positive and finite, got {seconds_per_segment}"
             )
         anim = Animation(default_framerate=int(fps))
@@ -682,10 +682,10 @@ class SceneView:
 
         d = _vector(direction, "direction")
         if not np.any(d[:2]):  # the look-at frame is undefined only for an exactly vertical view
-            raise ValueError(f"direction must be non-zero and not vertical, got {d}")
+            raise InvalidArgumentError(f"direction must be non-zero and not vertical, got {d}")
         for value, what in ((margin, "margin"), (aspect, "aspect")):
             if not (np.isfinite(value) and value > 0):
-                raise ValueError(f"{what} must be positive and finite, got {value}")
+                raise InvalidArgumentError(f"{what} must be positive and finite, got {value}")
         b = self.bounds
         if b is None:
             b = np.array([[-0.5, -0.5, 0.0], [0.5, 0.5, 0.0]])

@@ -18,6 +18,8 @@ import signal
 import struct
 import threading
 
+from .errors import InvalidArgumentError
+
 __all__ = ["can_fork", "forked_map", "worker_count"]
 
 # A chunk number in the queue pipe: 4 bytes, read whole (Linux reads a pipe under a lock
@@ -43,7 +45,7 @@ def worker_count(workers: int | str | None) -> int:
         try:
             return max(1, int(workers))
         except ValueError:
-            raise ValueError(f"workers must be a positive integer, got {workers!r}") from None
+            raise InvalidArgumentError(f"workers must be a positive integer, got {workers!r}") from None
     try:
         return max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux

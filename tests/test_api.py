@@ -13,6 +13,8 @@ PUBLIC = {
     "Body", "Scene", "load_scene", "SceneError", "CSpaceObstacle", "CSpace", "CspaceError", "InvalidMeshError", "EmptyMeshError",
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError", "BuildError",
+    "OutputError", "MeshFileError", "MeshFileNotFoundError", "OperandTypeError",
+    "InvalidQueryError", "InvalidArgumentError", "ArgumentTypeError",
 }
 
 
