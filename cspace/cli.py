@@ -268,6 +268,9 @@ def _plan(args: argparse.Namespace) -> int:
         print(f"wrote {path_out}")
     elif path_out:
         print(f"no path written to {path_out}: the problem was not solved", file=sys.stderr)
+    if not r.solved and (args.planner, args.sampler) != ("PRM", "narrow"):
+        print("hint: for narrow passages try --planner PRM --sampler narrow (samples in the gaps "
+              "between C-obstacles), or a longer --time", file=sys.stderr)
     if result_out:
         import json
 
@@ -314,7 +317,8 @@ def _view(args: argparse.Namespace) -> int:
         path = np.load(p) if p.suffix == ".npy" else np.loadtxt(p, delimiter="," if p.suffix == ".csv" else None)
         path = np.asarray(path, dtype=np.float64).reshape(-1, 3)
     view = SceneView(live=args.live)
-    report = draw_scene(view, scene, path=path, superset=args.superset)
+    cache = None if args.no_cache else (args.cache_dir or True)
+    report = draw_scene(view, scene, path=path, superset=args.superset, cache=cache)
     for name, what in report.items():
         print(f"{name}: {what}")
     if args.live:
@@ -377,6 +381,22 @@ _positive = _number(float, lambda v: 0 < v < float("inf"), "a positive number")
 _non_negative = _number(float, lambda v: 0 <= v < float("inf"), "a number >= 0")
 
 
+class _Formatter(argparse.RawDescriptionHelpFormatter):
+    """Help that shows an option's default when it has one (not None or False)."""
+
+    def _get_help_string(self, action):
+        text = action.help or ""
+        if (action.option_strings and "%(default)" not in text
+                and action.default not in (None, False, argparse.SUPPRESS)):
+            text += " (default: %(default)s)"
+        return text
+
+
+def _help(example: str) -> dict:
+    """Subcommand help: defaults shown, one example."""
+    return {"formatter_class": _Formatter, "epilog": f"example:\n  {example}"}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
     from .errors import CspaceError
@@ -385,13 +405,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--debug", action="store_true",
                         help="show Python tracebacks (for reporting a bug in cspace)")
     sub = parser.add_subparsers(dest="command", required=True)
-    p = sub.add_parser("convex-sum", help="exact Minkowski sum of two convex shapes (CVMS)")
+    p = sub.add_parser("convex-sum", help="exact Minkowski sum of two convex shapes (CVMS)", **_help(
+        "cspace convex-sum obstacle.stl robot.stl --reflect-b 0 0 0 -o cobstacle.stl"))
     _operand_arguments(p, "mesh file of A (its convex hull is used)", "write the sum as a mesh file")
     p.set_defaults(func=_convex_sum)
-    p = sub.add_parser("superset", help="NCC-CVMS superset (convolution) of a closed mesh and a convex shape")
+    p = sub.add_parser("superset", help="NCC-CVMS superset (convolution) of a closed mesh and a convex shape", **_help(
+        "cspace superset bunny.obj robot.stl --reflect-b 0 0 0 -o superset.ply"))
     _operand_arguments(p, "closed mesh file of A (validated)", "write the superset's triangles as a mesh file")
     p.set_defaults(func=_superset)
-    p = sub.add_parser("sum", help="exact Minkowski sum of a closed (non-convex) mesh and a convex shape")
+    p = sub.add_parser("sum", help="exact Minkowski sum of a closed (non-convex) mesh and a convex shape", **_help(
+        "cspace sum bunny.obj robot.stl --reflect-b 0 0 0 -o cobstacle.stl --stats"))
     _operand_arguments(p, "closed mesh file of A (validated; any genus, non-convex)",
                        "write the sum as a mesh file (any format trimesh exports)")
     p.add_argument("--stats", action="store_true", help="print the time of each stage")
@@ -399,29 +422,32 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="processes for the large stages (default: $CSPACE_WORKERS, else the CPUs)")
     p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
     p.set_defaults(func=_sum)
-    p = sub.add_parser("check", help="cross-check a scene's C-obstacles against FCL")
+    p = sub.add_parser("check", help="cross-check a scene's C-obstacles against FCL", **_help(
+        "cspace check scenes/window.toml -n 2000"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-n", type=_positive_int, default=10000,
-                   help="number of random translations (default 10000)")
-    p.add_argument("--seed", type=_seed, default=0, help="random seed (default 0)")
+                   help="number of random translations")
+    p.add_argument("--seed", type=_seed, default=0, help="random seed")
     p.add_argument("--band", type=_non_negative, default=1e-9,
-                   help="ignore points this close to the surface (default 1e-9)")
+                   help="ignore points this close to the surface")
     p.add_argument("--robot-hull", action="store_true",
                    help="check the C-obstacles of the robot's convex hull instead of its exact parts")
     p.set_defaults(func=_check)
-    p = sub.add_parser("build", help="model a scene and build its C-obstacles (cached)")
+    p = sub.add_parser("build", help="model a scene and build its C-obstacles (cached)", **_help(
+        "cspace build scenes/maze.toml --explain -o maze_cobstacles.npz"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="write the C-obstacles' meshes to an .npz file")
     _model_options(p)
     p.set_defaults(func=_build)
-    p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles")
+    p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles", **_help(
+        "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     _model_options(p)
     p.add_argument("--planner", default="RRTConnect", help="any bound OMPL geometric planner")
     p.add_argument("--time", type=_positive, default=5.0,
-                   help="planning time budget in seconds (default 5)")
-    p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (default: none)")
-    p.add_argument("-o", "--output", help="write the path (n x 3 text)")
+                   help="planning time budget in seconds")
+    p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (none: a new one each run)")
+    p.add_argument("-o", "--output", help="write the path (n x 3): .txt, .csv or .npy; only when solved")
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
     p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),
                    help="valid-state sampler of PRM-like planners: 'narrow' draws half its "
@@ -430,12 +456,16 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="re-check the path with FCL sampled every 1e-3 of the scene size")
     p.add_argument("--result", help="write a JSON summary (model, plan, path, checks)")
     p.set_defaults(func=_plan)
-    p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)")
+    p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)", **_help(
+        "cspace view scenes/window.toml -o window.html"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="HTML file to write (default: <scene name>.html)")
     p.add_argument("--live", action="store_true", help="serve the scene with a live meshcat server instead")
     p.add_argument("--path", help="a path of reference-point positions: .npy or text with 3 columns")
-    p.add_argument("--superset", action="store_true", help="draw the superset of non-convex bodies")
+    p.add_argument("--superset", action="store_true",
+                   help="draw the superset of a body whose C-obstacle could not be built")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
+    p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
     p.add_argument("--screenshot", metavar="PNG", help="also render the HTML with headless Chromium")
     p.set_defaults(func=_view)
     args = parser.parse_args(argv)

@@ -392,6 +392,10 @@ class ConvexPolytope:
 
         return trimesh.Trimesh(self.vertices, self.faces, process=False)
 
+    def __repr__(self) -> str:
+        return (f"ConvexPolytope(name={self.name!r}, vertices={len(self.ints)}, "
+                f"facets={self.n_facets}, volume={self.volume:.6g}, step=2**{self.grid.exponent})")
+
 
 def _as_points(points, name: str) -> np.ndarray:
     if hasattr(points, "vertices"):
@@ -598,6 +602,15 @@ class MinkowskiSum:
     def faces(self) -> np.ndarray:
         """(m, 3) int64 triangles (fan triangulation of the polygon facets)."""
         return self.polytope.faces
+
+    def to_trimesh(self):
+        """The sum as a ``trimesh.Trimesh`` (float64, not re-processed)."""
+        return self.polytope.to_trimesh()
+
+    def __repr__(self) -> str:
+        kinds = ", ".join(f"{int((self.kind == k).sum())} {n}" for k, n in enumerate(FACET_KINDS))
+        return (f"MinkowskiSum(vertices={len(self.labels)}, facets={len(self.kind)} ({kinds}), "
+                f"volume={self.volume:.6g})")
 
     @property
     def facets(self) -> list[np.ndarray]:

@@ -607,6 +607,13 @@ class CSpaceObstacle:
             f"vertices={len(self.vertices)})"
         )
 
+    def to_trimesh(self):
+        """The C-obstacle's boundary triangles as a ``trimesh.Trimesh`` (float64, not
+        re-processed; for a union of pieces, their overlapping boundaries)."""
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
     # ---- queries ------------------------------------------------------------------------
 
     def contains(self, q) -> np.ndarray | bool:

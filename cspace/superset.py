@@ -105,6 +105,19 @@ class Superset:
         o, f = self.facet_offsets, self.facet_indices
         return [f[o[i] : o[i + 1]] for i in range(len(o) - 1)]
 
+    def __repr__(self) -> str:
+        kinds = ", ".join(f"{int((self.kind == k).sum())} {n}" for k, n in enumerate(SUPERSET_KINDS))
+        return (f"Superset(vertices={len(self.labels)}, facets={self.n_facets} ({kinds}), "
+                f"step=2**{self.grid.exponent})")
+
+    def to_trimesh(self):
+        """The superset's triangles as a ``trimesh.Trimesh`` (a triangle soup: facets of
+        multiplicity ``k`` appear once, reversed where ``k < 0``)."""
+        import trimesh
+
+        faces, _, _ = self.triangles()
+        return trimesh.Trimesh(self.vertices, faces, process=False)
+
     def triangles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Fan triangulation with multiplicities folded in.
 

@@ -792,7 +792,7 @@ class SceneView:
 
 
 def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
-               superset: bool = False, animate: bool = True) -> dict[str, str]:
+               superset: bool = False, animate: bool = True, cache=None) -> dict[str, str]:
     """Draw a :class:`cspace.scene.Scene`: obstacles, the robot at start and goal, C-obstacles, a path.
 
     The scene is modelled and built as :func:`cspace.model.model_scene` does (exact robot
@@ -808,6 +808,8 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
         along it when ``animate``.
     cobstacles, superset : bool
         Whether to draw the C-obstacles / the superset of a body whose build failed.
+    cache : COCache, path, True, or None
+        The disk cache the C-obstacles are built through (:func:`cspace.model.model_scene`).
 
     Returns
     -------
@@ -822,7 +824,7 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the scene already warned when it was loaded
-        m = model_scene(scene)
+        m = model_scene(scene, cache=cache)
     report: dict[str, str] = {}
     for body in m.bodies:
         view.add_obstacle(body.name, body.vertices, body.faces)
