@@ -102,11 +102,11 @@ def _sum(args: argparse.Namespace) -> int:
     out = _out(args.output, MESH_FORMATS, "-o")
     A, grid, B = _closed_operands(args)
 
-    def progress(stage: str, fraction: float) -> None:
-        if not args.quiet:
-            print(f"  {stage} {fraction:4.0%}", file=sys.stderr, flush=True)
-
-    S, dt = _timed(minkowski_sum, A, B, progress=progress, workers=args.workers)
+    progress = _Progress(args.quiet, args.progress)
+    try:
+        S, dt = _timed(minkowski_sum, A, B, progress=progress, workers=args.workers)
+    finally:
+        progress.close()
     print(f"A: {len(A.faces)} triangles ({args.a}); B: {B.n_facets} facets ({args.b})")
     print(f"A ⊕ B: {len(S.faces)} triangles, {len(S.vertices)} vertices, volume {S.volume:.9g}, "
           f"{S.n_holes} hole(s), {len(S.nonmanifold_edges)} non-manifold edge(s), "
@@ -167,20 +167,35 @@ def _check(args: argparse.Namespace) -> int:
 
 
 class _Progress:
-    """Per-body progress lines on stderr for long builds (``model_scene``'s ``progress``)."""
+    """One progress style for every long command, ``progress(fraction, message)``.
 
-    def __init__(self, quiet: bool):
-        self.quiet = quiet
-        self.body = None
+    On a terminal: one status line on stderr, ``[ 45%] message``, rewritten in place.
+    Elsewhere (a pipe, a log): quiet, unless ``--progress`` asks for a line whenever the
+    message changes or another tenth is done. ``--quiet``: nothing.
+    """
+
+    def __init__(self, quiet: bool, lines: bool = False):
+        self.live = not quiet and sys.stderr.isatty()
+        self.lines = not quiet and not self.live and lines
+        self.message = None
         self.shown = -1
+        self.width = 0
 
     def __call__(self, fraction: float, message: str) -> None:
-        if self.quiet:
-            return
         tenth = int(fraction * 10)
-        if message != self.body or tenth > self.shown:
+        if self.live:
+            text = f"[{fraction:4.0%}] {message}"[:100]
+            print("\r" + text.ljust(self.width), end="", file=sys.stderr, flush=True)
+            self.width = len(text)
+        elif self.lines and (message != self.message or tenth > self.shown):
             print(f"[{fraction:4.0%}] {message}", file=sys.stderr, flush=True)
-            self.body, self.shown = message, tenth
+        self.message, self.shown = message, tenth
+
+    def close(self) -> None:
+        """End the status line (before anything else is printed)."""
+        if self.live and self.width:
+            print(file=sys.stderr, flush=True)
+            self.width = 0
 
 
 def _model(args: argparse.Namespace):
@@ -194,8 +209,11 @@ def _model(args: argparse.Namespace):
         print(f"cspace: note: robot {scene.robot.name!r} is replaced by its convex hull "
               "(--robot-hull): collisions may be reported where the real robot is free",
               file=sys.stderr)
-    return model_scene(scene, cache=cache, progress=_Progress(args.quiet),
-                       robot_hull=args.robot_hull)
+    progress = _Progress(args.quiet, args.progress)
+    try:
+        return model_scene(scene, cache=cache, progress=progress, robot_hull=args.robot_hull)
+    finally:
+        progress.close()
 
 
 def _build(args: argparse.Namespace) -> int:
@@ -348,7 +366,13 @@ def _model_options(p: argparse.ArgumentParser) -> None:
                         "(faster for a non-convex robot; conservative: it can only add "
                         "collisions); default: the robot exactly")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
+    _progress_options(p)
+
+
+def _progress_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-q", "--quiet", action="store_true", help="no progress on stderr")
+    p.add_argument("--progress", action="store_true",
+                   help="progress lines on stderr even when it is not a terminal (a log)")
 
 
 def _operand_arguments(p: argparse.ArgumentParser, a_help: str, output_help: str) -> None:
@@ -420,7 +444,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--stats", action="store_true", help="print the time of each stage")
     p.add_argument("--workers", type=_positive_int, default=None, metavar="N",
                    help="processes for the large stages (default: $CSPACE_WORKERS, else the CPUs)")
-    p.add_argument("-q", "--quiet", action="store_true", help="no progress lines on stderr")
+    _progress_options(p)
     p.set_defaults(func=_sum)
     p = sub.add_parser("check", help="cross-check a scene's C-obstacles against FCL", **_help(
         "cspace check scenes/window.toml -n 2000"))

@@ -467,7 +467,7 @@ def _build(body: BodyModel, robot, c, grid, progress):
         F = body.faces[body._keep]
         return SurfaceObstacle.build((body.vertices, F), robot, c, grid=grid, name=body.name,
                                      progress=progress)
-    return CSpaceObstacle.build(body._solid, robot, c, grid=grid)
+    return CSpaceObstacle.build(body._solid, robot, c, grid=grid, progress=progress)
 
 
 def _key(body: BodyModel, robot, c_ints, grid) -> str:
@@ -605,7 +605,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         ``$CSPACE_CACHE`` or ``~/.cache/cspace``); None or False: no disk cache.
     progress : callable, optional
         ``progress(fraction, message)`` with the overall fraction in ``[0, 1]``: once per
-        body and during long surface builds.
+        body, during long surface builds, and per stage of a non-convex (NCC-CVMS) build.
     grid : Grid, optional
         Default ``Grid.for_extent(scene.extent())``.
     robot_hull : bool, default False
@@ -663,10 +663,11 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         for i, (b, part) in enumerate(todo):
             construction = pair_construction(b.kind, part.kind)
 
-            def sub(f, i=i, b=b, part=part):
+            def sub(f, stage=None, i=i, b=b, part=part):
                 if progress is not None:
                     progress((i + f) / len(todo), f"{b.name} ({b.kind})"
-                             + (f" x {part.name}" if len(parts) > 1 else ""))
+                             + (f" x {part.name}" if len(parts) > 1 else "")
+                             + (f": {stage}" if stage else ""))
             sub(0.0)
             t = time.perf_counter()
             pair = PairModel(part.name, construction)
@@ -684,8 +685,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                 if convex and arrays is not None:
                     pair.cos = [_from_arrays(arrays, b, part.operand, c_snapped, grid)]
                 elif convex:
-                    pair.cos = [_build(b, part.operand, c, grid,
-                                       sub if b.kind == "surface" else None)]
+                    pair.cos = [_build(b, part.operand, c, grid, sub)]
                     arrays = _to_arrays(pair.cos[0]) if store is not None else None
                 else:
                     if arrays is None:

@@ -518,7 +518,8 @@ class CSpaceObstacle:
 
     @classmethod
     def build(
-        cls, obstacle, robot, reference_point=(0.0, 0.0, 0.0), *, grid: Grid | None = None
+        cls, obstacle, robot, reference_point=(0.0, 0.0, 0.0), *, grid: Grid | None = None,
+        progress=None,
     ) -> "CSpaceObstacle":
         """Compute ``CO = O ⊕ (c - R)`` exactly.
 
@@ -537,6 +538,8 @@ class CSpaceObstacle:
             The robot point whose position ``q`` is planned (robot frame).
         grid : Grid, optional
             Common snapping grid; default ``Grid.for_points`` of every input coordinate.
+        progress : callable, optional
+            ``progress(fraction, stage)`` during a non-convex build (see ``minkowski_sum``).
 
         Returns
         -------
@@ -563,7 +566,7 @@ class CSpaceObstacle:
             from .trim import minkowski_sum
 
             O = as_mesh(obstacle, grid=grid, name="obstacle")
-            S = minkowski_sum(O, R.reflected(c))
+            S = minkowski_sum(O, R.reflected(c), progress=progress)
             return cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
                                  reference_point=c_snapped, grid=grid, sum=S)
         co = convex_minkowski_sum(O, R.reflected(c)).polytope

@@ -222,7 +222,9 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
         convex polytope.
     B : ConvexPolytope, (n, 3) points (hulled) or a closed convex mesh
     progress : callable, optional
-        Called as ``progress(stage: str, fraction: float)`` during long builds.
+        Called as ``progress(fraction: float, stage: str)`` during long builds: the overall
+        fraction done in ``[0, 1]`` (stages weighted by their usual share of the time) and the
+        stage starting or under way (the same order as :func:`cspace.model_scene`'s).
     workers : int, optional
         Processes for the triangle-pair intersections, the per-plane arrangements and the
         rounding check (this one and ``workers - 1`` forked; the result does not depend on
@@ -367,16 +369,35 @@ def _shared_grid(A, B) -> Grid | None:
 # --------------------------------------------------------------------------------------------
 
 
+# The stages of _trim and their usual share of its time (for an overall progress fraction).
+_STAGES = {"superset": 0.05, "planes": 0.02, "intersections": 0.18, "arrangements": 0.45,
+           "traversal": 0.04, "membership": 0.04, "output": 0.07, "rounding_check": 0.15}
+
+
+def _stage_reporter(progress):
+    """``report(stage, fraction of the stage)`` calling ``progress(overall fraction, stage)``."""
+    names = list(_STAGES)
+    starts = dict(zip(names, np.cumsum([0.0] + list(_STAGES.values()))[:-1].tolist()))
+
+    def report(stage: str, fraction: float) -> None:
+        if progress is not None:
+            progress(min(1.0, starts[stage] + _STAGES[stage] * fraction), stage)
+    return report
+
+
 def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 1) -> SumPolyhedron:
     stats: dict = {}
-    report = progress or (lambda stage, fraction: None)
+    report = _stage_reporter(progress)
+    names = list(_STAGES)
 
     def lap(name: str, since: float) -> float:
         now = time.perf_counter()
         stats[name] = now - since
-        report(name, 1.0)
+        following = names[names.index(name) + 1]  # announce the next stage as it starts
+        report(following, 0.0)
         return now
 
+    report("superset", 0.0)
     t = time.perf_counter()
     S = minkowski_superset(A, B)
     A, B = _common_operands(A, B, S.grid)

@@ -136,13 +136,14 @@ def _private_cache(tmp_path, monkeypatch):
 
 def test_build_explains_caches_and_writes(tmp_path, capsys):
     out = tmp_path / "cos.npz"
-    assert main(["build", str(SCENES / "cavity.toml"), "--explain", "-o", str(out)]) == 0
+    assert main(["build", str(SCENES / "cavity.toml"), "--explain", "-o", str(out),
+                 "--progress"]) == 0
     captured = capsys.readouterr()
     text = captured.out
     assert "9 obstacle bodies -> 9 modelled: 8 convex, 0 solid, 0 surface, 1 dropped" in text
     assert "floor: dropped (12 triangles): its C-obstacle's bounding box" in text
     assert text.count("(cache miss)") == 8 and "(0 from the cache)" in text
-    assert "[100%] 8 C-obstacles" in captured.err  # progress on stderr
+    assert "[100%] 8 C-obstacles" in captured.err  # progress lines on stderr, as asked
     data = np.load(out)
     assert list(data["kinds"]) == ["convex"] * 8 and "wall-xmin" in list(data["names"])
     cs = CSpace.from_scene(load_scene(SCENES / "cavity.toml"))
@@ -151,8 +152,9 @@ def test_build_explains_caches_and_writes(tmp_path, capsys):
     assert main(["build", str(SCENES / "cavity.toml"), "--explain", "-q"]) == 0
     captured = capsys.readouterr()
     assert captured.out.count("(cache hit)") == 8 and captured.err == ""
-    assert main(["build", str(SCENES / "cavity.toml"), "--no-cache", "--explain", "-q"]) == 0
-    assert capsys.readouterr().out.count("(cache off)") == 8
+    assert main(["build", str(SCENES / "cavity.toml"), "--no-cache", "--explain"]) == 0
+    captured = capsys.readouterr()  # not a terminal and no --progress: quiet
+    assert captured.out.count("(cache off)") == 8 and captured.err == ""
 
 
 def test_plan_explain_reports_the_model_then_plans(capsys):
@@ -183,3 +185,37 @@ def test_build_of_a_solid_body_builds_or_names_it(tmp_path, capsys):
         assert "BUILD FAILED" in captured.out
     else:
         assert "(cache miss)" in captured.out
+
+
+def test_one_progress_style_for_builds_and_sums(monkeypatch, capsys):
+    # model_scene and minkowski_sum both call progress(fraction, message); a non-convex
+    # body reports its NCC-CVMS stages while it is built (no silent long body).
+    from cspace import minkowski_sum, model_scene
+    from cspace.cli import _Progress
+    from cspace.scene import Body, Scene
+
+    from zoo import l_shape
+
+    calls = []
+    V, F = l_shape()
+    robot = trimesh.creation.box((0.2, 0.2, 0.2))
+    scene = Scene("p", None, (Body("L", V, F, "l"),), Body("r", robot.vertices, robot.faces, "b"),
+                  (0.0, 0.0, 0.0), ((-1, -1, -1), (4, 4, 2)), (-0.9, -0.9, -0.9),
+                  (-0.8, -0.9, -0.9))
+    model_scene(scene, progress=lambda f, m: calls.append((f, m)))
+    stages = [m for _, m in calls]
+    assert "L (solid): arrangements" in stages and stages[-1] == "1 C-obstacles"
+    fractions = [f for f, _ in calls]
+    assert fractions == sorted(fractions) and 0.0 <= fractions[0] and fractions[-1] == 1.0
+    sums = []
+    minkowski_sum((V, F), robot.vertices, progress=lambda f, m: sums.append((f, m)), workers=1)
+    assert [m for _, m in sums][0] == "superset" and sums[-1] == (1.0, "rounding_check")
+    assert [f for f, _ in sums] == sorted(f for f, _ in sums)
+    # On a terminal: one status line rewritten in place, ended before other output.
+    monkeypatch.setattr(sys.stderr, "isatty", lambda: True, raising=False)
+    p = _Progress(quiet=False)
+    p(0.25, "arrangements")
+    p(0.5, "rounding_check")
+    p.close()
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "\r[ 25%] arrangements" in err and "[ 50%]" in err

@@ -105,7 +105,8 @@ def test_ctrl_c_during_a_long_build_is_one_line_and_leaves_nothing(tmp_path):
     trimesh.creation.icosphere(subdivisions=2, radius=0.1).export(tmp_path / "ball.stl")
     out = tmp_path / "sum.stl"
     p = subprocess.Popen([sys.executable, "-m", "cspace", "sum", str(tmp_path / "torus.stl"),
-                          str(tmp_path / "ball.stl"), "-o", str(out), "--workers", "2"],
+                          str(tmp_path / "ball.stl"), "-o", str(out), "--workers", "2",
+                          "--progress"],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                          start_new_session=True)
     # Interrupt in the middle of the forked arrangements (progress lines on stderr).
