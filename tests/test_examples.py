@@ -45,3 +45,17 @@ def test_penetration_depth(tmp_path):
     assert "tube centre (deep inside)    q = (1.0, 0.0, 0.0): in collision, penetration depth 0.4000" in out
     assert "centre of the hole (free)" in out and "free, clearance 0.5478" in out
     assert "moved up by depth + 1e-6 -> in collision: False" in out
+
+
+def test_readme_python_runs_from_a_fresh_clone(tmp_path, monkeypatch):
+    # Every ```python block of the README, in order, in one namespace, from the repository's
+    # root (scenes/ is shipped), writing into a temporary folder.
+    import re
+
+    root = Path(__file__).resolve().parents[1]
+    blocks = re.findall(r"```python\n(.*?)```", (root / "README.md").read_text(), flags=re.S)
+    assert len(blocks) >= 4
+    monkeypatch.chdir(root)
+    code = "\n".join(blocks).replace('"out/scene.html"', repr(str(tmp_path / "scene.html")))
+    exec(compile(code, "README.md", "exec"), {"__name__": "readme"})
+    assert (tmp_path / "scene.html").exists()
