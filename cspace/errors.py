@@ -27,6 +27,7 @@ __all__ = [
     "InvalidQueryError",
     "InvalidArgumentError",
     "ArgumentTypeError",
+    "SelfIntersectionError",
 ]
 
 
@@ -112,3 +113,8 @@ class InvalidArgumentError(CspaceError, ValueError):
 
 class ArgumentTypeError(CspaceError, TypeError):
     """An argument is of the wrong type; the message names the argument and what it takes."""
+
+
+class SelfIntersectionError(InvalidMeshError):
+    """A closed mesh intersects itself (two triangles meet beyond a shared edge or vertex):
+    it bounds no well-defined solid. The message names two triangles that cross."""

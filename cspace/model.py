@@ -394,6 +394,13 @@ def _closed_kind(name, P, F, grid):
     except InvalidMeshError as exc:
         return "surface", (f"closed but not a valid solid ({type(exc).__name__}: "
                            f"{str(exc).split(': ', 1)[-1]})"), None
+    from .trim import self_intersections
+
+    crossing = self_intersections(solid)
+    if len(crossing):
+        i, j = crossing[0].tolist()
+        return "surface", (f"closed but intersecting itself (triangles {i} and {j} cross; "
+                           f"{len(crossing)} pairs), so it bounds no solid"), None
     shells = int(solid.components.max()) + 1
     chi = len(solid.ints) - len(F) * 3 // 2 + len(F)
     try:

@@ -14,7 +14,7 @@ PUBLIC = {
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError", "BuildError",
     "OutputError", "MeshFileError", "MeshFileNotFoundError", "OperandTypeError",
-    "InvalidQueryError", "InvalidArgumentError", "ArgumentTypeError",
+    "InvalidQueryError", "InvalidArgumentError", "ArgumentTypeError", "SelfIntersectionError",
 }
 
 

@@ -190,3 +190,38 @@ def test_fuzz_malformed_meshes_through_the_api_10k(mesh, call):
         API_CALLS[call](V, F)
     except CspaceError:
         pass
+
+
+def folded_box():
+    """A closed box with one vertex pushed through the opposite face: a valid-looking closed
+    2-manifold that intersects itself."""
+    V, F = np.array(BOX.vertices), np.array(BOX.faces)
+    V[int(np.argmax(V[:, 0] + 0.01 * V[:, 1] + 0.001 * V[:, 2])), 0] = -1.0
+    return V, F
+
+
+def test_self_intersecting_obstacle_is_named_not_built(tmp_path):
+    from cspace.errors import SelfIntersectionError
+    from cspace.scene import Body, Scene
+    from cspace.trim import self_intersections
+
+    V, F = folded_box()
+    assert len(self_intersections(cspace.as_mesh((V, F)))) > 0
+    assert len(self_intersections(cspace.as_mesh((BOX.vertices, BOX.faces)))) == 0
+    with pytest.raises(SelfIntersectionError, match=r"triangles \d+ and \d+ meet"):
+        cspace.minkowski_sum((V, F), 0.1 * BOX.vertices)
+    # In a scene it is modelled as what it still is, a closed surface: surface semantics.
+    robot = trimesh.creation.box((0.1, 0.1, 0.1))
+    scene = Scene("s", None, (Body("folded", V, F, "x"),),
+                  Body("r", robot.vertices, robot.faces, "b"), np.zeros(3),
+                  [[-3, -3, -3], [3, 3, 3]], [-2.9, -2.9, -2.9], [2.9, 2.9, 2.9])
+    m = cspace.model_scene(scene)
+    (body,) = m.bodies
+    assert body.kind == "surface" and "intersecting itself" in body.reason
+    assert "intersecting itself" in m.explain()
+    # The command line: one line, exit 2, no file.
+    trimesh.Trimesh(V, F, process=False).export(tmp_path / "folded.stl")
+    robot.export(tmp_path / "r.stl")
+    assert main(["sum", str(tmp_path / "folded.stl"), str(tmp_path / "r.stl"), "-o",
+                 str(tmp_path / "out.stl")]) == 2
+    assert not (tmp_path / "out.stl").exists()
