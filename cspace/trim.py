@@ -1493,12 +1493,14 @@ def self_intersections(mesh) -> np.ndarray:
     if not len(T):
         return np.zeros((0, 2), np.int64)
     moved = np.ones(len(mesh.vertices), dtype=bool)  # test every pair, not only moved ones
-    bad, _ = _improper_pairs(np.asarray(mesh.vertices, dtype=np.float64), T, mesh.grid, moved)
+    # numpy filters only: an input check must not pay numba's first-call cost.
+    bad, _ = _improper_pairs(np.asarray(mesh.vertices, dtype=np.float64), T, mesh.grid, moved,
+                             compiled_ok=False)
     return bad
 
 
 def _improper_pairs(V: np.ndarray, T: np.ndarray, grid: Grid, moved: np.ndarray,
-                    workers: int = 1) -> tuple[np.ndarray, int]:
+                    workers: int = 1, compiled_ok: bool = True) -> tuple[np.ndarray, int]:
     """Pairs of triangles ``T`` over float64 vertices ``V`` (with a vertex in ``moved``) that
     meet improperly, decided exactly; and the number of processes used."""
     P = V[T]
@@ -1508,7 +1510,7 @@ def _improper_pairs(V: np.ndarray, T: np.ndarray, grid: Grid, moved: np.ndarray,
     pairs = box_pairs(lo, hi)
     # The compiled filter costs a one-off load (a few tenths of a second in a fresh process):
     # worth it only for many pairs, and then fast enough to stay in this process.
-    compiled = len(pairs) >= _COMPILED_FROM
+    compiled = compiled_ok and len(pairs) >= _COMPILED_FROM
     undecided = _undecided_pairs if compiled else _undecided_pairs_np
     Vc, Tc = np.ascontiguousarray(V), np.ascontiguousarray(T)
     Vi, Tl = _common_integers(V), T.tolist()
