@@ -353,6 +353,11 @@ def _view(args: argparse.Namespace) -> int:
     print(f"wrote {out} (self-contained; open it in a browser)")
     if args.screenshot:
         print(f"wrote {screenshot(out, args.screenshot)}")
+    failed = [name for name, what in report.items() if "failed to build" in what]
+    if failed:
+        print(f"cspace: error: the C-obstacles of {', '.join(failed)} failed to build; the page "
+              "shows those obstacles without them", file=sys.stderr)
+        return 1
     return 0
 
 

@@ -845,10 +845,12 @@ def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
                 report[body.name] = f"obstacle only: {e}"
                 continue
             view.add_superset(body.name, S)
-            report[body.name] = f"superset ({S.n_facets} facets; the build failed: {body.error})"
+            report[body.name] = (f"superset ({S.n_facets} facets): its C-obstacle failed to "
+                                 f"build: {body.error}")
+        elif body.error:
+            report[body.name] = f"obstacle only: its C-obstacle failed to build: {body.error}"
         elif not cos:
-            why = body.error or body.reason
-            report[body.name] = f"obstacle only ({body.kind}: {str(why).split(': ', 1)[-1]})"
+            report[body.name] = f"obstacle only ({body.kind}: {body.reason.split(': ', 1)[-1]})"
     view.add_robot("start", scene.robot.vertices, scene.robot.faces, scene.start,
                    reference=scene.reference_point)
     view.add_robot("goal", scene.robot.vertices, scene.robot.faces, scene.goal,
