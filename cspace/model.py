@@ -580,10 +580,10 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
         tp = triangle_pairs(o_ints, o_faces, part.ints, part.faces, c_ints, bounds_g,
                             closed=body.kind == "solid" or part.kind == "solid")
         return {"pairs": tp.pairs, "flat": tp.flat,
-                "counts": np.array([len(tp.pairs), 0, tp.flat_skipped, tp.out_of_bounds],
+                "counts": np.array([len(tp.pairs), tp.flat_skipped, tp.out_of_bounds],
                                    dtype=np.int64)}
     arrays = pack_polytopes(made.pieces, "p_")
-    arrays["counts"] = np.array([len(made.pieces), made.thickened, made.flat_skipped,
+    arrays["counts"] = np.array([len(made.pieces), made.flat_skipped,
                                  made.out_of_bounds], dtype=np.int64)
     return arrays
 
@@ -591,7 +591,7 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
 def _pair_detail(construction, arrays) -> str:
     if "counts" not in arrays:
         return ""
-    n, _, flat, out = (int(x) for x in arrays["counts"])
+    n, flat, out = (int(x) for x in arrays["counts"])  # built, flat left out, out of bounds
     what = "triangle pairs" if construction == "triangle pairs" else "robot-triangle pieces"
     extra = [f"{out} out of the bounds"] if out else []
     extra += [f"{flat} flat left out (an operand is closed)"] if flat else []
