@@ -482,6 +482,83 @@ def _key(body: BodyModel, robot, c_ints, grid) -> str:
     return co_key(body.kind, grid, body._ints, faces, robot.ints, c_ints)
 
 
+def _without_far_parts(scene):
+    """The scene without the parts of its obstacle bodies that cannot reach the bounds and
+    would coarsen the grid, and per scene body ``(count, box)`` of what was left out.
+
+    Precision follows the size of what is modelled, not where everything lies: an obstacle
+    far away that the robot can never touch must not set the grid step for the rest. Parts
+    are the components of triangles sharing a vertex (exact float positions); a part is far
+    when its C-obstacle's bounding box ``[lo(P) + lo(c - R), hi(P) + hi(c - R)]`` misses the
+    planning bounds (decided with exact rationals on the float input) and it reaches beyond
+    the extent of everything else; parts are left out only when that changes the grid step.
+    Other unreachable parts are dropped later, on the grid, as usual.
+    """
+    from dataclasses import replace
+    from fractions import Fraction
+
+    from .scene import Body
+
+    rel = scene.robot.vertices - scene.reference_point
+    # c - R as a box of exact rationals (the reference point minus the robot's box)
+    c = [Fraction(float(x)) for x in scene.reference_point]
+    r_lo = [Fraction(float(x)) for x in scene.robot.vertices.min(axis=0)]
+    r_hi = [Fraction(float(x)) for x in scene.robot.vertices.max(axis=0)]
+    b_lo = [Fraction(float(x)) for x in scene.bounds[0]]
+    b_hi = [Fraction(float(x)) for x in scene.bounds[1]]
+    split = []
+    for body in scene.obstacles:
+        _, inverse = np.unique(body.vertices, axis=0, return_inverse=True)
+        F = inverse.reshape(-1)[body.faces]
+        n = int(F.max()) + 1
+        g = coo_matrix((np.ones(3 * len(F)), (F.reshape(-1), np.repeat(F[:, 0], 3))),
+                       shape=(n, n))
+        _, label = connected_components(g, directed=False)
+        part = label[F[:, 0]]
+        parts = []
+        for k in np.unique(part):
+            faces = np.nonzero(part == k)[0]
+            V = body.vertices[np.unique(body.faces[faces])]
+            lo, hi = V.min(axis=0), V.max(axis=0)
+            reach = all(Fraction(float(lo[i])) + c[i] - r_hi[i] <= b_hi[i]
+                        and b_lo[i] <= Fraction(float(hi[i])) + c[i] - r_lo[i] for i in range(3))
+            size = float(np.abs(np.concatenate([lo, hi, lo - rel.max(axis=0),
+                                                hi - rel.min(axis=0)])).max())
+            parts.append((faces, reach, size, lo, hi))
+        split.append(parts)
+    keep_sizes = [s for parts in split for _, reach, s, _, _ in parts if reach]
+    near = max([float(np.abs(scene.bounds).max()) + float(np.abs(rel).max()),
+                float(np.abs(scene.robot.vertices).max())] + keep_sizes)
+    if Grid.for_extent(near).exponent >= Grid.for_extent(scene.extent()).exponent:
+        return scene, {}  # nothing far enough to coarsen the grid: model everything as is
+    far, bodies = {}, []
+    for body, parts in zip(scene.obstacles, split):
+        gone = [p for p in parts if not p[1] and p[2] > near]
+        if not gone:
+            bodies.append(body)
+            continue
+        lo = np.min([p[3] for p in gone], axis=0) - rel.max(axis=0)
+        hi = np.max([p[4] for p in gone], axis=0) - rel.min(axis=0)
+        far[body.name] = (len(gone), [lo.tolist(), hi.tolist()])
+        kept = np.sort(np.concatenate([p[0] for p in parts if not (not p[1] and p[2] > near)]
+                                      + [np.zeros(0, np.int64)]))
+        if len(kept):  # only the vertices the kept triangles use (the body's box shrinks)
+            used, faces = np.unique(body.faces[kept], return_inverse=True)
+            bodies.append(Body(body.name, body.vertices[used], faces.reshape(-1, 3),
+                               body.source))
+    if not far:
+        return scene, far
+    return replace(scene, obstacles=tuple(bodies)), far
+
+
+def _far_body(name: str, n_far: int, box) -> BodyModel:
+    return BodyModel(f"{name} (far parts)", name, "dropped",
+                     f"{n_far} connected part{'s' if n_far > 1 else ''} far from the bounds "
+                     f"(C-obstacle bounding box {box} misses them, decided exactly before the "
+                     "grid was chosen, so they do not coarsen it)",
+                     np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))
+
+
 def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> list[RobotPart]:
     """The robot's exact parts (steps 1-3 and 5 of the obstacles, without dropping), or the
     hull alone when asked for."""
@@ -614,7 +691,9 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         ``progress(fraction, message)`` with the overall fraction in ``[0, 1]``: once per
         body, during long surface builds, and per stage of a non-convex (NCC-CVMS) build.
     grid : Grid, optional
-        Default ``Grid.for_extent(scene.extent())``.
+        Default ``Grid.for_extent`` of what is modelled: obstacle parts that cannot reach the
+        bounds and lie beyond everything else are dropped first, so that an obstacle far away
+        does not coarsen the grid for the rest.
     robot_hull : bool, default False
         Build against the robot's convex hull instead of its exact parts: faster for a
         non-convex robot, and conservative (the hull holds the robot, so it can only add
@@ -627,7 +706,11 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         :class:`~cspace.errors.BuildError` by :meth:`SceneModel.cspace`.
     """
     t0 = time.perf_counter()
-    grid = grid or Grid.for_extent(scene.extent())
+    far: dict = {}
+    modelled = scene
+    if grid is None:
+        modelled, far = _without_far_parts(scene)
+        grid = Grid.for_extent(modelled.extent())
     c = np.asarray(scene.reference_point, dtype=np.float64)
     c_ints = grid.snap(c)
     # The box of c - R decides what is dropped, exactly, whatever the robot's parts.
@@ -643,7 +726,15 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     parts = _model_robot(scene, grid, robot, robot_hull)
     bounds_g = np.ldexp(np.asarray(scene.bounds, dtype=np.float64), -grid.exponent)
     bodies, sources = [], {}
+    kept = {sb.name: sb for sb in modelled.obstacles}
     for sb in scene.obstacles:
+        if sb.name not in kept:  # every part of it far away
+            n_far, box = far[sb.name]
+            sources[sb.name] = {"triangles": len(sb.faces), "collapsed": 0, "double_sided": 0,
+                                "repeated": 0, "parts": n_far}
+            bodies.append(_far_body(sb.name, n_far, box))
+            continue
+        sb = kept[sb.name]
         ints, F, counts = _weld_dedupe(sb, grid)
         split = _parts(ints, F) if len(F) else []
         counts["parts"] = len(split)
@@ -652,7 +743,9 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
             bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
                                     len(parts) == 1 and parts[0].kind == "convex"))
-        if not split:
+        if sb.name in far:
+            bodies.append(_far_body(sb.name, *far[sb.name]))
+        if not split and sb.name not in far:
             bodies.append(BodyModel(sb.name, sb.name, "dropped",
                                     f"empty: all {len(sb.faces)} triangles collapse when welded "
                                     f"on the grid (step 2**{grid.exponent})",

@@ -463,3 +463,20 @@ def test_fcl_environment_exact_robot(shared_data, tmp_path):
 
     r = cross_check(cs, n=2000, seed=2, band=1e-9)
     assert r["n_disagree"] == 0, r["disagreements"][:5]
+
+
+def test_a_far_unreachable_obstacle_does_not_coarsen_the_grid():
+    # An obstacle at x = 1e12, as its own body and as a far part of the world's body: both
+    # dropped before the grid is chosen, so the grid is the one of the scene without it.
+    near = box_body("near", (1.0, 0.0, 0.0))
+    far = box_body("far", (1e12, 0.0, 0.0))
+    reference = model_scene(make_scene([near]), build=False)
+    for bodies in ([near, far], [Body("world", np.vstack([near.vertices, far.vertices]),
+                                      np.vstack([near.faces, far.faces + 8]), "w")]):
+        m = model_scene(make_scene(bodies))
+        assert m.grid.exponent == reference.grid.exponent
+        dropped = [b for b in m.bodies if b.kind == "dropped"]
+        assert len(dropped) == 1 and "far from the bounds" in dropped[0].reason
+        kept = [b for b in m.bodies if b.kind != "dropped"]
+        assert [b.kind for b in kept] == ["convex"]
+        assert m.cspace().contains([0.4, 0.0, 0.0]) and not m.cspace().contains([-1.0, 0, 0])
