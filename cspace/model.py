@@ -54,6 +54,7 @@ from .mesh import ClosedMesh
 from .obstacle import CSpace, CSpaceObstacle
 from .pairs import (
     CONSTRUCTIONS,
+    _meets,
     PairObstacle,
     TrianglePairs,
     component_points,
@@ -371,11 +372,6 @@ def _parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
 
 # --------------------------------------------------------------------------------------
 # steps 4-5: drop and classify
-
-
-def _meets(lo: np.ndarray, hi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> np.ndarray:
-    """Exact: do the boxes ``[lo, hi]`` (grid ints, (k, 3)) meet ``[blo, bhi]`` (grid units)?"""
-    return ((lo.astype(np.float64) <= bhi) & (blo <= hi.astype(np.float64))).all(axis=-1)
 
 
 def _closed_kind(name, P, F, grid):
