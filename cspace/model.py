@@ -54,9 +54,9 @@ from .mesh import ClosedMesh
 from .obstacle import CSpace, CSpaceObstacle
 from .pairs import (
     CONSTRUCTIONS,
-    _meets,
     PairObstacle,
     TrianglePairs,
+    _meets,
     component_points,
     containment_meshes,
     convex_triangle_pieces,
