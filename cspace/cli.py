@@ -188,7 +188,8 @@ class _Progress:
             print("\r" + text.ljust(self.width), end="", file=sys.stderr, flush=True)
             self.width = len(text)
         elif self.lines and (message != self.message or tenth > self.shown):
-            print(f"[{fraction:4.0%}] {message}", file=sys.stderr, flush=True)
+            sys.stderr.write(f"[{fraction:4.0%}] {message}\n")  # one write: whole lines
+            sys.stderr.flush()
         self.message, self.shown = message, tenth
 
     def close(self) -> None:

@@ -145,6 +145,10 @@ def _read_trimesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
         loaded = trimesh.load(str(path), force="mesh", process=False)
         vertices = np.array(loaded.vertices, dtype=np.float64).reshape(-1, 3)
         faces = np.array(loaded.faces, dtype=np.int64)
+    except ImportError as exc:  # trimesh guessing the encoding of undecodable text
+        raise MeshFileError(
+            f"{where}: '{path}' is not a {path.suffix or 'mesh'} file trimesh can decode "
+            f"(binary data, or a text encoding it cannot guess: {exc})") from exc
     except Exception as exc:  # noqa: BLE001 - trimesh raises many kinds
         raise MeshFileError(
             f"{where}: trimesh cannot read '{path}' as a triangle mesh: "

@@ -120,9 +120,60 @@ def test_ctrl_c_during_a_long_build_is_one_line_and_leaves_nothing(tmp_path):
     _, rest = p.communicate(timeout=60)
     err = "".join(seen) + rest
     assert p.returncode == 130, err
-    assert "Traceback" not in err and err.strip().splitlines()[-1] == "cspace: interrupted"
+    assert "Traceback" not in err, err
+    assert err.strip().splitlines()[-1] == "cspace: interrupted", err
     assert not out.exists() and list(tmp_path.glob(".sum.stl*")) == []
     # No process of that group is left.
     time.sleep(0.5)
     with pytest.raises(ProcessLookupError):
         os.killpg(p.pid, 0)
+
+
+def _bad_invocations(tmp: Path):
+    """(arguments, expected words) of bad command lines: every one a one-line error."""
+    box, ok = tmp / "box.stl", SCENES / "window.toml"
+    trimesh.creation.box((1, 1, 1)).export(box)
+    (tmp / "random.obj").write_bytes(bytes(range(256)) * 8)
+    (tmp / "random.toml").write_bytes(bytes(range(256)) * 8)
+    (tmp / "empty.obj").write_text("")
+    (tmp / "nan.obj").write_text("v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    (tmp / "open.obj").write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    (tmp / "typo.toml").write_text("[robot]\nboxx = [1, 1, 1]\n")
+    (tmp / "x.cfg").write_text("[problem]\nworld = gone.dae\nrobot = gone.dae\n")
+    return [
+        (["sum", tmp / "random.obj", box], "cannot"),
+        (["sum", tmp / "empty.obj", box], "empty.obj"),
+        (["sum", tmp / "nan.obj", box], "not finite"),
+        (["sum", tmp / "open.obj", box], "boundary edges"),
+        (["sum", box, tmp / "gone.stl"], "not found"),
+        (["superset", tmp / "open.obj", box], "boundary edges"),
+        (["convex-sum", tmp / "nan.obj", box], "not finite"),
+        (["convex-sum", box, box, "-o", tmp / "out.unknown"], "unknown format"),
+        (["convex-sum", box, box, "--grid-bits", "99"], "bits"),
+        (["build", tmp / "random.toml"], "not valid TOML"),
+        (["build", tmp / "typo.toml"], "planning: missing"),
+        (["build", tmp / "gone.toml"], "not found"),
+        (["build", tmp / "x.cfg"], "x.cfg"),
+        (["build", ok, "-o", tmp / "out.txt"], "unknown format"),
+        (["plan", ok, "--planner", "Nope"], "not a valid planner"),
+        (["plan", ok, "--time", "0"], "'0' is not"),
+        (["plan", ok, "-o", tmp / "p.xyz"], "unknown format"),
+        (["plan", ok, "--result", tmp / "r.txt"], "unknown format"),
+        (["view", ok, "-o", tmp / "v.png"], "unknown format"),
+        (["view", tmp / "scene.unknown"], "unknown scene format"),
+        (["check", ok, "--band", "-1"], "'-1' is not"),
+        (["sum", box, box, "--workers", "0"], "'0' is not"),
+    ]
+
+
+def test_a_few_dozen_bad_command_lines(tmp_path):
+    for args, words in _bad_invocations(tmp_path):
+        r = cspace(*args)
+        assert r.returncode == 2, (args, r.stdout, r.stderr)
+        assert "Traceback" not in r.stderr, (args, r.stderr)
+        assert words in r.stderr, (args, words, r.stderr)
+        # One error line (argparse puts its usage lines above its own).
+        errors = [x for x in r.stderr.splitlines() if x.startswith("cspace") and "error:" in x]
+        assert len(errors) == 1, (args, r.stderr)
+    assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(("out", "p.", "r.",
+                                                                            "v.", "."))) == []
