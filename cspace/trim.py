@@ -1365,18 +1365,39 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
     used, T = np.unique(T, return_inverse=True)
     T = T.reshape(-1, 3)
     points = [cx.points[i] for i in used.tolist()]
-    # shells: one per component of the complement a facet faces (the unbounded one is outer)
+    # shells: one per component of the complement a facet faces. The anchor's is unbounded;
+    # another one is unbounded too when it faces a separate body (disjoint sums are not
+    # joined through dropped sub-facets), bounded when it is a hole. The exact sign of the
+    # volume its triangles enclose tells them apart: outward shells enclose positive volume,
+    # the shells of holes face inwards.
     cells, facet_shell = np.unique(np.array(outside_cell, dtype=np.int64), return_inverse=True)
+    facet_shell = facet_shell.reshape(-1)
     root = find(int(sh.of[anchor]))
     shell_is_hole = cells != root
+    tri_shell = facet_shell[np.array(tri_facet, dtype=np.int64)] if len(tri_facet) else None
+    for k in np.nonzero(shell_is_hole)[0].tolist():
+        shell_is_hole[k] = _volume_sign(points, T[tri_shell == k]) < 0
     return _Output(
         points=points,
         faces=T,
         face_facet=np.array(tri_facet, dtype=np.int64),
         facet_superset=np.array(facet_src, dtype=np.int64),
-        shell=facet_shell.reshape(-1)[np.array(tri_facet, dtype=np.int64)] if len(tri_facet) else np.zeros(0, np.int64),
+        shell=tri_shell if tri_shell is not None else np.zeros(0, np.int64),
         shell_is_hole=shell_is_hole,
     )
+
+
+def _volume_sign(points: list, faces: np.ndarray) -> int:
+    """Exact sign of the volume the triangles enclose (homogeneous grid points)."""
+    num, den = 0, 1
+    for a, b, c in faces.tolist():
+        P, Q, R = points[a], points[b], points[c]
+        det = _dot(P[:3], _cross(Q[:3], R[:3]))
+        if det:
+            w = P[3] * Q[3] * R[3]
+            g = gcd(den, w)
+            num, den = num * (w // g) + det * (den // g), den * (w // g)
+    return (num > 0) - (num < 0) if den > 0 else -((num > 0) - (num < 0))
 
 
 def _to_float(points: list, grid: Grid) -> np.ndarray:

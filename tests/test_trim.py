@@ -448,3 +448,22 @@ def test_bad_input_errors():
     nb[0, 0] = np.inf
     with pytest.raises(NonFiniteError):
         minkowski_sum((v, f), nb)
+
+
+def test_separate_bodies_are_not_holes():
+    # Two or three disjoint boxes ⊕ a cube: as many outer shells, no hole (the complement of
+    # each sum is unbounded); a hollow box keeps its one hole.
+    import trimesh
+
+    from zoo import hollow_box
+
+    cube = trimesh.creation.box((0.5, 0.5, 0.5)).vertices
+    for k in (1, 2, 3):
+        parts = [trimesh.creation.box((1, 1, 1)) for _ in range(k)]
+        for i, m in enumerate(parts):
+            m.apply_translation([3.0 * i, 0.0, 0.0])
+        m = trimesh.util.concatenate(parts)
+        S = minkowski_sum((m.vertices, m.faces), cube, workers=1)
+        assert S.n_holes == 0 and len(np.unique(S.shell)) == k
+        assert abs(S.volume - k * 1.5**3) < 1e-12
+    assert minkowski_sum(hollow_box(), 0.4 * cube, workers=1).n_holes == 1
