@@ -11,9 +11,9 @@ scene grid (``Grid.for_extent(scene.extent())``):
    (opposite winding: the two sides of a zero-thickness sheet) or *repeated* (same
    winding). A sheet modelled with both sides becomes the single open surface it is; a
    closed surface modelled double-sided becomes closed.
-3. **Split** into connected parts (triangles sharing an edge). Closed parts (no boundary
-   edge) whose bounding box lies inside another closed part's are kept with it (it may be a
-   cavity of that solid); every other part is its own body, named ``<body>#<k>``.
+3. **Split** into connected parts (triangles sharing an edge). A closed part (no boundary
+   edge) that lies inside another closed part's solid (a vertex of it, decided exactly) is
+   kept with it: a cavity; every other part is its own body, named ``<body>#<k>``.
 4. **Drop** a part whose C-obstacle cannot meet the planning bounds: its bounding box is
    exactly ``[lo(O) + lo(c - R), hi(O) + hi(c - R)]`` in grid integers, compared exactly
    with the bounds, before anything is built.
@@ -361,6 +361,22 @@ def _parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
     inside = ((lo[closed, None] <= lo[None, closed]) & (hi[None, closed] <= hi[closed, None])).all(2)
     np.fill_diagonal(inside, False)
     i, j = np.nonzero(inside)
+    # A box inside a box is not a cavity yet: one vertex of the inner component must lie in
+    # the outer one's solid, decided exactly (winding number from a symbolically perturbed
+    # ray, boundary included).
+    keep = np.ones(len(i), dtype=bool)
+    for a in np.unique(i).tolist():
+        rows = np.nonzero(i == a)[0]
+        outer = F[label == closed[a]]
+        try:
+            from .meshquery import MeshCO
+
+            solid = MeshCO(ints.astype(np.float64), outer, name="part")
+        except InvalidMeshError:  # not an oriented 2-cycle: keep the boxes' verdict
+            continue
+        probes = np.array([ints[F[label == closed[b]][0, 0]] for b in j[rows].tolist()])
+        keep[rows] = solid.contains(probes.astype(np.float64))
+    i, j = i[keep], j[keep]
     _, group = connected_components(
         coo_matrix((np.ones(len(i)), (closed[i], closed[j])), shape=(ncomp, ncomp)),
         directed=False)

@@ -480,3 +480,23 @@ def test_a_far_unreachable_obstacle_does_not_coarsen_the_grid():
         kept = [b for b in m.bodies if b.kind != "dropped"]
         assert [b.kind for b in kept] == ["convex"]
         assert m.cspace().contains([0.4, 0.0, 0.0]) and not m.cspace().contains([-1.0, 0, 0])
+
+
+def test_nesting_is_decided_exactly_not_by_boxes():
+    # An inside-out box in the notch of an L (inside the L's box, outside its solid) is a body
+    # of its own, turned outwards; the same box inside a big box's solid is a cavity.
+    from zoo import l_shape
+
+    V, F = l_shape(arm=2)  # [0, 3] x [0, 3] x [0, 1], the notch is [1, 3] x [1, 3]
+    small = trimesh.creation.box((0.5, 0.5, 0.5))
+    inverted = (small.vertices + [2.0, 2.0, 0.5], small.faces[:, ::-1])
+    notch = Body("w", np.vstack([V, inverted[0]]), np.vstack([F, inverted[1] + len(V)]), "x")
+    m = model_scene(make_scene([notch], bounds=((-1, -1, -1), (4, 4, 2))))
+    assert [b.kind for b in m.bodies] == ["solid", "convex"]
+    assert m.cspace().contains([2.0, 2.0, 0.5])
+    big = trimesh.creation.box((2.0, 2.0, 2.0))
+    hollow = Body("h", np.vstack([big.vertices, small.vertices]),
+                  np.vstack([big.faces, small.faces[:, ::-1] + 8]), "x")
+    m = model_scene(make_scene([hollow], bounds=((-3, -3, -3), (3, 3, 3))))
+    assert [b.kind for b in m.bodies] == ["solid"] and "2 shells" in m.bodies[0].reason
+    assert not m.cspace().contains([0.0, 0.0, 0.0])  # the cavity is wider than the robot
