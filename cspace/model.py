@@ -11,7 +11,8 @@ scene grid (``Grid.for_extent(scene.extent())``):
    (opposite winding: the two sides of a zero-thickness sheet) or *repeated* (same
    winding). A sheet modelled with both sides becomes the single open surface it is; a
    closed surface modelled double-sided becomes closed.
-3. **Split** into connected parts (triangles sharing an edge). A closed part (no boundary
+3. **Split** into connected parts (triangles sharing an edge that no third triangle uses:
+   at a non-manifold edge the parts meeting there are split apart). A closed part (no boundary
    edge) that lies inside another closed part's solid (a vertex of it, decided exactly) is
    kept with it: a cavity; every other part is its own body, named ``<body>#<k>``.
 4. **Drop** a part whose C-obstacle cannot meet the planning bounds: its bounding box is
@@ -344,10 +345,13 @@ def _parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
     m = len(F)
     edge, count = _edges(F, len(ints))
     face = np.repeat(np.arange(m), 3)
-    # Faces sharing an edge: link each half-edge's face to the first face using that edge.
+    # Faces sharing a manifold edge (two faces): link each half-edge's face to the first face
+    # using that edge. A non-manifold edge (two boxes sharing an edge) links nothing, so such
+    # a mesh falls apart into its manifold pieces, each a solid when closed.
     first = np.full(len(count), m, dtype=np.int64)
     np.minimum.at(first, edge, face)
-    g = coo_matrix((np.ones(3 * m), (face, first[edge])), shape=(m, m))
+    link = count[edge] == 2
+    g = coo_matrix((np.ones(int(link.sum())), (face[link], first[edge][link])), shape=(m, m))
     ncomp, label = connected_components(g, directed=False)
     boundary = np.zeros(ncomp, dtype=bool)
     np.logical_or.at(boundary, label[face], count[edge] == 1)

@@ -125,16 +125,6 @@ def test_surface_triangles_that_cannot_reach_the_bounds_are_left_out():
     assert len(b.co.pieces) == 8
 
 
-def test_non_manifold_closed_body_is_a_surface():
-    # Two boxes sharing an edge: closed (every edge used twice or four times), non-manifold.
-    a = trimesh.creation.box(extents=(1, 1, 1))
-    V = np.vstack([a.vertices, a.vertices + [1.0, 1.0, 0.0]])
-    m = model_scene(make_scene([Body("pair", V, np.vstack([a.faces, a.faces + 8]), "test")]),
-                    build=False)
-    (b,) = m.bodies
-    assert b.kind == "surface" and "NonManifoldError" in b.reason
-
-
 # --------------------------------------------------------------------------------------
 # surface C-obstacles
 
@@ -454,10 +444,10 @@ def test_parasol_solid_builds_and_agrees_with_fcl(shared_data, tmp_path, rel):
 
 @pytest.mark.slow
 def test_fcl_environment_exact_robot(shared_data, tmp_path):
-    # rob.obj exactly: 4 open parts (one closed but non-manifold), every body paired with each
-    # part (convex ⊕ robot triangles, triangle pairs); about a minute here.
+    # rob.obj exactly: 6 parts (two closed boxes split off at non-manifold edges, open and
+    # non-manifold rest), every body paired with each part.
     m = model_scene(fcl_env_scene(shared_data), cache=tmp_path / "cache")
-    assert [p.kind for p in m.robot_parts] == ["surface"] * 4
+    assert sorted(p.kind for p in m.robot_parts) == ["convex"] * 2 + ["surface"] * 4
     cs = m.cspace()
     from cspace.fcl_check import cross_check
 
@@ -500,3 +490,17 @@ def test_nesting_is_decided_exactly_not_by_boxes():
     m = model_scene(make_scene([hollow], bounds=((-3, -3, -3), (3, 3, 3))))
     assert [b.kind for b in m.bodies] == ["solid"] and "2 shells" in m.bodies[0].reason
     assert not m.cspace().contains([0.0, 0.0, 0.0])  # the cavity is wider than the robot
+
+
+def test_boxes_touching_along_an_edge_or_at_a_vertex_are_two_solids():
+    # One mesh of two closed boxes sharing an edge (a non-manifold edge of four triangles) or
+    # a vertex: split into two convex solids, so a robot inside either box collides.
+    a = trimesh.creation.box((1.0, 1.0, 1.0))
+    for shift in ([1.0, 1.0, 0.0], [1.0, 1.0, 1.0]):
+        b = trimesh.creation.box((1.0, 1.0, 1.0))
+        b.apply_translation(shift)
+        both = trimesh.util.concatenate([a, b])
+        m = model_scene(make_scene([Body("two", both.vertices, both.faces, "x")],
+                                   robot_extent=0.1))
+        assert [b.kind for b in m.bodies] == ["convex", "convex"]
+        assert m.cspace().contains([[0.0, 0.0, 0.0], shift]).all()
