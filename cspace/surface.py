@@ -260,6 +260,8 @@ class _UnionCO:
     @staticmethod
     def _by_piece(rows: np.ndarray, js: np.ndarray):
         """``(piece, rows)`` groups of candidate pairs."""
+        if not len(js):
+            return
         order = np.argsort(js, kind="stable")
         rows, js = rows[order], js[order]
         cuts = np.flatnonzero(np.r_[True, js[1:] != js[:-1], True])

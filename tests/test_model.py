@@ -504,3 +504,11 @@ def test_boxes_touching_along_an_edge_or_at_a_vertex_are_two_solids():
                                    robot_extent=0.1))
         assert [b.kind for b in m.bodies] == ["convex", "convex"]
         assert m.cspace().contains([[0.0, 0.0, 0.0], shift]).all()
+
+
+def test_surface_distance_with_no_candidates_left():
+    # _by_piece on no rows yielded a piece of an empty array (IndexError): a surface
+    # C-obstacle queried where every nearer box has been ruled out.
+    from cspace.surface import _UnionCO
+
+    assert list(_UnionCO._by_piece(np.zeros(0, np.int64), np.zeros(0, np.int64))) == []
