@@ -404,6 +404,87 @@ def _vertices_of(obj) -> np.ndarray:
     return a
 
 
+class _FlatOperand:
+    """A flat convex operand (a polygon or a segment) on the grid: its points and, for
+    drawing and FCL, a fan of triangles over its hull (internal)."""
+
+    kind = "flat"
+
+    def __init__(self, ints: np.ndarray, grid: Grid):
+        self.ints, self.faces = _flat_hull(ints)
+        self.grid = grid
+
+    @property
+    def vertices(self) -> np.ndarray:
+        return self.grid.to_float(self.ints)
+
+
+def _flat_hull(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The hull of coplanar (or collinear) grid points as ``(corners, fan triangles)``,
+    exact: Andrew's monotone chain on the projection along the axis nearest the normal."""
+    P = np.unique(np.asarray(P, dtype=np.int64), axis=0)
+    d = P - P[0]
+    n = np.zeros(3, dtype=object)
+    for k in range(1, len(P)):  # a normal from the first non-collinear triple
+        n = np.cross(d[1].astype(object), d[k].astype(object))
+        if any(n):
+            break
+    drop = int(np.argmax([abs(int(x)) for x in n])) if any(n) else int(np.argmin(np.ptp(P, 0)))
+    keep = [a for a in range(3) if a != drop]
+    pts = sorted(range(len(P)), key=lambda i: (int(P[i, keep[0]]), int(P[i, keep[1]])))
+
+    def cross(o, a, b):
+        (ox, oy), (ax, ay), (bx, by) = (P[i, keep].tolist() for i in (o, a, b))
+        return (ax - ox) * (by - oy) - (ay - oy) * (bx - ox)
+
+    hull = []
+    for seq in (pts, pts[::-1]):
+        part = []
+        for i in seq:
+            while len(part) >= 2 and cross(part[-2], part[-1], i) <= 0:
+                part.pop()
+            part.append(i)
+        hull += part[:-1]
+    corners = P[hull] if len(hull) >= 2 else P[:1]
+    if len(corners) == 2:  # a segment: one degenerate triangle for FCL and drawing
+        corners = np.vstack([corners, corners[1:]])
+    faces = np.array([[0, k, k + 1] for k in range(1, len(corners) - 1)], dtype=np.int64)
+    return corners, faces
+
+
+def _flat_operands(obstacle, robot, c, grid):
+    """``(C-obstacle polytope, O, R)`` when an operand is a flat convex point set (a polygon
+    or a segment) and the other a convex one: ``O ⊕ (c - R)`` is the hull of the pairwise
+    sums of their points (exact on the grid). None when both operands have volume, or the
+    obstacle is not a point set or convex mesh."""
+    from .errors import DegenerateError
+
+    def points(obj, name):
+        try:
+            return _as_convex(obj, grid, name), None
+        except DegenerateError:
+            return None, grid.snap(_vertices_of(obj))
+        except NotConvexError:
+            return None, None
+
+    O, o_pts = points(obstacle, "obstacle")
+    R, r_pts = points(robot, "robot")
+    if o_pts is None and r_pts is None:
+        return None
+    if (O is None and o_pts is None) or (R is None and r_pts is None):
+        return None  # a non-convex mesh with a flat operand: NCC-CVMS takes solids only
+    A = O.ints if O is not None else o_pts
+    B = grid.snap(c) - (R.ints if R is not None else r_pts)
+    sums = (A[:, None, :] + B[None, :, :]).reshape(-1, 3)
+    try:
+        co = ConvexPolytope.from_ints(sums, grid=grid, name="cobstacle")
+    except DegenerateError as exc:
+        raise DegenerateError(f"the C-obstacle of a flat obstacle and a flat robot in parallel "
+                              f"planes is itself flat ({exc}); not supported") from None
+    return (co, O if O is not None else _FlatOperand(o_pts, grid),
+            R if R is not None else _FlatOperand(r_pts, grid))
+
+
 class CSpaceObstacle:
     """One translational C-obstacle ``CO = O ⊕ (-R)``, exact, with vectorised queries.
 
@@ -531,9 +612,11 @@ class CSpaceObstacle:
         ----------
         obstacle : ConvexPolytope, (n, 3) float64 points, or a closed mesh
             Points are hulled; a mesh (ClosedMesh, trimesh, ``(vertices, faces)``, path)
-            may be non-convex.
+            may be non-convex. Coplanar or collinear points (a panel, a rod) are a flat
+            convex operand.
         robot : ConvexPolytope, (n, 3) float64 points, or a closed convex mesh
-            In its own frame.
+            In its own frame; flat points (a panel, a rod) too, against a convex obstacle
+            (the C-obstacle is the hull of the pairwise sums).
         reference_point : (3,) float64
             The robot point whose position ``q`` is planned (robot frame).
         grid : Grid, optional
@@ -557,8 +640,16 @@ class CSpaceObstacle:
             raise NonFiniteError(f"reference_point is not finite: {c.tolist()}")
         if grid is None:
             grid = Grid.for_points(_vertices_of(obstacle), _vertices_of(robot), c[None, :])
-        R = _as_convex(robot, grid, "robot")
         c_snapped = grid.to_float(grid.snap(c))
+        flat = _flat_operands(obstacle, robot, c, grid)
+        if flat is not None:
+            co, O, R = flat
+            out = cls(co, obstacle=O, robot=R, reference_point=c_snapped)
+            # FCL's view: each operand a solid where it has volume, a surface where flat.
+            o_flat, r_flat = isinstance(O, _FlatOperand), isinstance(R, _FlatOperand)
+            out.semantics = (not o_flat, "surface" if r_flat else "convex")
+            return out
+        R = _as_convex(robot, grid, "robot")
         try:
             O = _as_convex(obstacle, grid, "obstacle")
         except NotConvexError:

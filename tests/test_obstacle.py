@@ -22,7 +22,7 @@ from scipy.spatial import ConvexHull
 
 from cspace import load_scene
 from cspace.convex import ConvexPolytope, hull_minkowski_sum
-from cspace.errors import NonFiniteError
+from cspace.errors import DegenerateError, NonFiniteError
 from cspace.fcl_check import FclOracle, cross_check
 from cspace.obstacle import CSpace, CSpaceObstacle
 from cspace.scene import Body, Scene
@@ -458,3 +458,28 @@ def test_exact_at_any_scale(scale):
     assert co.segment_free([-2 * scale, y, mid[2]], [3 * scale, y, mid[2]]) is True
     d = co.signed_distance([hi + scale, mid[1], mid[2]])
     assert d == pytest.approx(scale, rel=1e-14)
+
+
+@pytest.mark.parametrize("case", ["panel robot", "rod robot", "panel obstacle", "triangle robot"])
+def test_flat_convex_operands_against_fcl(case):
+    # A panel, a rod or a triangle (coplanar or collinear points) is a flat convex operand:
+    # against a convex one the C-obstacle is the exact hull of the pairwise sums, and FCL
+    # (the flat one a surface, the other a solid) agrees.
+    import trimesh
+
+    from cspace.fcl_check import cross_check
+
+    box = trimesh.creation.box((1.0, 1.0, 1.0)).vertices
+    flat = {"panel robot": [[0, 0, 0], [0.6, 0, 0], [0.6, 0.4, 0], [0, 0.4, 0]],
+            "rod robot": [[0, 0, 0], [0.3, 0.2, 0.1]],
+            "panel obstacle": [[0, 0, 0], [0.6, 0, 0], [0.6, 0.4, 0], [0, 0.4, 0]],
+            "triangle robot": [[0, 0, 0], [0.5, 0.1, 0.2], [0.1, 0.4, -0.3]]}[case]
+    flat = np.array(flat, dtype=np.float64)
+    o, r = (flat, box) if case == "panel obstacle" else (box, flat)
+    co = CSpaceObstacle.build(o, r, (0.05, 0.0, 0.0))
+    assert co.kind == "convex"
+    report = cross_check(co, n=4000, seed=3)
+    assert report["n_disagree"] == 0, report["disagreements"][:5]
+    assert 500 < report["n_inside"] < 3500
+    with pytest.raises(DegenerateError, match="itself flat"):
+        CSpaceObstacle.build(flat[:3] if len(flat) >= 3 else flat, flat)
