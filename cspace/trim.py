@@ -128,16 +128,8 @@ class SumPolyhedron:
         if self.convex:
             P = self.points_exact
             return ExactVolume(Fraction(P.volume6()) / 6 * Fraction(2) ** (3 * self.grid.exponent))
-        pts = self.points_exact
-        num, den = 0, 1
-        for a, b, c in self.faces.tolist():
-            P, Q, R = pts[a], pts[b], pts[c]
-            det = _dot(P[:3], _cross(Q[:3], R[:3]))
-            if det:
-                w = P[3] * Q[3] * R[3]
-                g = gcd(den, w)
-                num, den = num * (w // g) + det * (den // g), den * (w // g)
-        return ExactVolume(Fraction(num, den) / 6 * Fraction(2) ** (3 * self.grid.exponent))
+        six = _six_volume(self.points_exact, self.faces)
+        return ExactVolume(six / 6 * Fraction(2) ** (3 * self.grid.exponent))
 
     @property
     def volume(self) -> float:
@@ -1387,8 +1379,9 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
     )
 
 
-def _volume_sign(points: list, faces: np.ndarray) -> int:
-    """Exact sign of the volume the triangles enclose (homogeneous grid points)."""
+def _six_volume(points: list, faces: np.ndarray) -> Fraction:
+    """Six times the volume the triangles enclose, exactly, in grid units cubed (homogeneous
+    grid points ``(x, y, z, w)``)."""
     num, den = 0, 1
     for a, b, c in faces.tolist():
         P, Q, R = points[a], points[b], points[c]
@@ -1397,7 +1390,13 @@ def _volume_sign(points: list, faces: np.ndarray) -> int:
             w = P[3] * Q[3] * R[3]
             g = gcd(den, w)
             num, den = num * (w // g) + det * (den // g), den * (w // g)
-    return (num > 0) - (num < 0) if den > 0 else -((num > 0) - (num < 0))
+    return Fraction(num, den)
+
+
+def _volume_sign(points: list, faces: np.ndarray) -> int:
+    """Exact sign of the volume the triangles enclose (homogeneous grid points)."""
+    six = _six_volume(points, faces)
+    return (six > 0) - (six < 0)
 
 
 def _to_float(points: list, grid: Grid) -> np.ndarray:
