@@ -187,7 +187,7 @@ class PairModel:
     cos : list of CSpaceObstacle
         Its C-obstacles (convex pieces and containment terms for triangle pairs).
     detail : str
-        Sizes: pieces built, left out, thickened.
+        Sizes: pieces or pairs built, and those left out (flat, out of the bounds).
     seconds : float
     cache : {'hit', 'miss', 'off', ''}
     """

@@ -105,7 +105,8 @@ class PairPieces:
     ----------
     pieces : list of ConvexPolytope
     thickened : int
-        Flat pieces of two open surfaces, grown by one grid step (see the module docstring).
+        Flat pieces of two open surfaces grown by one grid step (the hull reference only;
+        :class:`PairObstacle` keeps them exact).
     flat_skipped : int
         Flat pieces left out because an operand is closed.
     out_of_bounds : int
