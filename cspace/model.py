@@ -637,12 +637,12 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
     if construction == "triangle pairs":
         o_ints, o_faces = _body_operand(body)
         terms = []
-        if part.kind == "solid":
-            terms += containment_meshes(component_points(o_ints, o_faces), part.ints,
-                                        part.faces, c_ints, robot_solid=True)
-        if body.kind == "solid":
-            terms += containment_meshes(component_points(part.ints, part.faces), o_ints, o_faces,
-                                        c_ints, robot_solid=False)
+        if part.kind == "solid":  # obstacle components small enough for the robot to hold
+            points = component_points(o_ints, o_faces, fits_in=np.ptp(part.ints, axis=0))
+            terms += containment_meshes(points, part.ints, part.faces, c_ints, robot_solid=True)
+        if body.kind == "solid":  # robot components small enough for the obstacle to hold
+            points = component_points(part.ints, part.faces, fits_in=np.ptp(o_ints, axis=0))
+            terms += containment_meshes(points, o_ints, o_faces, c_ints, robot_solid=False)
         for ints, faces in terms:
             if _meets(ints.min(axis=0), ints.max(axis=0), *bounds_g):
                 cos.append(CSpaceObstacle.from_mesh(grid.to_float(ints), faces, obstacle=obstacle,

@@ -251,17 +251,31 @@ def convex_triangle_pieces(o_ints, r_ints, r_faces, c_ints, grid, bounds_g) -> P
     return out
 
 
-def component_points(ints: np.ndarray, faces: np.ndarray) -> np.ndarray:
+def component_points(ints: np.ndarray, faces: np.ndarray, fits_in=None) -> np.ndarray:
     """``(k, 3)``: one vertex (the first) of each connected component of a mesh (dtype kept)
-    (triangles sharing a vertex are connected)."""
+    (triangles sharing a vertex are connected).
+
+    ``fits_in``: an extent (3,); only components whose box is no larger on any axis are
+    kept. A component can lie inside a solid only if it fits in the solid's box, so the
+    containment terms of larger ones (walls, floors) can never hold and are not built.
+    """
     F = np.asarray(faces, np.int64)
     n = len(ints)
     a, b = F.reshape(-1), np.repeat(F[:, 0], 3)
     g = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
     _, label = connected_components(g, directed=False)
     used = np.unique(F)
-    _, first = np.unique(label[used], return_index=True)
-    return np.asarray(ints)[used[first]]
+    roots, first = np.unique(label[used], return_index=True)
+    points = np.asarray(ints)[used[first]]
+    if fits_in is None:
+        return points
+    V = np.asarray(ints)
+    lo = np.full((label.max() + 1, 3), np.inf)
+    hi = np.full((label.max() + 1, 3), -np.inf)
+    np.minimum.at(lo, label[used], V[used])
+    np.maximum.at(hi, label[used], V[used])
+    fits = ((hi[roots] - lo[roots]) <= np.asarray(fits_in)).all(axis=1)
+    return points[fits]
 
 
 def containment_meshes(points, solid_ints, solid_faces, c_ints, *, robot_solid: bool):

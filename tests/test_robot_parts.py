@@ -184,3 +184,20 @@ def test_l_robot_plans_through_an_l_corridor_and_fcl_agrees():
     hits, n = path_collisions(cs, result.path, step=1e-3 * np.linalg.norm(np.ptp(
         np.asarray(bounds), axis=0)))
     assert n > 100 and len(hits) == 0
+
+
+def test_containment_terms_only_where_they_can_hold():
+    # A robot smaller than an obstacle component can never hold it: no "o + c - R" term; the
+    # obstacle can hold the robot: one "O + c - r" term.
+    m = model_scene(_scene(L_SOLID, _u_robot(0.2)))
+    (pair,) = m.bodies[0].pairs
+    assert [co.kind for co in pair.cos] == ["pairs", "mesh"]
+    # A small obstacle inside a large U's reach: the robot may hold it; it cannot hold the U.
+    m = model_scene(_scene(_box((0.1, 0.1, 0.1), centre=(0.0, -0.5, 0.0)), _u_robot(0.5)))
+    (pair,) = m.bodies[0].pairs
+    assert pair.construction == "NCC-CVMS swapped"  # convex obstacle: one exact surface
+    tiny = _box((0.05, 0.05, 0.05))
+    m = model_scene(_scene(_open(tiny), _u_robot(0.5)))  # an open speck: surface body
+    (pair,) = m.bodies[0].pairs
+    assert [co.kind for co in pair.cos] == ["pairs", "mesh"]
+    assert m.cspace().contains([0.0, 0.5, 0.0])  # the speck deep in the U's base
