@@ -28,7 +28,7 @@ from .exact import Grid
 __all__ = ["COCache", "cache_dir", "co_key", "FORMAT"]
 
 # Bump when the stored layout or an algorithm's output changes.
-FORMAT = 2
+FORMAT = 3  # 3: C-obstacles grown by their margin (cspace.margin), stored with it
 
 
 def cache_dir(directory=None) -> Path:

@@ -342,6 +342,11 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         Membership disagreements at points within ``band`` (scene units) of a C-obstacle
         boundary (our distance) are not counted.
 
+    C-obstacles grown by their margin (outward rounding, :mod:`cspace.margin`) are compared
+    one-sidedly: "ours in collision, FCL free" within the growth (FCL's distance at most the
+    box's half-diagonal) is the stated false collision and is counted in ``n_in_margin``, not
+    as a disagreement; "ours free, FCL in collision" (a false free) always counts.
+
     Returns
     -------
     report : dict
@@ -349,7 +354,9 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         ``disagreements`` their ``(j, 3)`` locations and ``disagree_indices``; ``n_in_band``
         disagreements ignored; ``n_fcl_touching`` points FCL calls collision-free with a
         negative distance (its "in contact" answer; a disagreement unless in the band);
-        ``max_distance_error`` over points both call outside (FCL distance >= 0);
+        ``n_false_free``: counted disagreements where we say free; ``n_in_margin``;
+        ``max_distance_error`` over points both call outside (FCL distance >= 0; against the
+        interval ``[d - growth, d]`` the grown C-obstacle's distance lies in);
         ``scene_size``; ``seconds_per_query_ours`` (contains + signed distance) and
         ``seconds_per_query_fcl`` (collide, plus distance where free); ``ok``.
     """
@@ -406,10 +413,13 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
     near = np.abs(ours_d) < band
     fcl_touch = ~fcl_in & (fcl_d < 0)
     differ = (ours_in != fcl_in) | (fcl_touch & ~ours_in)
-    in_band = differ & near
-    counted = np.nonzero(differ & ~in_band)[0]
+    growth = max(_growth(o) for o in cs.obstacles)
+    in_margin = differ & ours_in & ~fcl_in & (fcl_d <= growth + band)
+    in_band = differ & near & ~in_margin
+    counted = np.nonzero(differ & ~in_band & ~in_margin)[0]
     both_out = ~ours_in & ~fcl_in & ~fcl_touch
-    err = np.abs(ours_d[both_out] - fcl_d[both_out])
+    d, f = ours_d[both_out], fcl_d[both_out]
+    err = np.maximum(np.maximum(d - f, (f - growth) - d), 0.0)
     return {
         "n": int(len(q)),
         "n_inside": int(ours_in.sum()),
@@ -418,6 +428,8 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         "disagree_indices": counted,
         "disagreements": q[counted],
         "n_in_band": int(in_band.sum()),
+        "n_in_margin": int(in_margin.sum()),
+        "n_false_free": int((~ours_in[counted]).sum()),
         "n_fcl_touching": int(fcl_touch.sum()),
         "max_distance_error": float(err.max()) if err.size else 0.0,
         "scene_size": size,
@@ -425,6 +437,16 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         "seconds_per_query_fcl": t_fcl / len(q),
         "ok": bool(counted.size == 0),
     }
+
+
+def _growth(co) -> float:
+    """How far a C-obstacle was grown beyond its snapped operands' (scene units): the margin
+    box's half-diagonal plus its rounding slack."""
+    m = getattr(co, "margin", None)
+    if m is None:
+        return 0.0
+    g = np.asarray(m.steps, dtype=np.float64) * m.grid.step + m.rounding
+    return float(np.linalg.norm(g)) * (1 + 1e-12)
 
 
 def _oracle(co) -> "FclOracle":

@@ -42,6 +42,7 @@ from __future__ import annotations
 import time
 import warnings
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -51,8 +52,9 @@ from .cache import COCache, co_key, pack_polytopes, unpack_polytopes
 from .convex import ConvexPolytope
 from .errors import BuildError, InvalidMeshError, NotConvexError
 from .exact import Grid
+from .margin import Margin, snap_deviation
 from .mesh import ClosedMesh
-from .obstacle import CSpace, CSpaceObstacle
+from .obstacle import CSpace, CSpaceObstacle, grown_mesh_sum
 from .pairs import (
     CONSTRUCTIONS,
     PairObstacle,
@@ -226,6 +228,11 @@ class SceneModel:
         (dropped in steps 1-2) and ``parts`` (after splitting).
     seconds : dict
         ``model`` (steps 1-5) and ``build`` (step 6) wall seconds.
+    margin : Margin or None
+        The outward rounding (:mod:`cspace.margin`): the snapping deviation of the scene and
+        the box every C-obstacle is grown by (a float64 surface's may be one step wider, to
+        cover its rounding: its own ``margin`` says). With ``conservative=True`` every
+        C-obstacle holds the true one of the scene's float input.
     """
 
     scene: object
@@ -236,6 +243,15 @@ class SceneModel:
     seconds: dict
     robot_parts: list = field(default_factory=list)
     robot_hull: bool = False
+    margin: Margin | None = None
+
+    @property
+    def error_bound(self) -> float:
+        """How far (scene units) a translation reported in collision can be from the scene's
+        true C-obstacles (the largest over the built ones); with ``conservative=True`` no true
+        collision is ever missed."""
+        built = [co.margin.error_bound for b in self.bodies for co in b.cos]
+        return max(built + [self.margin.error_bound if self.margin else 0.0])
 
     def of_kind(self, kind: str) -> list[BodyModel]:
         return [b for b in self.bodies if b.kind == kind]
@@ -276,6 +292,20 @@ class SceneModel:
         cos += [SurfaceObstacle.union(group) for group in surfaces.values()]
         return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name)
 
+    def _margin_line(self) -> str:
+        m = self.margin
+        if m is None:
+            return "error bound: unknown"
+        steps = sorted({co.margin.steps for b in self.bodies for co in b.cos} | {m.steps})
+        grown = ("not grown" if steps == [(0, 0, 0)] else
+                 "grown by " + " or ".join(str(list(s)) for s in steps) + " grid steps per axis")
+        one_sided = m.conservative and all(co.margin.holds_true for b in self.bodies
+                                           for co in b.cos)
+        return (f"error bound {self.error_bound:.3g}: snapping moved the input by at most "
+                f"{[float(f'{d:.3g}') for d in m.deviation]} per axis; C-obstacles {grown}: "
+                + ("every error is a false collision, never a false free" if one_sided else
+                   "the error is two-sided (conservative=False)"))
+
     def explain(self) -> str:
         """A human-readable report: per scene body and per modelled body."""
         c = self.counts()
@@ -286,7 +316,7 @@ class SceneModel:
                      "vertices), as asked (robot_hull)" if self.robot_hull else
                      f"{len(self.robot_parts)} part{'s' if len(self.robot_parts) != 1 else ''}, "
                      "modelled exactly") + f"; grid step 2**{self.grid.exponent}; bounds "
-                 f"{self.scene.bounds.tolist()}"]
+                 f"{self.scene.bounds.tolist()}", self._margin_line()]
         lines += ["  " + p.line() for p in self.robot_parts]
         for name, s in self.sources.items():
             extra = [f"{s[k]} {k.replace('_', '-')}" for k in ("collapsed", "double_sided",
@@ -466,31 +496,62 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
 
 def _to_arrays(co) -> dict:
     if co.kind == "convex":
-        return pack_polytopes([co.polytope, co.obstacle], "p_")
-    if co.kind == "surface":
-        return pack_polytopes(co.pieces, "p_")
-    return {"vertices": np.asarray(co.vertices), "faces": np.asarray(co.faces)}
+        out = pack_polytopes([co.polytope, co.obstacle], "p_")
+    elif co.kind == "surface":
+        out = pack_polytopes(co.pieces, "p_")
+    else:
+        out = {"vertices": np.asarray(co.vertices), "faces": np.asarray(co.faces)}
+    return out | _margin_arrays(co.margin)
 
 
-def _from_arrays(a: dict, body: BodyModel, robot, c, grid):
+def _margin_arrays(m: Margin) -> dict:
+    """The box and rounding a C-obstacle was grown by (a surface's may be wider than asked)."""
+    return {"margin": np.array(m.steps, dtype=np.int64), "rounding": np.array([m.rounding])}
+
+
+def _margin_from(a: dict, margin: Margin) -> Margin:
+    """The margin stored with built or cached arrays (same deviation as the scene's)."""
+    if "margin" not in a:
+        return margin
+    rounding = float(a["rounding"][0]) if "rounding" in a else 0.0
+    return Margin(tuple(int(x) for x in a["margin"]), margin.deviation, margin.grid,
+                  rounding, margin.conservative)
+
+
+def _from_arrays(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
+    m = _margin_from(a, margin)
     if body.kind == "convex":
         co, obs = unpack_polytopes(a, "p_", grid)
-        return CSpaceObstacle(co, obstacle=obs, robot=robot, reference_point=c)
+        return CSpaceObstacle(co, obstacle=obs, robot=robot, reference_point=c, margin=m)
     if body.kind == "surface":
         F = body.faces[body._keep]
-        return SurfaceObstacle(unpack_polytopes(a, "p_", grid),
-                               obstacle=SurfaceMesh(body.vertices, F, body.name), robot=robot,
-                               reference_point=c, grid=grid)
+        co = SurfaceObstacle(unpack_polytopes(a, "p_", grid),
+                             obstacle=SurfaceMesh(body.vertices, F, body.name), robot=robot,
+                             reference_point=c, grid=grid)
+        co.margin = m
+        return co
     return CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
-                                    robot=robot, reference_point=c, grid=grid, name=body.name)
+                                    robot=robot, reference_point=c, grid=grid, name=body.name,
+                                    margin=m)
 
 
-def _build(body: BodyModel, robot, c, grid, progress):
+def _build(body: BodyModel, robot, c, grid, margin: Margin, progress):
+    """The C-obstacle of a body and a convex robot part, grown by ``margin`` (the float64
+    surface of a solid body by what also covers its rounding), with that margin."""
+    if body.kind == "solid":
+        S, m = grown_mesh_sum(body._solid, robot.reflected(c), margin, progress)
+        return CSpaceObstacle.from_mesh(S.vertices, S.faces, obstacle=body._solid, robot=robot,
+                                        reference_point=grid.to_float(grid.snap(c)), grid=grid,
+                                        sum=S, name=body.name, margin=m)
+    grown = margin.grow(robot)
     if body.kind == "surface":
         F = body.faces[body._keep]
-        return SurfaceObstacle.build((body.vertices, F), robot, c, grid=grid, name=body.name,
-                                     progress=progress)
-    return CSpaceObstacle.build(body._solid, robot, c, grid=grid, progress=progress)
+        co = SurfaceObstacle.build((body.vertices, F), grown, c, grid=grid, name=body.name,
+                                   progress=progress)
+    else:
+        co = CSpaceObstacle.build(body._solid, grown, c, grid=grid, conservative=False)
+    co.robot, co.margin = robot, margin
+    return co
 
 
 def _key(body: BodyModel, robot, c_ints, grid) -> str:
@@ -600,11 +661,12 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
     return out
 
 
-def _pair_key(construction, body: BodyModel, part: RobotPart, c_ints, grid) -> str:
+def _pair_key(construction, body: BodyModel, part: RobotPart, c_ints, grid,
+              margin: Margin) -> str:
     faces = body.faces[body._keep] if body.kind == "surface" else body.faces
     robot = np.vstack([part.ints, part.faces])
-    return co_key(f"{construction} robot {len(part.ints)}", grid, body._ints, faces, robot,
-                  c_ints)
+    return co_key(f"{construction} robot {len(part.ints)} margin {list(margin.steps)}", grid,
+                  body._ints, faces, robot, c_ints)
 
 
 def _body_operand(body: BodyModel):
@@ -627,7 +689,7 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
         o_ints, o_faces = _body_operand(body)
         S = o_ints[o_faces]
         T = c_ints - part.ints[part.faces]
-        tp = TrianglePairs(S, T, arrays["pairs"], arrays["flat"])
+        tp = TrianglePairs(S, T, arrays["pairs"], arrays["flat"], margin=arrays["margin"])
         cos = [PairObstacle(tp, obstacle=obstacle, robot=part, reference_point=c,
                             grid=grid)] if len(tp.pairs) else []
     else:
@@ -654,25 +716,25 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
 
 
 def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, grid, bounds_g,
-                       progress) -> dict:
-    """Build a pair with a non-convex robot part: arrays for the cache."""
+                       margin: Margin, progress) -> dict:
+    """Build a pair with a non-convex robot part, grown by ``margin`` (the convex obstacle,
+    or each triangle pair's piece): arrays for the cache."""
     if construction == "NCC-CVMS swapped":
-        from .trim import minkowski_sum
-
         moved = ClosedMesh.from_arrays(grid.to_float(part.ints - c_ints), part.faces, grid=grid,
                                        name=part.name)
-        S = minkowski_sum(moved, body._solid.reflected((0.0, 0.0, 0.0)))
+        S, m = grown_mesh_sum(moved, body._solid.reflected((0.0, 0.0, 0.0)), margin)
         # -(A ⊕ B): negating floats is exact; reversing the triangles keeps them outward.
         return {"vertices": -np.asarray(S.vertices) + 0.0,
-                "faces": np.ascontiguousarray(np.asarray(S.faces)[:, ::-1])}
+                "faces": np.ascontiguousarray(np.asarray(S.faces)[:, ::-1]),
+                "margin": np.array(m.steps, dtype=np.int64), "rounding": np.array([m.rounding])}
     if construction == "convex ⊕ robot triangles":
-        made = convex_triangle_pieces(body._solid.ints, part.ints, part.faces, c_ints, grid,
-                                      bounds_g)
+        made = convex_triangle_pieces(margin.grow_ints(body._solid.ints), part.ints, part.faces,
+                                      c_ints, grid, bounds_g)
     else:
         o_ints, o_faces = _body_operand(body)
         tp = triangle_pairs(o_ints, o_faces, part.ints, part.faces, c_ints, bounds_g,
-                            closed=body.kind == "solid" or part.kind == "solid")
-        return {"pairs": tp.pairs, "flat": tp.flat,
+                            closed=body.kind == "solid" or part.kind == "solid", margin=margin.g)
+        return {"pairs": tp.pairs, "flat": tp.flat, "margin": margin.g,
                 "counts": np.array([len(tp.pairs), tp.flat_skipped, tp.out_of_bounds],
                                    dtype=np.int64)}
     arrays = pack_polytopes(made.pieces, "p_")
@@ -692,7 +754,8 @@ def _pair_detail(construction, arrays) -> str:
 
 
 def model_scene(scene, *, build: bool = True, cache=None, progress=None,
-                grid: Grid | None = None, robot_hull: bool = False) -> SceneModel:
+                grid: Grid | None = None, robot_hull: bool = False,
+                conservative: bool = True) -> SceneModel:
     """Decide, per obstacle body, what to build and why; build it.
 
     Parameters
@@ -714,6 +777,11 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         Build against the robot's convex hull instead of its exact parts: faster for a
         non-convex robot, and conservative (the hull holds the robot, so it can only add
         collisions), but not the robot the scene gave. ``explain()`` says which was used.
+    conservative : bool, default True
+        Grow every C-obstacle by the least box that makes it hold the true C-obstacle of the
+        scene's float input (:mod:`cspace.margin`): errors are then false collisions within
+        ``error_bound``, never false free. False: the exact C-obstacles of the snapped
+        input, whose error is two-sided (for measuring, not for planning).
 
     Returns
     -------
@@ -729,9 +797,12 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         grid = Grid.for_extent(modelled.extent())
     c = np.asarray(scene.reference_point, dtype=np.float64)
     c_ints = grid.snap(c)
-    # The box of c - R decides what is dropped, exactly, whatever the robot's parts.
+    margin = _margin(modelled, grid, conservative)
+    # The box of c - R, grown by the widest margin a build may take (one more step for a
+    # float64 surface's rounding), decides what is dropped, exactly, whatever the robot's parts.
     r_ints = grid.snap(scene.robot.vertices[np.unique(scene.robot.faces)])
-    minus_r_box = (c_ints - r_ints.max(axis=0), c_ints - r_ints.min(axis=0))
+    g = margin.g + 1
+    minus_r_box = (c_ints - r_ints.max(axis=0) - g, c_ints - r_ints.min(axis=0) + g)
     try:
         robot = ConvexPolytope.from_ints(r_ints, grid=grid, name=scene.robot.name)
     except InvalidMeshError as exc:  # a flat robot has no hull polytope
@@ -792,23 +863,25 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                 convex = part.kind == "convex"
                 if store is None:
                     key = None
-                elif convex:
-                    key = _key(b, part.operand, c_ints, grid)
+                elif convex:  # the grown robot names the growth
+                    key = _key(b, margin.grow(part.operand), c_ints, grid)
                 else:
-                    key = _pair_key(construction, b, part, c_ints, grid)
+                    key = _pair_key(construction, b, part, c_ints, grid, margin)
                 arrays = store.load(key) if store is not None else None
                 pair.cache = "hit" if arrays is not None else ("off" if store is None else "miss")
                 if convex and arrays is not None:
-                    pair.cos = [_from_arrays(arrays, b, part.operand, c_snapped, grid)]
+                    pair.cos = [_from_arrays(arrays, b, part.operand, c_snapped, grid, margin)]
                 elif convex:
-                    pair.cos = [_build(b, part.operand, c, grid, sub)]
+                    pair.cos = [_build(b, part.operand, c, grid, margin, sub)]
                     arrays = _to_arrays(pair.cos[0]) if store is not None else None
                 else:
                     if arrays is None:
                         arrays = _build_pair_arrays(construction, b, part, c_ints, grid,
-                                                    bounds_g, sub)
+                                                    bounds_g, margin, sub)
                     pair.cos = _pair_cos(construction, arrays, b, part, c_ints, grid, bounds_g)
                     pair.detail = _pair_detail(construction, arrays)
+                    for co in pair.cos:  # one margin for the pair's union
+                        co.margin = _margin_from(arrays, margin)
                 if store is not None and pair.cache == "miss":
                     try:
                         store.store(key, arrays)
@@ -831,4 +904,18 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     t2 = time.perf_counter()
     return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
                       seconds={"model": t1 - t0, "build": t2 - t1}, robot_parts=parts,
-                      robot_hull=robot_hull)
+                      robot_hull=robot_hull, margin=margin)
+
+
+def _margin(scene, grid: Grid, conservative: bool) -> Margin:
+    """The scene's outward rounding: the obstacles' largest snapping move per axis (over all
+    bodies), plus the robot's, plus the reference point's, exact. Float64 surfaces may widen
+    it by a step to cover their rounding (each C-obstacle's ``margin`` says)."""
+    dev_o = np.zeros(3)
+    for body in scene.obstacles:
+        dev_o = np.maximum(dev_o, snap_deviation(body.vertices, grid))
+    parts = (dev_o, snap_deviation(scene.robot.vertices, grid),
+             snap_deviation(np.asarray(scene.reference_point, np.float64), grid))
+    dev = [sum((Fraction(float(p[i])) for p in parts), Fraction(0)) for i in range(3)]
+    out = Margin.for_deviation(dev, grid, rounded=False)
+    return out if conservative else out.without_growth()

@@ -19,9 +19,11 @@ snapping of the queries): a float64 ``q`` is a dyadic rational, so ``n . q - d *
 an exact sign. It is evaluated by a float filter (one matrix product with a rigorous error
 bound, semi-static: ``16 eps`` times the same sum on absolute values) and, where the filter
 cannot decide, with Python integers (every float is an integer times a power of two). No
-tolerance decides anything. The stored C-obstacle is exact for the *snapped* inputs: it
-differs from the unsnapped ``O ⊕ (c - R)`` by at most ``3 * grid.point_error_bound``
-(Hausdorff; obstacle, robot and reference point are each snapped once).
+tolerance decides anything. The stored C-obstacle is the exact one of the *snapped* inputs
+grown by the least box that covers how far snapping moved them (and the float64 rounding of a
+stored surface): :mod:`cspace.margin`. It therefore holds the true ``O ⊕ (c - R)`` of the float
+input, so a collision is never reported free, and a reported collision is within
+``error_bound`` of a true one (``conservative=False``: no growth, two-sided error).
 """
 
 from __future__ import annotations
@@ -40,8 +42,9 @@ from .errors import (
     NotConvexError,
 )
 from .exact import _EPS, _FILTER, _TINY, Grid, _dyadic
+from .margin import Margin
 
-__all__ = ["CSpaceObstacle", "CSpace"]
+__all__ = ["CSpaceObstacle", "CSpace", "grown_mesh_sum"]
 
 # _FILTER (16 eps, from the kernel) also covers the 4-term products here (3 coordinates and
 # the offset, from rounded inputs): they need about 6 eps times the permanent.
@@ -390,10 +393,10 @@ def _vertices_of(obj) -> np.ndarray:
     """(n, 3) float64 coordinates of an operand, to size the grid."""
     if isinstance(obj, ConvexPolytope) or hasattr(obj, "vertices"):
         return np.asarray(obj.vertices, dtype=np.float64)
-    if isinstance(obj, (str, os.PathLike)):
-        from .mesh import as_mesh
+    if isinstance(obj, (str, os.PathLike)):  # the file's own floats, not snapped ones
+        from .meshfile import read_mesh_file
 
-        return as_mesh(obj).vertices
+        return np.asarray(read_mesh_file(obj).vertices, dtype=np.float64)
     if _is_mesh(obj):
         return np.asarray(obj[0], dtype=np.float64)
     a = np.asarray(obj, dtype=np.float64)
@@ -452,11 +455,13 @@ def _flat_hull(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return corners, faces
 
 
-def _flat_operands(obstacle, robot, c, grid):
-    """``(C-obstacle polytope, O, R)`` when an operand is a flat convex point set (a polygon
-    or a segment) and the other a convex one: ``O ⊕ (c - R)`` is the hull of the pairwise
-    sums of their points (exact on the grid). None when both operands have volume, or the
-    obstacle is not a point set or convex mesh."""
+def _flat_operands(obstacle, robot, c, grid, margin: Margin):
+    """``(C-obstacle polytope, O, R, margin)`` when an operand is a flat convex point set (a
+    polygon or a segment): ``O ⊕ (c - R)`` is the hull of the pairwise sums of their points
+    (exact on the grid), grown by ``margin``'s box. When both are flat in parallel planes the
+    sum is flat too; it is then grown by at least one grid step on every axis (a solid within
+    the returned margin's bound: an error that can only add collisions). None when both
+    operands have volume, or the obstacle is not a point set or convex mesh."""
     from .errors import DegenerateError
 
     def points(obj, name):
@@ -477,12 +482,35 @@ def _flat_operands(obstacle, robot, c, grid):
     B = grid.snap(c) - (R.ints if R is not None else r_pts)
     sums = (A[:, None, :] + B[None, :, :]).reshape(-1, 3)
     try:
-        co = ConvexPolytope.from_ints(sums, grid=grid, name="cobstacle")
-    except DegenerateError as exc:
-        raise DegenerateError(f"the C-obstacle of a flat obstacle and a flat robot in parallel "
-                              f"planes is itself flat ({exc}); not supported") from None
+        co = ConvexPolytope.from_ints(margin.grow_ints(sums), grid=grid, name="cobstacle")
+    except DegenerateError:
+        margin = margin.at_least(1)
+        co = ConvexPolytope.from_ints(margin.grow_ints(sums), grid=grid, name="cobstacle")
     return (co, O if O is not None else _FlatOperand(o_pts, grid),
-            R if R is not None else _FlatOperand(r_pts, grid))
+            R if R is not None else _FlatOperand(r_pts, grid), margin)
+
+
+def grown_mesh_sum(A, B: ConvexPolytope, margin: Margin, progress=None):
+    """``minkowski_sum(A, B ⊕ box)`` with the box of ``margin`` (chosen for the snapping
+    deviation alone), and the margin that holds for the float64 surface returned.
+
+    The surface's vertices are rounded to float64 (at most half an ulp per coordinate, which
+    the sum measures). When the box also covers that rounding the sum is returned as is;
+    otherwise (rare: a deviation just below a whole number of steps, or none at all with
+    inexact vertices) it is built once more with the box that covers the a-priori rounding
+    bound, so that the stored surface holds the true C-obstacle.
+
+    Returns ``(SumPolyhedron, Margin)``.
+    """
+    from .trim import minkowski_sum
+
+    S = minkowski_sum(A, margin.grow(B), progress=progress)
+    m = margin.with_rounding(S.rounding)
+    if not margin.conservative or m.holds_true:
+        return S, m
+    wider = Margin.for_deviation(margin.deviation, margin.grid, rounded=True)
+    S = minkowski_sum(A, wider.grow(B), progress=progress)
+    return S, wider.with_rounding(S.rounding)
 
 
 class CSpaceObstacle:
@@ -540,9 +568,11 @@ class CSpaceObstacle:
     """
 
     def __init__(
-        self, polytope: ConvexPolytope, *, obstacle=None, robot=None, reference_point=None
+        self, polytope: ConvexPolytope, *, obstacle=None, robot=None, reference_point=None,
+        margin: Margin | None = None,
     ):
         self.polytope = polytope
+        self.margin = margin if margin is not None else Margin.none(polytope.grid)
         self.obstacle = obstacle
         self.robot = robot
         self.reference_point = (
@@ -558,7 +588,7 @@ class CSpaceObstacle:
     @classmethod
     def from_mesh(
         cls, vertices, faces, *, obstacle=None, robot=None, reference_point=(0.0, 0.0, 0.0),
-        grid: Grid | None = None, sum=None, name: str = "cobstacle",
+        grid: Grid | None = None, sum=None, name: str = "cobstacle", margin: Margin | None = None,
     ) -> "CSpaceObstacle":
         """Wrap a closed triangle surface as a C-obstacle (``kind='mesh'``).
 
@@ -577,6 +607,8 @@ class CSpaceObstacle:
         sum : SumPolyhedron, optional
         name : str
             Used in error messages.
+        margin : Margin, optional
+            How the surface was grown from its operands (default: not at all).
 
         Raises
         ------
@@ -592,6 +624,7 @@ class CSpaceObstacle:
         self.robot = robot
         self.reference_point = np.asarray(reference_point, dtype=np.float64).reshape(3)
         self.grid = grid if grid is not None else Grid.for_points(impl.vertices)
+        self.margin = margin if margin is not None else Margin.none(self.grid)
         self.kind = "mesh"
         self.sum = sum
         self._impl = impl
@@ -600,9 +633,9 @@ class CSpaceObstacle:
     @classmethod
     def build(
         cls, obstacle, robot, reference_point=(0.0, 0.0, 0.0), *, grid: Grid | None = None,
-        progress=None,
+        progress=None, conservative: bool = True,
     ) -> "CSpaceObstacle":
-        """Compute ``CO = O ⊕ (c - R)`` exactly.
+        """Compute ``CO = O ⊕ (c - R)`` exactly, grown just enough to hold the true one.
 
         A convex obstacle gives a convex C-obstacle (``kind='convex'``, CVMS); a non-convex
         closed mesh gives ``cspace.minkowski_sum(O, R.reflected(c))`` held as a closed
@@ -623,10 +656,19 @@ class CSpaceObstacle:
             Common snapping grid; default ``Grid.for_points`` of every input coordinate.
         progress : callable, optional
             ``progress(fraction, stage)`` during a non-convex build (see ``minkowski_sum``).
+        conservative : bool, default True
+            Grow the C-obstacle of the snapped operands by the least box (:mod:`cspace.margin`)
+            that makes it hold the C-obstacle of the float input, so that no translation is
+            ever reported free that is not (every error is a false collision within
+            :attr:`error_bound`). Inputs on the grid get no growth where the result is stored
+            exactly (convex path). False: the exact C-obstacle of the snapped operands, whose
+            error is two-sided.
 
         Returns
         -------
         CSpaceObstacle
+            ``margin`` says by how much it was grown; ``error_bound`` how far a reported
+            collision can be from a true one.
 
         Raises
         ------
@@ -641,10 +683,16 @@ class CSpaceObstacle:
         if grid is None:
             grid = Grid.for_points(_vertices_of(obstacle), _vertices_of(robot), c[None, :])
         c_snapped = grid.to_float(grid.snap(c))
-        flat = _flat_operands(obstacle, robot, c, grid)
+
+        def margin(rounded: bool) -> Margin:
+            m = Margin.for_operands(grid, _vertices_of(obstacle), _vertices_of(robot),
+                                    c[None, :], rounded=rounded)
+            return m if conservative else m.without_growth()
+
+        flat = _flat_operands(obstacle, robot, c, grid, margin(False))
         if flat is not None:
-            co, O, R = flat
-            out = cls(co, obstacle=O, robot=R, reference_point=c_snapped)
+            co, O, R, m = flat
+            out = cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=m)
             # FCL's view: each operand a solid where it has volume, a surface where flat.
             o_flat, r_flat = isinstance(O, _FlatOperand), isinstance(R, _FlatOperand)
             out.semantics = (not o_flat, "surface" if r_flat else "convex")
@@ -654,14 +702,14 @@ class CSpaceObstacle:
             O = _as_convex(obstacle, grid, "obstacle")
         except NotConvexError:
             from .mesh import as_mesh
-            from .trim import minkowski_sum
 
             O = as_mesh(obstacle, grid=grid, name="obstacle")
-            S = minkowski_sum(O, R.reflected(c), progress=progress)
+            S, m = grown_mesh_sum(O, R.reflected(c), margin(False), progress)
             return cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
-                                 reference_point=c_snapped, grid=grid, sum=S)
-        co = convex_minkowski_sum(O, R.reflected(c)).polytope
-        return cls(co, obstacle=O, robot=R, reference_point=c_snapped)
+                                 reference_point=c_snapped, grid=grid, sum=S, margin=m)
+        m = margin(False)
+        co = convex_minkowski_sum(O, m.grow(R).reflected(c)).polytope
+        return cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=m)
 
     # ---- properties ---------------------------------------------------------------------
 
@@ -694,6 +742,13 @@ class CSpaceObstacle:
         """(2, 3) float64 bounding box of the C-obstacle."""
         V = self.vertices
         return np.stack([V.min(axis=0), V.max(axis=0)])
+
+    @property
+    def error_bound(self) -> float:
+        """How far (scene units) a translation reported in collision can be from the true
+        C-obstacle of the float input (:attr:`margin`'s bound). Built with
+        ``conservative=True`` the error is one-sided: every true collision is reported."""
+        return self.margin.error_bound
 
     def __repr__(self) -> str:
         return (

@@ -42,7 +42,11 @@ surfaces the flat piece is needed and kept, exactly.
 Pairs are held as index arrays (:class:`PairObstacle`): each piece is the intersection of 17
 slabs whose normals come from the two triangles alone (:func:`pair_planes`), so no hull is
 built; queries evaluate the slabs of the pairs near them with a float filter and settle what
-it leaves with Python integers. :func:`triangle_pair_pieces` builds one exact hull per pair
+it leaves with Python integers. Pieces grown by the outward-rounding box of
+:mod:`cspace.margin` take 38 slabs, still exact. The grown pieces and the (ungrown) containment
+terms hold the true C-obstacle: a robot component inside the obstacle for the float input
+either stays inside after snapping (the term holds) or lies within the snapping deviation of
+the boundary, where a grown pair piece holds it. :func:`triangle_pair_pieces` builds one exact hull per pair
 instead, the reference the fast path is tested against (0.6 ms a pair).
 
 All coordinates are grid integers of the scene grid (robot frame for the robot part, the
@@ -51,7 +55,7 @@ reference point ``c`` snapped); sums and differences of grid integers are exact.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse import coo_matrix
@@ -60,6 +64,7 @@ from scipy.sparse.csgraph import connected_components
 from .convex import ConvexPolytope
 from .errors import DegenerateError
 from .exact import _FILTER, _TINY
+from .margin import Margin
 from .obstacle import CSpaceObstacle, exact_plane_sign, exact_segment_entry, segment_filter
 
 __all__ = ["CONSTRUCTIONS", "pair_construction", "PairPieces", "TrianglePairs",
@@ -157,6 +162,9 @@ class TrianglePairs:
     flat_skipped, out_of_bounds : int
         Pairs left out: flat with a closed operand (redundant), or whose piece box misses the
         planning bounds (decided exactly).
+    margin : (3,) int64
+        Every piece is grown by the box ``[-margin, margin]`` (grid steps per axis; outward
+        rounding, :mod:`cspace.margin`): ``S[i] ⊕ T[j] ⊕ box``.
     """
 
     S: np.ndarray
@@ -165,10 +173,22 @@ class TrianglePairs:
     flat: np.ndarray
     flat_skipped: int = 0
     out_of_bounds: int = 0
+    margin: np.ndarray = field(default_factory=lambda: np.zeros(3, np.int64))
+
+    def __post_init__(self):
+        self.margin = np.asarray(self.margin, dtype=np.int64).reshape(3)
+
+    def piece_points(self, i: int, j: int) -> np.ndarray:
+        """``(k, 3)`` int64 points whose hull is the (grown) piece of pair ``(i, j)``."""
+        pts = (self.S[i][:, None, :] + self.T[j][None, :, :]).reshape(-1, 3)
+        if not self.margin.any():
+            return pts
+        C = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * self.margin
+        return np.unique((pts[:, None, :] + C[None]).reshape(-1, 3), axis=0)
 
 
 def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
-                   closed: bool) -> TrianglePairs:
+                   closed: bool, margin=(0, 0, 0)) -> TrianglePairs:
     """The pairs (obstacle triangle s, robot triangle t) whose piece ``s ⊕ (c - t)`` can meet
     the bounds; flat ones are left out when either operand is closed (see the module).
 
@@ -184,13 +204,17 @@ def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
         Planning bounds in grid units.
     closed : bool
         Whether either operand is closed.
+    margin : (3,) int
+        Grow every piece by this box (grid steps per axis), see :class:`TrianglePairs`.
     """
+    g = np.asarray(margin, dtype=np.int64).reshape(3)
     S = np.asarray(o_ints, np.int64)[np.asarray(o_faces, np.int64)]
     T = np.asarray(c_ints, np.int64) - np.asarray(r_ints, np.int64)[np.asarray(r_faces, np.int64)]
     ns, nt = _primitive_normals(S), _primitive_normals(-T)
-    s_lo, s_hi, t_lo, t_hi = S.min(axis=1), S.max(axis=1), T.min(axis=1), T.max(axis=1)
+    s_lo, s_hi = S.min(axis=1) - g, S.max(axis=1) + g
+    t_lo, t_hi = T.min(axis=1), T.max(axis=1)
     per = max(1, _BLOCK // max(1, len(T)))
-    out = TrianglePairs(S, T, np.zeros((0, 2), np.int64), np.zeros(0, bool))
+    out = TrianglePairs(S, T, np.zeros((0, 2), np.int64), np.zeros(0, bool), margin=g)
     kept, flats = [], []
     for a in range(0, len(S), per):
         i = np.arange(a, min(a + per, len(S)))
@@ -210,18 +234,19 @@ def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
 
 
 def triangle_pair_pieces(o_ints, o_faces, r_ints, r_faces, c_ints, grid, bounds_g, *,
-                         closed: bool, progress=None) -> PairPieces:
+                         closed: bool, progress=None, margin=(0, 0, 0)) -> PairPieces:
     """Reference construction: one exact hull per triangle pair of :func:`triangle_pairs`.
 
     About 0.6 ms a pair; :class:`PairObstacle` answers the same queries from the pairs alone
     and is tested against these hulls. Flat pieces (two open operands) are thickened by one
     grid step here, so that each is a polytope.
     """
-    tp = triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, closed=closed)
+    tp = triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, closed=closed,
+                        margin=margin)
     out = PairPieces([], flat_skipped=tp.flat_skipped, out_of_bounds=tp.out_of_bounds)
     for k, ((i, j), f) in enumerate(zip(tp.pairs.tolist(), tp.flat.tolist())):
-        pts = (tp.S[i][:, None, :] + tp.T[j][None, :, :]).reshape(-1, 3)
-        out.pieces.append(_piece(pts, f, grid, out, f"pair {i}x{j}"))
+        pts = tp.piece_points(i, j)
+        out.pieces.append(_piece(pts, f and not tp.margin.any(), grid, out, f"pair {i}x{j}"))
         if progress is not None and k % 256 == 255:
             progress((k + 1) / len(tp.pairs))
     return out
@@ -307,8 +332,9 @@ def _edges(tri: np.ndarray) -> np.ndarray:
     return tri[:, [1, 2, 0]] - tri
 
 
-def pair_planes(S: np.ndarray, T: np.ndarray) -> np.ndarray:
-    """``(k, 17, 3)`` int64 normals whose slabs bound the pieces ``s ⊕ t`` exactly.
+def pair_planes(S: np.ndarray, T: np.ndarray, grown: bool = False) -> np.ndarray:
+    """``(k, 17, 3)`` int64 normals whose slabs bound the pieces ``s ⊕ t`` exactly
+    (``(k, 38, 3)`` when ``grown``: also ``s ⊕ t ⊕ box``).
 
     For triangles ``s`` (rows of S) and ``t`` (rows of T), grid integers: the two triangle
     normals, the nine cross products of an edge of each (every facet normal of a 3D sum of two
@@ -318,6 +344,11 @@ def pair_planes(S: np.ndarray, T: np.ndarray) -> np.ndarray:
     ``min over the piece <= N . x <= max over the piece`` of every normal the piece is exactly
     their intersection, flat or not. Zero rows (parallel edges) bound nothing. Exact: edges of
     28-bit coordinates give entries below 2**58.
+
+    ``grown``: 21 more, the three coordinate axes and each edge crossed with each axis. The
+    facet normals of ``P ⊕ box`` are facet normals of P or of the box, or cross products of an
+    edge of each (P's edges are edges of s or t; flat P's own are ``±n``): with the box's
+    support ``sum_i g_i |N_i|`` added to every slab, their intersection is ``P ⊕ box`` exactly.
     """
     Es, Et = _edges(S), _edges(T)
     ns = np.cross(Es[:, 0], -Es[:, 2])
@@ -327,8 +358,13 @@ def pair_planes(S: np.ndarray, T: np.ndarray) -> np.ndarray:
     axis = np.abs(ref).argmax(axis=1)
     unit = np.zeros((len(S), 3), dtype=np.int64)
     unit[np.arange(len(S)), axis] = 1
-    turned = np.cross(unit[:, None, :], np.concatenate([Es, Et], axis=1))
-    return np.concatenate([ns[:, None], nt[:, None], cross, turned], axis=1)
+    edges = np.concatenate([Es, Et], axis=1)
+    turned = np.cross(unit[:, None, :], edges)
+    out = [ns[:, None], nt[:, None], cross, turned]
+    if grown:
+        axes = np.broadcast_to(np.eye(3, dtype=np.int64), (len(S), 3, 3))
+        out += [axes, np.cross(axes[:, :, None, :], edges[:, None, :, :]).reshape(len(S), 18, 3)]
+    return np.concatenate(out, axis=1)
 
 
 def _tri_support(N: np.ndarray, tri: np.ndarray):
@@ -343,14 +379,16 @@ class _PairsCO:
     """Exact queries on ``∪ s_i ⊕ t_j`` over given triangle pairs (the engine interface of
     :mod:`cspace.obstacle`), with no hull built per pair.
 
-    Each pair's piece is the intersection of 17 slabs (:func:`pair_planes`). Queries find the
+    Each pair's piece is the intersection of 17 slabs (:func:`pair_planes`; 38 for pieces grown
+    by the margin box ``[-g, g]``). Queries find the
     pairs whose piece box holds them (a uniform grid of cells, as for surface pieces), compute
     the slab values in float with a rigorous bound (16 unit roundoffs of the sum of absolute
     products, the normals and supports rounded to float included), and settle what the bound
     leaves with Python integers. Touching counts as inside.
     """
 
-    def __init__(self, S: np.ndarray, T: np.ndarray, pairs: np.ndarray, grid):
+    def __init__(self, S: np.ndarray, T: np.ndarray, pairs: np.ndarray, grid,
+                 margin=(0, 0, 0)):
         from .surface import _CellGrid
 
         self.S, self.T = np.asarray(S, np.int64), np.asarray(T, np.int64)
@@ -358,9 +396,14 @@ class _PairsCO:
         if not len(self.pairs):
             raise ValueError("a triangle-pair C-obstacle needs at least one pair")
         self.grid, self.exponent = grid, grid.exponent
+        # Pieces grown by the box [-g, g] (outward rounding): 38 slabs instead of 17.
+        self.g = np.asarray(margin, dtype=np.int64).reshape(3)
+        self.grown = bool(self.g.any())
+        self.n_slabs = 38 if self.grown else 17
+        self._gf = self.g.astype(np.float64)
         i, j = self.pairs[:, 0], self.pairs[:, 1]
-        self.lo = grid.to_float(self.S[i].min(axis=1) + self.T[j].min(axis=1))
-        self.hi = grid.to_float(self.S[i].max(axis=1) + self.T[j].max(axis=1))
+        self.lo = grid.to_float(self.S[i].min(axis=1) + self.T[j].min(axis=1) - self.g)
+        self.hi = grid.to_float(self.S[i].max(axis=1) + self.T[j].max(axis=1) + self.g)
         self.cells = _CellGrid(self.lo, self.hi)
         # The two triangle normals' slabs first: most pairs near a query are separated by
         # one of them, and they cost six dot products a pair.
@@ -371,29 +414,32 @@ class _PairsCO:
         self._s_abs = np.abs(self._Sf).max(axis=1)
         self._t_abs = np.abs(self._Tf).max(axis=1)
         # Slab columns of every pair up front when they fit in about 64 MB, else per query.
-        self._all = self._columns(np.arange(len(self.pairs))) if len(self.pairs) <= _KEEP else None
+        fits = len(self.pairs) * self.n_slabs <= _KEEP * 17
+        self._all = self._columns(np.arange(len(self.pairs))) if fits else None
 
     # ---- slabs ------------------------------------------------------------------------
 
     def _columns(self, p: np.ndarray):
         """Upper and lower slab sides of pairs ``p`` as columns ``a . [k, 1] <= 0``:
-        ``(A (n, 4, 34), absA (n, 4, 34))`` float, zero normals padded out."""
+        ``(A (n, 4, 2K), absA (n, 4, 2K))`` float (K slabs), zero normals padded out."""
         S, T = self.S[self.pairs[p, 0]], self.T[self.pairs[p, 1]]
-        N = pair_planes(S, T)
+        N = pair_planes(S, T, self.grown)
+        K = N.shape[1]
         Nf = N.astype(np.float64)
         s_lo, s_hi, s_perm = _tri_support(Nf, S.astype(np.float64))
         t_lo, t_hi, t_perm = _tri_support(Nf, T.astype(np.float64))
+        box = np.abs(Nf) @ self._gf  # the box's support, g_i |N_i| summed (rounded: in perm)
         valid = N.any(axis=2)
-        A = np.zeros((len(p), 4, 34))
-        A[:, :3, :17] = Nf.transpose(0, 2, 1)
-        A[:, 3, :17] = -(s_hi + t_hi)
-        A[:, :3, 17:] = -Nf.transpose(0, 2, 1)
-        A[:, 3, 17:] = s_lo + t_lo
+        A = np.zeros((len(p), 4, 2 * K))
+        A[:, :3, :K] = Nf.transpose(0, 2, 1)
+        A[:, 3, :K] = -(s_hi + t_hi + box)
+        A[:, :3, K:] = -Nf.transpose(0, 2, 1)
+        A[:, 3, K:] = s_lo + t_lo - box
         absA = np.abs(A)
         # The supports are rounded sums of rounded products: their error is covered by the
         # permanent (bounded below like the products of the query itself).
-        absA[:, 3, :17] += s_perm + t_perm
-        absA[:, 3, 17:] += s_perm + t_perm
+        absA[:, 3, :K] += s_perm + t_perm + box
+        absA[:, 3, K:] += s_perm + t_perm + box
         pad = ~np.concatenate([valid, valid], axis=1)
         A[:, :3, :][np.repeat(pad[:, None, :], 3, axis=1)] = 0.0
         A[:, 3, :][pad] = _PAD
@@ -403,15 +449,17 @@ class _PairsCO:
     def _exact_planes(self, p: int):
         """``(n, d)`` Python-int half-spaces ``n . k <= d`` of pair ``p``'s piece."""
         S, T = self.S[self.pairs[p, 0]], self.T[self.pairs[p, 1]]
-        N = pair_planes(S[None], T[None])[0]
+        N = pair_planes(S[None], T[None], self.grown)[0]
+        g = self.g.tolist()
         out = []
         for n in N.tolist():
             if not any(n):
                 continue
             vs = [sum(a * b for a, b in zip(n, v)) for v in S.tolist()]
             vt = [sum(a * b for a, b in zip(n, v)) for v in T.tolist()]
-            out.append((n, max(vs) + max(vt)))
-            out.append(([-x for x in n], -(min(vs) + min(vt))))
+            box = sum(gi * abs(ni) for gi, ni in zip(g, n))
+            out.append((n, max(vs) + max(vt) + box))
+            out.append(([-x for x in n], -(min(vs) + min(vt) - box)))
         return out
 
     def _columns_of(self, p: np.ndarray):
@@ -432,7 +480,7 @@ class _PairsCO:
 
     def _face_values(self, q: np.ndarray, p: np.ndarray):
         """Values and bounds of the four face-normal slab sides of pairs ``p`` at queries
-        ``q`` (rows matched), as :meth:`_values` gives for all 34: a cheap first pass."""
+        ``q`` (rows matched), as :meth:`_values` gives for all: a cheap first pass."""
         i, j = self.pairs[p, 0], self.pairs[p, 1]
         Q = np.ldexp(q, -self.exponent)
         out, errs = [], []
@@ -443,10 +491,11 @@ class _PairsCO:
             dots = np.einsum("kj,kaj->ka", n, other)
             x = np.einsum("kj,kj->k", n, Q)
             an = np.abs(n)
+            box = an @ self._gf  # the margin box's support
             err = _FILTER * (np.einsum("kj,kj->k", an, np.abs(Q))
                              + np.einsum("kj,kj->k", an, own_abs)
-                             + np.einsum("kj,kj->k", an, other_abs)) + _TINY
-            out += [x - base - dots.max(axis=1), base + dots.min(axis=1) - x]
+                             + np.einsum("kj,kj->k", an, other_abs) + box) + _TINY
+            out += [x - base - dots.max(axis=1) - box, base + dots.min(axis=1) - x - box]
             errs += [err, err]
         return np.stack(out, axis=1), np.stack(errs, axis=1)
 
@@ -585,6 +634,8 @@ class _PairsCO:
                 r, p = rows[c:c + (1 << 16)], ps[c:c + (1 << 16)]
                 np.minimum.at(b, r, self._pair_distance(S, T, x, r, p))
             best[s:s + step] = b
+        if self.grown:  # the grown piece is nearer by at most the box's half-diagonal
+            best = np.maximum(best - float(np.linalg.norm(self._gf)) * self.grid.step, 0.0)
         return best
 
     def _pair_distance(self, S, T, x, rows, ps):
@@ -675,13 +726,14 @@ class PairObstacle(CSpaceObstacle):
         self.reference_point = np.asarray(reference_point, dtype=np.float64).reshape(3)
         self.grid = grid
         self.sum = None
-        self._impl = _PairsCO(pairs.S, pairs.T, pairs.pairs, grid)
+        self._impl = _PairsCO(pairs.S, pairs.T, pairs.pairs, grid, pairs.margin)
+        self.margin = Margin.none(grid)  # set by model_scene with the growth's deviation
         self._mesh = None
 
     @property
     def n_facets(self) -> int:
-        """Slab sides over all pairs (17 slabs, 34 sides, a pair)."""
-        return 34 * len(self.pairs.pairs)
+        """Slab sides over all pairs (17 slabs a pair, 38 when grown; two sides each)."""
+        return 2 * self._impl.n_slabs * len(self.pairs.pairs)
 
     def _hull_mesh(self, which) -> tuple[np.ndarray, np.ndarray]:
         """The pieces ``which`` (indices into the pairs) as hulls in one mesh (flat ones
@@ -689,8 +741,8 @@ class PairObstacle(CSpaceObstacle):
         tp, V, F, n = self.pairs, [], [], 0
         scratch = PairPieces([])
         for (i, j), f in zip(tp.pairs[which].tolist(), tp.flat[which].tolist()):
-            pts = (tp.S[i][:, None, :] + tp.T[j][None, :, :]).reshape(-1, 3)
-            piece = _piece(pts, f, self.grid, scratch, "piece")
+            piece = _piece(tp.piece_points(i, j), f and not tp.margin.any(), self.grid, scratch,
+                           "piece")
             V.append(piece.vertices)
             F.append(piece.faces + n)
             n += len(piece.vertices)

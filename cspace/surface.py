@@ -27,6 +27,7 @@ import numpy as np
 
 from .convex import ConvexPolytope
 from .exact import _FILTER, _TINY, Grid
+from .margin import Margin
 from .obstacle import CSpaceObstacle, _ConvexCO
 
 __all__ = ["SurfaceMesh", "SurfaceObstacle", "surface_pieces"]
@@ -321,6 +322,7 @@ class SurfaceObstacle(CSpaceObstacle):
         self.robot = robot
         self.reference_point = np.asarray(reference_point, dtype=np.float64).reshape(3)
         self.grid = grid
+        self.margin = Margin.none(grid)  # set by model_scene when the robot was grown
         self._impl = _UnionCO(self.pieces, _impl)
         self.stats: dict = {}
 
@@ -335,9 +337,11 @@ class SurfaceObstacle(CSpaceObstacle):
                            np.vstack([p.obstacle.faces + o for p, o in zip(parts, offsets)]),
                            ", ".join(p.obstacle.name for p in parts))
         first = parts[0]
-        return cls([q for p in parts for q in p.pieces], obstacle=mesh, robot=first.robot,
-                   reference_point=first.reference_point, grid=first.grid,
-                   _impl=[c for p in parts for c in p._impl.impl])
+        out = cls([q for p in parts for q in p.pieces], obstacle=mesh, robot=first.robot,
+                  reference_point=first.reference_point, grid=first.grid,
+                  _impl=[c for p in parts for c in p._impl.impl])
+        out.margin = max((p.margin for p in parts), key=lambda m: m.error_bound)
+        return out
 
     @classmethod
     def build(cls, obstacle, robot: ConvexPolytope, reference_point=(0.0, 0.0, 0.0), *,

@@ -89,6 +89,9 @@ class SumPolyhedron:
     rounding_self_intersections : (k, 2) int64
         Pairs of triangles that intersect improperly after rounding to float64 although
         they did not in the exact result (empty when rounding created none).
+    rounding : (3,) float64
+        Per axis, a bound on how far rounding to float64 moved a vertex (half the ulp of the
+        moved coordinates; zero when every vertex is exactly a float64).
     grid : Grid
         The snapping grid of the inputs.
     points_exact : list or ConvexPolytope
@@ -121,6 +124,7 @@ class SumPolyhedron:
     points_exact: list = field(repr=False)
     convex: bool = False
     stats: dict = field(default_factory=dict, repr=False)
+    rounding: np.ndarray = field(default_factory=lambda: np.zeros(3), repr=False)
 
     @cached_property
     def volume_exact(self) -> Fraction:
@@ -1442,7 +1446,10 @@ def _result(out: _Output, S: Superset, stats: dict, workers: int = 1) -> SumPoly
     grid = S.grid
     V = _to_float(out.points, grid)
     nm_edges, nm_vertices = _nonmanifold(out.faces, len(V))
-    crossings, stats["rounding_processes"] = _rounding_check(out, V, grid, workers)
+    crossings, stats["rounding_processes"], moved = _rounding_check(out, V, grid, workers)
+    # Correct rounding moves a coordinate by at most half its ulp: per axis, over moved points.
+    rounding = (0.5 * np.spacing(np.abs(V[moved])).max(axis=0) if moved.any()
+                else np.zeros(3))
     stats["rounding_check"] = time.perf_counter() - t
     stats["total"] += stats["rounding_check"]
     stats["output_triangles"] = len(out.faces)
@@ -1464,14 +1471,15 @@ def _result(out: _Output, S: Superset, stats: dict, workers: int = 1) -> SumPoly
         points_exact=out.points,
         convex=False,
         stats=stats,
+        rounding=rounding,
     )
 
 
 def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
-                    workers: int = 1) -> tuple[np.ndarray, int]:
-    """Triangle pairs that meet improperly after rounding to float64, and the number of
+                    workers: int = 1) -> tuple[np.ndarray, int, np.ndarray]:
+    """Triangle pairs that meet improperly after rounding to float64, the number of
     processes that tested them (several from ``_PARALLEL_CHECK`` box pairs on, numpy filter
-    path only).
+    path only), and which vertices rounding moved.
 
     In the exact result two triangles meet only in shared vertices and edges. Rounding moves
     a vertex by at most half an ulp per coordinate; only pairs with a moved vertex can change,
@@ -1481,7 +1489,7 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
     """
     T = out.faces
     if not len(T):
-        return np.zeros((0, 2), np.int64), 1
+        return np.zeros((0, 2), np.int64), 1, np.zeros(len(V), dtype=bool)
     e = grid.exponent
     up, down = (1 << e, 1) if e >= 0 else (1, 1 << -e)
 
@@ -1494,8 +1502,8 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
 
     moved = np.array([moved_point(P, v) for P, v in zip(out.points, V.tolist())], dtype=bool)
     if not moved.any():
-        return np.zeros((0, 2), np.int64), 1
-    return _improper_pairs(V, T, grid, moved, workers)
+        return np.zeros((0, 2), np.int64), 1, moved
+    return (*_improper_pairs(V, T, grid, moved, workers), moved)
 
 
 def self_intersections(mesh) -> np.ndarray:

@@ -228,8 +228,8 @@ def test_rounding_check_in_two_processes_matches_one(monkeypatch):
     monkeypatch.setattr(T, "_improper", lambda V, s, t: True)
     monkeypatch.setattr(T, "_undecided_pairs_np",
                         lambda V, F, ps, moved: moved[F[ps]].any(axis=(1, 2)))
-    one, n1 = real(*seen["args"], 1)
-    two, n2 = real(*seen["args"], 2)
+    one, n1, _ = real(*seen["args"], 1)
+    two, n2, _ = real(*seen["args"], 2)
     assert (n1, n2) == (1, 2)
     assert len(one) > 100 and np.array_equal(one, two)
 
@@ -258,8 +258,8 @@ def test_rounding_check_of_an_empty_output():
     z = np.zeros((0, 3), np.int64)
     out = T._Output(points=[], faces=z, face_facet=z[:, 0], facet_superset=z[:, 0],
                     shell=z[:, 0], shell_is_hole=np.zeros(0, bool))
-    bad, used = T._rounding_check(out, np.zeros((0, 3)), Grid(exponent=-20), workers=2)
-    assert bad.shape == (0, 2) and used == 1
+    bad, used, moved = T._rounding_check(out, np.zeros((0, 3)), Grid(exponent=-20), workers=2)
+    assert bad.shape == (0, 2) and used == 1 and moved.shape == (0,)
 
 
 def test_crossing_order_matches_the_angular_sort():

@@ -1,0 +1,148 @@
+"""Hard cases: no answer is ever a false free, and the stated bound holds.
+
+The families come from ``hard.py``, each with translations whose answer is known without
+cspace (and confirmed by FCL on the float input itself). The default run sweeps a part of
+each family; ``make test-slow`` sweeps all of it.
+"""
+
+from __future__ import annotations
+
+from fractions import Fraction
+
+import numpy as np
+import pytest
+from hard import GAP_ANGLES, gap_comb, l_robot
+from scipy.spatial import ConvexHull
+
+from cspace import CSpaceObstacle, Grid, model_scene
+from cspace.fcl_check import FclOracle, cross_check
+from cspace.margin import Margin, snap_deviation
+from cspace.scene import Body, Scene
+
+FAST_ANGLES = GAP_ANGLES[:12]
+
+
+def _box_faces(points: np.ndarray) -> np.ndarray:
+    return ConvexHull(points).simplices
+
+
+def _false_free(co, q: np.ndarray) -> int:
+    """How many of the known collisions ``q`` (along one slot) are answered free: by
+    ``contains``, by ``segment_free`` along the slot, by ``first_contact`` from its start."""
+    n = int((~co.contains(q)).sum())
+    n += bool(co.segment_free(q[0], q[-1]))
+    n += co.first_contact(q[0], q[-1]) != 0.0
+    return n
+
+
+def _confirmed_by_fcl(case) -> None:
+    V, F = case.obstacle
+    orc = FclOracle(V, F, case.robot, _box_faces(case.robot), np.zeros(3), convex=True)
+    assert orc.collides(case.colliding).all(), "the known collisions must be collisions"
+
+
+# --------------------------------------------------------------------------------------
+# the margin itself
+
+
+def test_snap_deviation_is_exact():
+    rng = np.random.default_rng(1)
+    P = rng.normal(size=(200, 3)) * [1.0, 1e-3, 7.0]
+    grid = Grid.for_points(P)
+    dev = snap_deviation(P, grid)
+    k = grid.snap(P)
+    exact = [max(abs(Fraction(float(x)) - Fraction(int(i)) * Fraction(grid.step))
+                 for x, i in zip(P[:, a], k[:, a])) for a in range(3)]
+    assert [Fraction(float(d)) for d in dev] == exact
+    assert (dev <= grid.error_bound).all()
+
+
+@pytest.mark.parametrize("rounded", [False, True])
+def test_margin_is_the_least_box_covering_the_deviation(rounded):
+    grid = Grid.for_extent(3.0)
+    s = Fraction(grid.step)
+    for dev in ([0.0, 0.0, 0.0], [grid.step, 0.5 * grid.step, 1.5 * grid.step],
+                [1e-30, 2.9 * grid.step, 3 * grid.step]):
+        m = Margin.for_deviation(dev, grid, rounded=rounded)
+        need = [Fraction(d) + Fraction(m.rounding) for d in dev]
+        assert all(g * s >= x for g, x in zip(m.steps, need)) and m.holds_true
+        assert all((g - 1) * s < x or g == 0 for g, x in zip(m.steps, need))
+    assert Margin.for_deviation([0, 0, 0], grid, rounded=False).error_bound == 0.0
+    assert not Margin.for_deviation([grid.step / 3] * 3, grid, rounded=False).without_growth(
+    ).holds_true
+
+
+# --------------------------------------------------------------------------------------
+# a slot exactly as wide as the robot, turned by irrational angles: no false free
+
+
+def test_gap_comb_cracks_exist_without_outward_rounding():
+    # The family is hard: the exact C-obstacle of the *snapped* input opens a slit of free
+    # space in some of the turned combs (what outward rounding exists for).
+    cracked = 0
+    for angle in FAST_ANGLES:
+        case = gap_comb(angle)
+        co = CSpaceObstacle.build(case.obstacle, case.robot, conservative=False)
+        cracked += _false_free(co, case.colliding) > 0
+    assert cracked >= 1
+
+
+@pytest.mark.parametrize("depth", [1e-9, 1e-12])
+def test_gap_comb_is_never_reported_free(depth):
+    for angle in FAST_ANGLES:
+        case = gap_comb(angle, depth=depth)
+        _confirmed_by_fcl(case)
+        co = CSpaceObstacle.build(case.obstacle, case.robot)
+        assert co.margin.holds_true and any(co.margin.steps)
+        assert co.error_bound < 1e-6  # a few grid steps of a unit scene
+        assert _false_free(co, case.colliding) == 0, f"angle {angle}"
+
+
+def _gap_scene(case, robot, teeth_apart: bool) -> Scene:
+    V, F = case.obstacle
+    if teeth_apart:  # the two teeth of the slot as convex bodies of their own (CVMS)
+        w = 0.25
+        bodies = []
+        for x0 in (0.0, 2 * w):
+            box = np.array([[x, y, z] for x in (x0, x0 + w) for y in (w, 3 * w)
+                            for z in (0.0, w)]) @ case.rotation.T
+            bodies.append(Body(f"tooth at {x0}", box, _box_faces(box), "test"))
+        bodies = tuple(bodies)
+    else:
+        bodies = (Body("comb", V, F, "test"),)
+    lo = np.array([-1.0, -1.0, -1.0])
+    return Scene("gap", None, bodies, Body("robot", *robot, "test"), (0.0, 0.0, 0.0),
+                 (lo, -lo), lo + 0.01, lo + 0.02)
+
+
+@pytest.mark.parametrize("robot, teeth_apart, construction", [
+    ("box", True, "CVMS"), ("box", False, "NCC-CVMS"), ("L", False, "triangle pairs"),
+], ids=["teeth convex (CVMS)", "comb solid (NCC-CVMS)", "L robot (triangle pairs)"])
+def test_gap_scene_is_never_reported_free(robot, teeth_apart, construction):
+    angles = FAST_ANGLES[:6] if robot == "L" else FAST_ANGLES
+    for angle in angles:
+        case = gap_comb(angle)
+        shape = ((case.robot, _box_faces(case.robot)) if robot == "box"
+                 else l_robot(angle=angle))
+        m = model_scene(_gap_scene(case, shape, teeth_apart))
+        assert {p.construction for b in m.bodies for p in b.pairs} == {construction}
+        cs = m.cspace()
+        assert "never a false free" in m.explain()
+        assert _false_free(cs, case.colliding) == 0, f"angle {angle}"
+    # and the grown C-obstacles still agree with FCL on the snapped operands away from
+    # the growth (checked on the last angle)
+    r = cross_check(cs, n=3000, seed=2)
+    assert r["n_disagree"] == 0 and r["n_false_free"] == 0
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("depth", [1e-9, 1e-12, 0.0])
+def test_gap_comb_full_sweep(depth):
+    # Every angle; depth 0: the robot exactly between the teeth as the float input says
+    # (touching or within ~1e-16 of it; never reported free).
+    for angle in GAP_ANGLES:
+        case = gap_comb(angle, depth=depth)
+        if depth:
+            _confirmed_by_fcl(case)
+        co = CSpaceObstacle.build(case.obstacle, case.robot)
+        assert _false_free(co, case.colliding) == 0, f"angle {angle}"
