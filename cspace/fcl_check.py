@@ -311,6 +311,9 @@ def _near_surface(co, n: int, rng, scale: float) -> np.ndarray:
     """Points on random boundary triangles of a C-obstacle, moved along the normal."""
     # Triangle pairs: the hulls of a few hundred random pieces, not of every piece.
     V, F = co.sample_mesh(rng) if hasattr(co, "sample_mesh") else (co.vertices, co.faces)
+    # Triangles with a float normal (a sliver whose rounded corners are collinear has none).
+    T = V[F]
+    F = F[np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1) > 0]
     tri = V[F[rng.integers(0, len(F), n)]]
     w = rng.dirichlet(np.ones(3), n)
     p = np.einsum("ki,kij->kj", w, tri)

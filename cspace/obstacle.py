@@ -407,6 +407,63 @@ def _vertices_of(obj) -> np.ndarray:
     return a
 
 
+def _mesh_arrays(obj) -> tuple[np.ndarray, np.ndarray]:
+    """``(vertices float64, faces int64)`` of a mesh-like operand, as given (not validated)."""
+    if isinstance(obj, (str, os.PathLike)):
+        from .meshfile import read_mesh_file
+
+        f = read_mesh_file(obj)
+        return np.asarray(f.vertices, dtype=np.float64), np.asarray(f.faces, dtype=np.int64)
+    if hasattr(obj, "vertices") and hasattr(obj, "faces"):
+        return np.asarray(obj.vertices, dtype=np.float64), np.asarray(obj.faces, dtype=np.int64)
+    return np.asarray(obj[0], dtype=np.float64), np.asarray(obj[1], dtype=np.int64)
+
+
+class _Mesh:
+    """Vertices and faces of several operands joined (for FCL checks and drawing)."""
+
+    def __init__(self, vertices: np.ndarray, faces: np.ndarray, name: str = "mesh"):
+        self.vertices, self.faces, self.name = vertices, faces, name
+
+    @classmethod
+    def join(cls, meshes) -> "_Mesh":
+        V, F, n = [], [], 0
+        for m in meshes:
+            V.append(np.asarray(m.vertices, dtype=np.float64))
+            F.append(np.asarray(m.faces, dtype=np.int64) + n)
+            n += len(V[-1])
+        return cls(np.vstack(V), np.vstack(F), "+".join(getattr(m, "name", "mesh") for m in meshes))
+
+
+class _UnionOf:
+    """The engine interface over several C-obstacles' engines: their union, not built."""
+
+    def __init__(self, cos: list):
+        self.engines = [co._impl for co in cos]
+        joined = _Mesh.join(cos)
+        self.vertices, self.faces = joined.vertices, joined.faces
+
+    def contains(self, q: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(q), dtype=bool)
+        for e in self.engines:
+            rest = np.nonzero(~out)[0]
+            if not rest.size:
+                break
+            out[rest] = e.contains(q[rest])
+        return out
+
+    def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
+        hit, t = np.zeros(len(q0), dtype=bool), np.full(len(q0), np.nan)
+        for e in self.engines:
+            h, te = e.segments(q0, q1, want_t)
+            hit |= h
+            t = np.fmin(t, te)
+        return hit, t
+
+    def signed_distance(self, q: np.ndarray) -> np.ndarray:
+        return np.minimum.reduce([e.signed_distance(q) for e in self.engines])
+
+
 class _FlatOperand:
     """A flat convex operand (a polygon or a segment) on the grid: its points and, for
     drawing and FCL, a fan of triangles over its hull (internal)."""
@@ -462,14 +519,14 @@ def _flat_operands(obstacle, robot, c, grid, margin: Margin):
     sum is flat too; it is then grown by at least one grid step on every axis (a solid within
     the returned margin's bound: an error that can only add collisions). None when both
     operands have volume, or the obstacle is not a point set or convex mesh."""
-    from .errors import DegenerateError
+    from .errors import DegenerateError, NonManifoldError
 
     def points(obj, name):
         try:
             return _as_convex(obj, grid, name), None
         except DegenerateError:
             return None, grid.snap(_vertices_of(obj))
-        except NotConvexError:
+        except (NotConvexError, NonManifoldError):
             return None, None
 
     O, o_pts = points(obstacle, "obstacle")
@@ -490,9 +547,13 @@ def _flat_operands(obstacle, robot, c, grid, margin: Margin):
             R if R is not None else _FlatOperand(r_pts, grid), margin)
 
 
-def grown_mesh_sum(A, B: ConvexPolytope, margin: Margin, progress=None):
+def grown_mesh_sum(A, B, margin: Margin, progress=None):
     """``minkowski_sum(A, B ⊕ box)`` with the box of ``margin`` (chosen for the snapping
     deviation alone), and the margin that holds for the float64 surface returned.
+
+    ``B`` is a ConvexPolytope or ``(n, 3)`` grid ints of a convex set on ``margin.grid``; a
+    flat one (a panel, a rod) is grown by at least one step on every axis, so that the sum has
+    a solid operand (an error that only adds collisions, within the returned bound).
 
     The surface's vertices are rounded to float64 (at most half an ulp per coordinate, which
     the sum measures). When the box also covers that rounding the sum is returned as is;
@@ -502,14 +563,27 @@ def grown_mesh_sum(A, B: ConvexPolytope, margin: Margin, progress=None):
 
     Returns ``(SumPolyhedron, Margin)``.
     """
+    from .errors import DegenerateError
     from .trim import minkowski_sum
 
-    S = minkowski_sum(A, margin.grow(B), progress=progress)
+    def grown(m: Margin) -> ConvexPolytope:
+        if isinstance(B, ConvexPolytope):
+            return m.grow(B)
+        return ConvexPolytope.from_ints(m.grow_ints(B), grid=m.grid, name="B")
+
+    try:
+        Bg = grown(margin)
+    except DegenerateError:  # flat: give it volume
+        margin = margin.at_least(1)
+        Bg = grown(margin)
+    S = minkowski_sum(A, Bg, progress=progress)
     m = margin.with_rounding(S.rounding)
     if not margin.conservative or m.holds_true:
         return S, m
     wider = Margin.for_deviation(margin.deviation, margin.grid, rounded=True)
-    S = minkowski_sum(A, wider.grow(B), progress=progress)
+    wider = Margin(tuple(max(a, b) for a, b in zip(wider.steps, margin.steps)),
+                   wider.deviation, wider.grid, wider.rounding)
+    S = minkowski_sum(A, grown(wider), progress=progress)
     return S, wider.with_rounding(S.rounding)
 
 
@@ -532,9 +606,12 @@ class CSpaceObstacle:
     reference_point : (3,) float64
         The robot's reference point, snapped to the grid.
     grid : Grid
-    kind : {'convex', 'mesh'}
-        The representation: exact facet planes, or a closed triangle surface
-        (:class:`cspace.meshquery.MeshCO`) for non-convex C-obstacles.
+    kind : {'convex', 'mesh', 'union'}
+        The representation: exact facet planes, a closed triangle surface
+        (:class:`cspace.meshquery.MeshCO`) for non-convex C-obstacles, or the union of
+        several (``parts``; an obstacle whose pieces meet at non-manifold edges or vertices).
+    margin : Margin
+        The outward rounding it was grown by (:mod:`cspace.margin`); ``error_bound``.
     sum : SumPolyhedron or None
         The ``cspace.minkowski_sum`` result a mesh C-obstacle was built from (provenance,
         holes, non-manifold features), when built by :meth:`build`.
@@ -645,11 +722,13 @@ class CSpaceObstacle:
         ----------
         obstacle : ConvexPolytope, (n, 3) float64 points, or a closed mesh
             Points are hulled; a mesh (ClosedMesh, trimesh, ``(vertices, faces)``, path)
-            may be non-convex. Coplanar or collinear points (a panel, a rod) are a flat
-            convex operand.
+            may be non-convex, and may touch itself at edges or vertices (two boxes sharing
+            an edge: split there, the C-obstacle is the union of the pieces'). Coplanar or
+            collinear points (a panel, a rod) are a flat convex operand.
         robot : ConvexPolytope, (n, 3) float64 points, or a closed convex mesh
-            In its own frame; flat points (a panel, a rod) too, against a convex obstacle
-            (the C-obstacle is the hull of the pairwise sums).
+            In its own frame; flat points (a panel, a rod) too: against a convex obstacle the
+            C-obstacle is the hull of the pairwise sums, against a non-convex one the robot
+            is thickened by at least one grid step (within ``error_bound``).
         reference_point : (3,) float64
             The robot point whose position ``q`` is planned (robot frame).
         grid : Grid, optional
@@ -682,14 +761,19 @@ class CSpaceObstacle:
             raise NonFiniteError(f"reference_point is not finite: {c.tolist()}")
         if grid is None:
             grid = Grid.for_points(_vertices_of(obstacle), _vertices_of(robot), c[None, :])
+        m = Margin.for_operands(grid, _vertices_of(obstacle), _vertices_of(robot), c[None, :],
+                                rounded=False)
+        return cls._grown(obstacle, robot, c, grid, m if conservative else m.without_growth(),
+                          progress)
+
+    @classmethod
+    def _grown(cls, obstacle, robot, c, grid: Grid, margin: Margin, progress=None):
+        """:meth:`build` with the margin decided (from the float operands)."""
+        from .errors import DegenerateError, NonManifoldError
+        from .mesh import as_mesh
+
         c_snapped = grid.to_float(grid.snap(c))
-
-        def margin(rounded: bool) -> Margin:
-            m = Margin.for_operands(grid, _vertices_of(obstacle), _vertices_of(robot),
-                                    c[None, :], rounded=rounded)
-            return m if conservative else m.without_growth()
-
-        flat = _flat_operands(obstacle, robot, c, grid, margin(False))
+        flat = _flat_operands(obstacle, robot, c, grid, margin)
         if flat is not None:
             co, O, R, m = flat
             out = cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=m)
@@ -697,19 +781,68 @@ class CSpaceObstacle:
             o_flat, r_flat = isinstance(O, _FlatOperand), isinstance(R, _FlatOperand)
             out.semantics = (not o_flat, "surface" if r_flat else "convex")
             return out
-        R = _as_convex(robot, grid, "robot")
+        try:
+            R = _as_convex(robot, grid, "robot")
+        except DegenerateError:  # flat, against a non-convex obstacle: NCC-CVMS thickens it
+            R = _FlatOperand(grid.snap(_vertices_of(robot)), grid)
         try:
             O = _as_convex(obstacle, grid, "obstacle")
-        except NotConvexError:
-            from .mesh import as_mesh
+        except (NotConvexError, NonManifoldError):
+            try:
+                O = as_mesh(obstacle, grid=grid, name="obstacle")
+            except NonManifoldError:  # pieces meeting at edges or vertices: one CO each
+                return cls._of_parts(obstacle, robot, c, grid, margin, progress)
+            B = R.reflected(c) if isinstance(R, ConvexPolytope) else grid.snap(c) - R.ints
+            S, m = grown_mesh_sum(O, B, margin, progress)
+            out = cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
+                                reference_point=c_snapped, grid=grid, sum=S, margin=m)
+            if isinstance(R, _FlatOperand):
+                out.semantics = (True, "surface")
+            return out
+        co = convex_minkowski_sum(O, margin.grow(R).reflected(c)).polytope
+        return cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=margin)
 
-            O = as_mesh(obstacle, grid=grid, name="obstacle")
-            S, m = grown_mesh_sum(O, R.reflected(c), margin(False), progress)
-            return cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
-                                 reference_point=c_snapped, grid=grid, sum=S, margin=m)
-        m = margin(False)
-        co = convex_minkowski_sum(O, m.grow(R).reflected(c)).polytope
-        return cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=m)
+    @classmethod
+    def _of_parts(cls, obstacle, robot, c, grid: Grid, margin: Margin, progress=None):
+        """A closed obstacle whose pieces meet at non-manifold edges or vertices (two boxes
+        sharing an edge): split there into closed manifold pieces (exactly, as scenes are,
+        :func:`cspace.components.split_parts`); the C-obstacle is the union of theirs."""
+        from types import SimpleNamespace
+
+        from .components import split_parts, weld_dedupe
+        from .errors import NonManifoldError
+
+        V, F = _mesh_arrays(obstacle)
+        ints, F, _ = weld_dedupe(SimpleNamespace(vertices=V, faces=F), grid)
+        parts = split_parts(ints, F)
+        cos = []
+        for k, faces in enumerate(parts):
+            used, local = np.unique(F[faces], return_inverse=True)
+            piece = (grid.to_float(ints[used]), local.reshape(-1, 3))
+            try:
+                cos.append(cls._grown(piece, robot, c, grid, margin, progress))
+            except NonManifoldError as exc:  # pragma: no cover - split_parts leaves none
+                raise NonManifoldError(f"obstacle: piece {k} of {len(parts)}: {exc}") from None
+        return cls.union(cos)
+
+    @classmethod
+    def union(cls, cos: list) -> "CSpaceObstacle":
+        """One C-obstacle answering for several (their union, not built): ``contains`` and
+        ``segment_free`` over all, ``first_contact`` the earliest, ``signed_distance`` the
+        least (inside: minus the deepest containing one's depth, a lower bound on the union's).
+        ``kind='union'``; ``parts`` holds them."""
+        if len(cos) == 1:
+            return cos[0]
+        self = cls.__new__(cls)
+        self.parts = list(cos)
+        first = cos[0]
+        self.polytope, self.sum, self.kind = None, None, "union"
+        self.obstacle = _Mesh.join([co.obstacle for co in cos])
+        self.robot, self.reference_point, self.grid = first.robot, first.reference_point, first.grid
+        self.margin = max((co.margin for co in cos), key=lambda m: m.error_bound)
+        self.semantics = getattr(first, "semantics", None)
+        self._impl = _UnionOf(cos)
+        return self
 
     # ---- properties ---------------------------------------------------------------------
 

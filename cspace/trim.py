@@ -159,9 +159,11 @@ class SumPolyhedron:
     def error_bound(self) -> float:
         """Hausdorff distance bound between this sum and the sum of the unsnapped inputs
         (twice the grid's point error bound), plus half a float64 ulp of rounding per
-        coordinate of :attr:`vertices`."""
+        coordinate of :attr:`vertices`, plus ``sqrt(3)`` steps per flat operand thickened
+        (``stats['thickened_operands']``; the sum then holds the exact one)."""
         scale = float(np.abs(self.vertices).max()) if len(self.vertices) else 0.0
-        return 2.0 * self.grid.point_error_bound + float(np.spacing(scale))
+        thick = self.stats.get("thickened_operands", 0) * np.sqrt(3.0) * self.grid.step
+        return 2.0 * self.grid.point_error_bound + float(np.spacing(scale)) + thick
 
     def to_trimesh(self):
         import trimesh
@@ -180,6 +182,25 @@ def _convex_operand(obj, name: str, grid: Grid | None = None) -> ConvexPolytope 
         return ConvexPolytope.from_mesh(mesh, name=mesh.name)
     except NotConvexError:
         return None
+
+
+def _convex_or_thickened(obj, name: str, grid: Grid | None):
+    """``(ConvexPolytope or None, thickened)``: a flat convex point set (a panel, a triangle,
+    a rod) has no volume; it is grown by one grid step on every axis (its hull with the
+    corners of the box ``[-1, 1]^3`` steps around each point) so that the sum has a solid
+    operand. The sum then holds the exact one and lies within ``sqrt(3)`` steps of it."""
+    from .errors import DegenerateError
+
+    try:
+        return _convex_operand(obj, name, grid), False
+    except DegenerateError:
+        points = _raw_points(obj, name)
+        if points is None:
+            raise
+        g = grid if grid is not None else Grid.for_points(points)
+        box = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
+        ints = (g.snap(points)[:, None, :] + box[None]).reshape(-1, 3)
+        return ConvexPolytope.from_ints(ints, grid=g, name=name), True
 
 
 def _from_convex(A: ConvexPolytope, B: ConvexPolytope, t0: float) -> SumPolyhedron:
@@ -217,6 +238,8 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
         A closed, oriented, non-self-intersecting triangle mesh (any genus, non-convex), or a
         convex polytope.
     B : ConvexPolytope, (n, 3) points (hulled) or a closed convex mesh
+        Flat points (a panel, a triangle, a rod; also as A) are thickened by one grid step
+        on every axis (``stats['thickened_operands']``, included in :attr:`error_bound`).
     progress : callable, optional
         Called as ``progress(fraction: float, stage: str)`` during long builds: the overall
         fraction done in ``[0, 1]`` (stages weighted by their usual share of the time) and the
@@ -245,12 +268,14 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     # Snap both operands once, on one grid for both (snapping on separate grids and then
     # re-snapping onto the common one would move points twice, beyond the stated bound).
     grid = _shared_grid(A, B)
-    Bc = _convex_operand(B, "B", grid)
+    Bc, thick_b = _convex_or_thickened(B, "B", grid)
     if Bc is None:
         raise NotConvexError("B must be convex (the robot of a translational C-obstacle)")
-    Ac = _convex_operand(A, "A", grid)
+    Ac, thick_a = _convex_or_thickened(A, "A", grid)
     if Ac is not None:
-        return _from_convex(Ac, Bc, t0)
+        out = _from_convex(Ac, Bc, t0)
+        out.stats["thickened_operands"] = thick_a + thick_b
+        return out
     A = as_mesh(A, grid=grid, name=getattr(A, "name", None) or "A")
     crossing = self_intersections(A)
     if len(crossing):
@@ -264,7 +289,9 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     enabled = gc.isenabled()
     gc.disable()
     try:
-        return _trim(A, Bc, t0, progress, worker_count(workers))
+        out = _trim(A, Bc, t0, progress, worker_count(workers))
+        out.stats["thickened_operands"] = int(thick_b)
+        return out
     finally:
         if enabled:
             gc.enable()

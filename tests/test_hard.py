@@ -11,10 +11,10 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hard import GAP_ANGLES, gap_comb, l_robot
+from hard import GAP_ANGLES, gap_comb, l_robot, rotation_z
 from scipy.spatial import ConvexHull
 
-from cspace import CSpaceObstacle, Grid, model_scene
+from cspace import ClosedMesh, CSpaceObstacle, Grid, minkowski_sum, model_scene
 from cspace.fcl_check import FclOracle, cross_check
 from cspace.margin import Margin, snap_deviation
 from cspace.scene import Body, Scene
@@ -146,3 +146,55 @@ def test_gap_comb_full_sweep(depth):
             _confirmed_by_fcl(case)
         co = CSpaceObstacle.build(case.obstacle, case.robot)
         assert _false_free(co, case.colliding) == 0, f"angle {angle}"
+
+
+# --------------------------------------------------------------------------------------
+# refusals turned into answers: obstacles touching themselves, flat robots
+
+
+def _touching_boxes(shift, angle: float):
+    """Two unit boxes as one mesh, the second moved by ``shift`` (sharing an edge or a
+    vertex with the first), welded, turned by ``angle`` about z: a closed 2-cycle that is not
+    a 2-manifold."""
+    import trimesh
+
+    a = trimesh.creation.box((1.0, 1.0, 1.0))
+    V = np.vstack([a.vertices + 0.5, a.vertices + 0.5 + np.asarray(shift, float)])
+    F = np.vstack([a.faces, a.faces + 8])
+    V, inverse = np.unique(V, axis=0, return_inverse=True)
+    return V @ rotation_z(angle).T, inverse.reshape(-1)[F]
+
+
+@pytest.mark.parametrize("shift", [(1, 1, 0), (1, 1, 1)], ids=["edge", "vertex"])
+@pytest.mark.parametrize("angle", [0.0, GAP_ANGLES[0]], ids=["axis-aligned", "turned"])
+def test_obstacle_touching_itself_builds_as_the_union_of_its_pieces(shift, angle):
+    from cspace.errors import NonManifoldError
+
+    V, F = _touching_boxes(shift, angle)
+    robot = np.array([[x, y, z] for x in (0, .3) for y in (0, .3) for z in (0, .3)]) - 0.15
+    with pytest.raises(NonManifoldError):  # not one solid ...
+        ClosedMesh.from_arrays(V, F)
+    co = CSpaceObstacle.build((V, F), robot)  # ... but the union of two
+    assert co.kind == "union" and len(co.parts) == 2
+    # the robot squeezed into the shared edge / vertex collides (both pieces touch it)
+    corner = np.asarray(shift, float) @ rotation_z(angle).T * 1.0
+    assert co.contains(corner)
+    r = cross_check(co, n=4000, seed=5)
+    assert r["n_disagree"] == 0 and r["n_false_free"] == 0, r["disagreements"][:3]
+
+
+@pytest.mark.parametrize("flat", ["panel", "triangle", "rod"])
+def test_flat_robot_against_a_non_convex_obstacle(flat):
+    from zoo import comb
+
+    V, F = comb()
+    R = {"panel": [[0, 0, 0], [0.6, 0, 0], [0.6, 0.4, 0], [0, 0.4, 0]],
+         "triangle": [[0, 0, 0], [0.5, 0.1, 0.2], [0.1, 0.4, -0.3]],
+         "rod": [[0, 0, 0], [0.3, 0.2, 0.1]]}[flat]
+    R = np.asarray(R, dtype=np.float64)
+    co = CSpaceObstacle.build((V, F), R, (0.05, 0.0, 0.0))
+    assert co.kind == "mesh" and min(co.margin.steps) >= 1 and co.error_bound < 1e-5
+    r = cross_check(co, n=4000, seed=6, band=1e-6)  # FCL's fuzz on degenerate triangles
+    assert r["n_disagree"] == 0 and r["n_false_free"] == 0, r["disagreements"][:3]
+    S = minkowski_sum((V, F), R)  # the sum alone: B thickened by one step, stated
+    assert S.stats["thickened_operands"] == 1 and S.error_bound < 1e-5
