@@ -37,6 +37,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_superset.py
 	$(PY) benchmarks/bench_minkowski.py
 	$(PY) benchmarks/bench_queries.py
+	$(PY) benchmarks/bench_hard_cases.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

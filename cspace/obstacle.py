@@ -512,6 +512,33 @@ def _flat_hull(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return corners, faces
 
 
+def _flat_convex_mesh(P: np.ndarray, F: np.ndarray) -> bool:
+    """Is a mesh whose grid points ``P`` are coplanar a convex polygon (or segment), modelled
+    one- or two-sided: do its triangles cover their hull exactly once or twice? Exact: twice
+    the projected areas, in integers, along the axis nearest the plane's normal."""
+    corners, _ = _flat_hull(P)
+    if len(corners) < 3 or not len(F):
+        return True  # a segment: no area to compare
+    U = np.unique(P, axis=0)
+    d = (U - U[0]).astype(object)
+    n = next((c for k in range(2, len(U)) for c in [np.cross(d[1], d[k])] if any(c)), None)
+    if n is None:
+        return True  # collinear
+    if any(int(np.dot(n, x)) for x in d):
+        return False  # not flat: some other degeneracy (a collapsed face)
+    drop = int(np.argmax([abs(int(x)) for x in n]))
+    keep = [a for a in range(3) if a != drop]
+
+    def twice_area(tri) -> int:
+        (ax, ay), (bx, by), (cx, cy) = ([int(v) for v in p[keep]] for p in tri)
+        return abs((bx - ax) * (cy - ay) - (by - ay) * (cx - ax))
+
+    hull = sum(twice_area((corners[0], corners[k], corners[k + 1]))
+               for k in range(1, len(corners) - 1))
+    total = sum(twice_area(P[f]) for f in np.asarray(F, np.int64))
+    return total in (hull, 2 * hull)
+
+
 def _flat_operands(obstacle, robot, c, grid, margin: Margin):
     """``(C-obstacle polytope, O, R, margin)`` when an operand is a flat convex point set (a
     polygon or a segment): ``O ⊕ (c - R)`` is the hull of the pairwise sums of their points
@@ -519,13 +546,16 @@ def _flat_operands(obstacle, robot, c, grid, margin: Margin):
     sum is flat too; it is then grown by at least one grid step on every axis (a solid within
     the returned margin's bound: an error that can only add collisions). None when both
     operands have volume, or the obstacle is not a point set or convex mesh."""
-    from .errors import DegenerateError, NonManifoldError
+    from .errors import DegenerateError, DuplicateFaceError, NonManifoldError
 
     def points(obj, name):
         try:
             return _as_convex(obj, grid, name), None
-        except DegenerateError:
-            return None, grid.snap(_vertices_of(obj))
+        except (DegenerateError, DuplicateFaceError):
+            P = grid.snap(_vertices_of(obj))
+            if _is_mesh(obj) and not _flat_convex_mesh(P, _mesh_arrays(obj)[1]):
+                raise  # a thin non-convex mesh (a flat L) is not its hull
+            return None, P
         except (NotConvexError, NonManifoldError):
             return None, None
 

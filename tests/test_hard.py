@@ -198,3 +198,26 @@ def test_flat_robot_against_a_non_convex_obstacle(flat):
     assert r["n_disagree"] == 0 and r["n_false_free"] == 0, r["disagreements"][:3]
     S = minkowski_sum((V, F), R)  # the sum alone: B thickened by one step, stated
     assert S.stats["thickened_operands"] == 1 and S.error_bound < 1e-5
+
+
+def test_a_flat_mesh_is_its_hull_only_when_it_is_convex():
+    # An L plate thinner than the grid step collapses to a flat L: not convex, so it is not
+    # replaced by its hull (that would report collisions far beyond the bound): a named error.
+    from zoo import voxel_solid
+
+    from cspace.errors import DegenerateError
+
+    occ = np.zeros((3, 3, 1), dtype=bool)
+    occ[:, 0, 0] = occ[0, :, 0] = True
+    V, F = voxel_solid(occ, 1.0)
+    box = np.array([[x, y, z] for x in (-.15, .15) for y in (-.15, .15) for z in (-.15, .15)])
+    with pytest.raises(DegenerateError, match="collapses"):
+        CSpaceObstacle.build((V * [0.5, 0.5, 1e-9], F), box)
+    # A panel modelled two-sided (each triangle twice, opposite windings) is a flat convex
+    # robot: accepted, and FCL agrees.
+    P = np.array([[0, 0, 0], [.6, 0, 0], [.6, .4, 0], [0, .4, 0]], dtype=np.float64)
+    PF = np.array([[0, 1, 2], [0, 2, 3], [2, 1, 0], [3, 2, 0]])
+    co = CSpaceObstacle.build(3 * box, (P, PF))
+    assert co.kind == "convex"
+    r = cross_check(co, n=2000, seed=7)
+    assert r["n_disagree"] == 0 and r["n_false_free"] == 0
