@@ -264,9 +264,22 @@ def _tri_dist2(px, py, pz, T, t):
         _seg_dist2(px, py, pz, bx, by, bz, cx, cy, cz),
         _seg_dist2(px, py, pz, cx, cy, cz, ax, ay, az),
     )
-    abx, aby, abz = bx - ax, by - ay, bz - az
-    acx, acy, acz = cx - ax, cy - ay, cz - az
-    nx, ny, nz = aby * acz - abz * acy, abz * acx - abx * acz, abx * acy - aby * acx
+    # The normal from the two shorter edges: e0 x e1 = e1 x e2 = e2 x e0 (= ab x ac), but the
+    # product of the two longest edges of a sliver (a nearly parallel pair) cancels and tilts
+    # the plane (3e-6 off at 0.26 from a 3.5 x 6e-13 sliver of a grown sum).
+    e0x, e0y, e0z = bx - ax, by - ay, bz - az
+    e1x, e1y, e1z = cx - bx, cy - by, cz - bz
+    e2x, e2y, e2z = ax - cx, ay - cy, az - cz
+    l0 = e0x * e0x + e0y * e0y + e0z * e0z
+    l1 = e1x * e1x + e1y * e1y + e1z * e1z
+    l2 = e2x * e2x + e2y * e2y + e2z * e2z
+    if l0 >= l1 and l0 >= l2:
+        ux, uy, uz, vx, vy, vz = e1x, e1y, e1z, e2x, e2y, e2z
+    elif l1 >= l2:
+        ux, uy, uz, vx, vy, vz = e2x, e2y, e2z, e0x, e0y, e0z
+    else:
+        ux, uy, uz, vx, vy, vz = e0x, e0y, e0z, e1x, e1y, e1z
+    nx, ny, nz = uy * vz - uz * vy, uz * vx - ux * vz, ux * vy - uy * vx
     nn = nx * nx + ny * ny + nz * nz
     if not nn > 0.0:
         return best

@@ -654,7 +654,11 @@ def _point_segment_d2(p, a, b):
 def _point_triangle_d2(p, tri):
     """Squared distance from points to triangles (k,), float."""
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    n = np.cross(b - a, c - a)
+    # The normal from the two shorter edges (see cspace.meshquery._tri_dist2: slivers).
+    E = np.stack([b - a, c - b, a - c], axis=1)
+    longest = np.einsum("kij,kij->ki", E, E).argmax(axis=1)
+    r = np.arange(len(tri))
+    n = np.cross(E[r, (longest + 1) % 3], E[r, (longest + 2) % 3])
     nn = np.einsum("kj,kj->k", n, n)
     with np.errstate(divide="ignore", invalid="ignore"):
         h = np.einsum("kj,kj->k", p - a, n) / nn
