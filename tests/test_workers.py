@@ -37,8 +37,9 @@ def test_this_process_and_a_child_share_the_chunks():
     """With two workers one chunk queue feeds this process and one forked child: a slow
     parent leaves most chunks to the child."""
     def task(c):
-        if _in_parent():
-            time.sleep(0.05)
+        # The child is quicker, but not instant: under load it could otherwise drain the
+        # queue before this process takes its first chunk.
+        time.sleep(0.05 if _in_parent() else 0.01)
         return os.getpid()
 
     pids = dict(forked_map(task, list(range(20)), 2))
