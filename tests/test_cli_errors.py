@@ -108,7 +108,10 @@ def test_ctrl_c_during_a_long_build_is_one_line_and_leaves_nothing(tmp_path):
                           str(tmp_path / "ball.stl"), "-o", str(out), "--workers", "2",
                           "--progress"],
                          stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                         start_new_session=True)
+                         start_new_session=True,
+                         # as from a terminal: a test run started in the background (nohup,
+                         # `cmd &`) ignores SIGINT, and Python keeps an inherited SIG_IGN
+                         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     # Interrupt in the middle of the forked arrangements (progress lines on stderr).
     seen = []
     for line in p.stderr:
