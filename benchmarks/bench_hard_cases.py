@@ -181,7 +181,8 @@ def _cspace_row(case: Case, q, ref, vol_ref, conservative=True) -> dict:
         co = CSpaceObstacle.build((case.vertices, case.faces), case.robot,
                                   conservative=conservative)
     except cspace.CspaceError as exc:
-        return {"result": f"{type(exc).__name__}: {str(exc)[:90]}", "seconds": time.perf_counter() - t}
+        return {"result": f"{type(exc).__name__}: {str(exc)[:90]}",
+                "seconds": time.perf_counter() - t}
     dt = time.perf_counter() - t
     ff, fc, far = _judge(case, co.contains, q, ref)
     if co.kind == "union":
@@ -430,10 +431,14 @@ def main() -> None:
     thin = [3, 9] if args.quick else [3, 6, 7, 8, 9, 12]
     t0 = time.perf_counter()
     body = []
-    body += voxel_family("Offset: L bracket and box robot moved by 10^k", [f"10^{k}" for k in offsets],
-                         lambda p: Case(L, cell, robot, lambda x, k=int(p[3:]): x + 10.0 ** k), n, rng)
-    body += voxel_family("Scale: L bracket and box robot scaled by 10^k", [f"10^{k}" for k in scales],
-                         lambda p: Case(L, cell, robot, lambda x, k=int(p[3:]): x * 10.0 ** k), n, rng)
+    body += voxel_family("Offset: L bracket and box robot moved by 10^k",
+                         [f"10^{k}" for k in offsets],
+                         lambda p: Case(L, cell, robot, lambda x, k=int(p[3:]): x + 10.0 ** k),
+                         n, rng)
+    body += voxel_family("Scale: L bracket and box robot scaled by 10^k",
+                         [f"10^{k}" for k in scales],
+                         lambda p: Case(L, cell, robot, lambda x, k=int(p[3:]): x * 10.0 ** k),
+                         n, rng)
     body += voxel_family("Thin: the L as a plate 10^-k thick", [f"10^-{k}" for k in thin],
                          lambda p: Case(L, (0.5, 0.5, 10.0 ** -int(p[4:])), robot), n, rng)
     body += voxel_family("Flat robot against the L", ["panel (z = 0)", "rod (along x)"],
@@ -495,7 +500,8 @@ def summary() -> list[str]:
     """Per tool: rows answered, refused or failed, rows with a false free, and (cspace) the
     largest ratio of a false collision's distance to the stated bound."""
     out = ["## Summary", "", "| tool | rows | answered | refused / failed | rows with false free | "
-           "false free answers | worst false collision / stated bound |", "|---|---|---|---|---|---|---|"]
+           "false free answers | worst false collision / stated bound |",
+           "|---|---|---|---|---|---|---|"]
     for tool in ("cspace", "cspace, conservative=False", "manifold3d", "CGAL Nef"):
         rows = [r for _, _, t, r in RESULTS if t == tool]
         if not rows:

@@ -75,7 +75,8 @@ def split_parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
     np.minimum.at(lo, label, corners.min(axis=1))
     np.maximum.at(hi, label, corners.max(axis=1))
     closed = np.nonzero(~boundary)[0]
-    inside = ((lo[closed, None] <= lo[None, closed]) & (hi[None, closed] <= hi[closed, None])).all(2)
+    inside = ((lo[closed, None] <= lo[None, closed])
+              & (hi[None, closed] <= hi[closed, None])).all(2)
     np.fill_diagonal(inside, False)
     i, j = np.nonzero(inside)
     # A box inside a box is not a cavity yet: one vertex of the inner component must lie in

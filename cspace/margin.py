@@ -37,7 +37,20 @@ import numpy as np
 
 from .exact import Grid
 
-__all__ = ["Margin", "snap_deviation"]
+__all__ = ["Margin", "snap_deviation", "grow_points"]
+
+
+def grow_points(ints: np.ndarray, steps) -> np.ndarray:
+    """``(m, 3)`` int64: every grid point plus every corner of the box ``[-steps, steps]``
+    (per axis), duplicates removed; their hull is the points' hull grown by the box. The
+    points themselves when ``steps`` is zero."""
+    P = np.asarray(ints, dtype=np.int64).reshape(-1, 3)
+    g = np.asarray(steps, dtype=np.int64).reshape(3)
+    if not g.any():
+        return P
+    C = np.unique(np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)],
+                           dtype=np.int64) * g, axis=0)
+    return np.unique((P[:, None, :] + C[None, :, :]).reshape(-1, 3), axis=0)
 
 
 def snap_deviation(points, grid: Grid) -> np.ndarray:
@@ -139,19 +152,9 @@ class Margin:
     def any(self) -> bool:
         return any(self.steps)
 
-    def corners(self) -> np.ndarray:
-        """``(k, 3)`` int64 distinct corners of the box (one row, zero, for no growth)."""
-        g = self.g
-        C = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)],
-                     dtype=np.int64) * g
-        return np.unique(C, axis=0)
-
     def grow_ints(self, ints: np.ndarray) -> np.ndarray:
         """``(n * k, 3)`` int64: every point plus every corner (hull them for the grown set)."""
-        P = np.asarray(ints, dtype=np.int64).reshape(-1, 3)
-        if not self.any:
-            return P
-        return np.unique((P[:, None, :] + self.corners()[None, :, :]).reshape(-1, 3), axis=0)
+        return grow_points(ints, self.steps)
 
     def grow(self, poly):
         """A convex polytope grown by the box (exact hull on the grid), or itself."""
@@ -161,11 +164,6 @@ class Margin:
 
         return ConvexPolytope.from_ints(self.grow_ints(poly.ints), grid=poly.grid,
                                         name=poly.name)
-
-    def support(self, normals: np.ndarray) -> list:
-        """Exact support of the box in each direction: ``sum_i g_i |n_i|`` (Python ints)."""
-        g = [int(x) for x in self.steps]
-        return [sum(gi * abs(int(ni)) for gi, ni in zip(g, n)) for n in np.asarray(normals).tolist()]
 
     @property
     def error_bound(self) -> float:
@@ -186,5 +184,6 @@ class Margin:
                    for d, g in zip(self.deviation, self.steps))
 
     def __repr__(self) -> str:
-        return (f"Margin(steps={list(self.steps)}, deviation={[f'{d:.3g}' for d in self.deviation]}, "
+        dev = [f"{d:.3g}" for d in self.deviation]
+        return (f"Margin(steps={list(self.steps)}, deviation={dev}, "
                 f"error_bound={self.error_bound:.3g})")

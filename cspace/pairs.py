@@ -64,7 +64,7 @@ from scipy.sparse.csgraph import connected_components
 from .convex import ConvexPolytope
 from .errors import DegenerateError
 from .exact import _FILTER, _TINY
-from .margin import Margin
+from .margin import Margin, grow_points
 from .obstacle import CSpaceObstacle, exact_plane_sign, exact_segment_entry, segment_filter
 
 __all__ = ["CONSTRUCTIONS", "pair_construction", "PairPieces", "TrianglePairs",
@@ -180,11 +180,8 @@ class TrianglePairs:
 
     def piece_points(self, i: int, j: int) -> np.ndarray:
         """``(k, 3)`` int64 points whose hull is the (grown) piece of pair ``(i, j)``."""
-        pts = (self.S[i][:, None, :] + self.T[j][None, :, :]).reshape(-1, 3)
-        if not self.margin.any():
-            return pts
-        C = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)]) * self.margin
-        return np.unique((pts[:, None, :] + C[None]).reshape(-1, 3), axis=0)
+        return grow_points((self.S[i][:, None, :] + self.T[j][None, :, :]).reshape(-1, 3),
+                           self.margin)
 
 
 def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,

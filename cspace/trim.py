@@ -197,10 +197,11 @@ def _convex_or_thickened(obj, name: str, grid: Grid | None):
         points = _raw_points(obj, name)
         if points is None:
             raise
+        from .margin import grow_points
+
         g = grid if grid is not None else Grid.for_points(points)
-        box = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)])
-        ints = (g.snap(points)[:, None, :] + box[None]).reshape(-1, 3)
-        return ConvexPolytope.from_ints(ints, grid=g, name=name), True
+        return ConvexPolytope.from_ints(grow_points(g.snap(points), (1, 1, 1)), grid=g,
+                                        name=name), True
 
 
 def _from_convex(A: ConvexPolytope, B: ConvexPolytope, t0: float) -> SumPolyhedron:
