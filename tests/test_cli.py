@@ -163,6 +163,8 @@ def test_plan_explain_reports_the_model_then_plans(capsys):
     text = capsys.readouterr().out
     assert "17 obstacle bodies -> 17 modelled: 11 convex, 0 solid, 0 surface, 6 dropped" in text
     assert "front-spine: dropped" in text and "back-tooth-1: convex" in text
+    # the stated bound, one-sided (the comb's coordinates are not all on the grid: it grows)
+    assert "error bound " in text and "never a false free" in text
     assert text.index("modelled") < text.index("RRTConnect solved")
 
 
