@@ -436,12 +436,26 @@ class _Mesh:
 
 
 class _UnionOf:
-    """The engine interface over several C-obstacles' engines: their union, not built."""
+    """The engine interface over several C-obstacles' engines: their union, not built
+    (:class:`CSpace` and ``kind='union'`` C-obstacles). Each query stops asking engines for
+    rows already decided; vertices and faces are joined on first use (drawing only)."""
 
-    def __init__(self, cos: list):
-        self.engines = [co._impl for co in cos]
-        joined = _Mesh.join(cos)
-        self.vertices, self.faces = joined.vertices, joined.faces
+    def __init__(self, cos):
+        self.cos = tuple(cos)
+        self.engines = [co._impl for co in self.cos]
+        self._joined = None
+
+    @property
+    def vertices(self) -> np.ndarray:
+        if self._joined is None:
+            self._joined = _Mesh.join(self.cos)
+        return self._joined.vertices
+
+    @property
+    def faces(self) -> np.ndarray:
+        if self._joined is None:
+            self._joined = _Mesh.join(self.cos)
+        return self._joined.faces
 
     def contains(self, q: np.ndarray) -> np.ndarray:
         out = np.zeros(len(q), dtype=bool)
@@ -455,13 +469,22 @@ class _UnionOf:
     def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
         hit, t = np.zeros(len(q0), dtype=bool), np.full(len(q0), np.nan)
         for e in self.engines:
-            h, te = e.segments(q0, q1, want_t)
-            hit |= h
-            t = np.fmin(t, te)
+            if want_t:  # the earliest contact over all
+                h, te = e.segments(q0, q1, True)
+                hit |= h
+                t = np.fmin(t, te)
+                continue
+            rest = np.nonzero(~hit)[0]
+            if not rest.size:
+                break
+            hit[rest], _ = e.segments(q0[rest], q1[rest], False)
         return hit, t
 
     def signed_distance(self, q: np.ndarray) -> np.ndarray:
-        return np.minimum.reduce([e.signed_distance(q) for e in self.engines])
+        out = np.full(len(q), np.inf)
+        for e in self.engines:
+            out = np.minimum(out, e.signed_distance(q))
+        return out
 
 
 class _FlatOperand:
@@ -1065,6 +1088,7 @@ class CSpace:
 
     def __init__(self, obstacles, *, bounds=None, name: str = "cspace"):
         self.obstacles = tuple(obstacles)
+        self._union = _UnionOf(self.obstacles)
         self.name = name
         if bounds is None:
             if not self.obstacles:
@@ -1113,12 +1137,7 @@ class CSpace:
         See :meth:`CSpaceObstacle.contains`.
         """
         q, single = _translations(q)
-        out = np.zeros(len(q), dtype=bool)
-        for o in self.obstacles:
-            rest = np.nonzero(~out)[0]
-            if not rest.size:
-                break
-            out[rest] = o._impl.contains(q[rest])
+        out = self._union.contains(q)
         return bool(out[0]) if single else out
 
     def signed_distance(self, q) -> np.ndarray | float:
@@ -1130,28 +1149,17 @@ class CSpace:
         make the true depth larger); the sign is exact either way.
         """
         q, single = _translations(q)
-        out = np.full(len(q), np.inf)
-        for o in self.obstacles:
-            out = np.minimum(out, o._signed_distance(q))
+        out = self._union.signed_distance(q)
         return float(out[0]) if single else out
 
     def segment_free(self, q0, q1) -> np.ndarray | bool:
         """Free of every obstacle (exact); see :meth:`CSpaceObstacle.segment_free`."""
         a, b, single = CSpaceObstacle._pair(q0, q1)
-        free = np.ones(len(a), dtype=bool)
-        for o in self.obstacles:
-            rest = np.nonzero(free)[0]
-            if not rest.size:
-                break
-            hit, _ = o._impl.segments(a[rest], b[rest], want_t=False)
-            free[rest] = ~hit
+        free = ~self._union.segments(a, b, want_t=False)[0]
         return bool(free[0]) if single else free
 
     def first_contact(self, q0, q1) -> np.ndarray | float:
         """Smallest first-contact parameter over the obstacles (NaN if the segment is free)."""
         a, b, single = CSpaceObstacle._pair(q0, q1)
-        t = np.full(len(a), np.nan)
-        for o in self.obstacles:
-            _, to = o._impl.segments(a, b, want_t=True)
-            t = np.fmin(t, to)
+        t = self._union.segments(a, b, want_t=True)[1]
         return float(t[0]) if single else t
