@@ -35,7 +35,6 @@ Usage: ``python benchmarks/bench_hard_cases.py [--quick] [--no-cgal] [--out PATH
 from __future__ import annotations
 
 import argparse
-import itertools
 import os
 import platform
 import sys
@@ -59,102 +58,6 @@ RESULTS: list = []  # (family, parameter, tool, row) of every voxel-family row, 
 L_OCC = zoo.l_shape(arm=2)  # noqa: F841 (documentation: the same L as the tests)
 
 
-def _l_cells() -> np.ndarray:
-    occ = np.zeros((3, 3, 1), dtype=bool)
-    occ[:, 0, 0] = True
-    occ[0, :, 0] = True
-    return occ
-
-
-class Case:
-    """A voxel obstacle and a box robot in float coordinates, with the exact reference."""
-
-    def __init__(self, occ, cell, robot_size, transform=lambda x: x, robot_at=(0.0, 0.0, 0.0)):
-        self.occ = np.asarray(occ, bool)
-        cell = np.asarray(cell, float)
-        V, F = _voxels(self.occ)
-        self.vertices = transform(V * cell)  # floats: the input
-        self.faces = F
-        # lattice coordinates per axis as the input floats (cell corners are mesh vertices)
-        self.axes = [np.unique(self.vertices[:, a]) for a in range(3)]
-        half = np.asarray(robot_size, float) / 2
-        corners = np.array(list(itertools.product(*[(-h, h) for h in half])))
-        self.robot = np.unique(transform(corners + np.asarray(robot_at)) - transform(
-            np.asarray(robot_at)[None]), axis=0)  # robot frame: centred on its reference
-        r_lo = [Fraction(float(x)) for x in self.robot.min(axis=0)]
-        r_hi = [Fraction(float(x)) for x in self.robot.max(axis=0)]
-        self.boxes = []
-        for i, j, k in zip(*np.nonzero(self.occ)):
-            idx = (i, j, k)
-            lo = [Fraction(float(self.axes[a][idx[a]])) - r_hi[a] for a in range(3)]
-            hi = [Fraction(float(self.axes[a][idx[a] + 1])) - r_lo[a] for a in range(3)]
-            self.boxes.append((lo, hi))
-        self.lo = np.array([[float(x) for x in b[0]] for b in self.boxes])
-        self.hi = np.array([[float(x) for x in b[1]] for b in self.boxes])
-
-    def contains(self, q: np.ndarray) -> np.ndarray:
-        """Exact membership of float translations in the reference (boxes, closed)."""
-        out = np.zeros(len(q), dtype=bool)
-        for r, x in enumerate(q.tolist()):
-            X = [Fraction(v) for v in x]
-            out[r] = any(all(lo[a] <= X[a] <= hi[a] for a in range(3)) for lo, hi in self.boxes)
-        return out
-
-    def distance(self, q: np.ndarray) -> np.ndarray:
-        """Float distance to the reference union (0 inside)."""
-        gap = np.maximum(np.maximum(self.lo[None] - q[:, None], q[:, None] - self.hi[None]), 0)
-        return np.sqrt((gap ** 2).sum(axis=2)).min(axis=1)
-
-    def volume(self) -> Fraction:
-        """Exact volume of the union of boxes (cells of the grid of their bounds)."""
-        cuts = [sorted({b[0][a] for b in self.boxes} | {b[1][a] for b in self.boxes})
-                for a in range(3)]
-        total = Fraction(0)
-        for i in range(len(cuts[0]) - 1):
-            for j in range(len(cuts[1]) - 1):
-                for k in range(len(cuts[2]) - 1):
-                    lo = (cuts[0][i], cuts[1][j], cuts[2][k])
-                    if any(all(b[0][a] <= lo[a] and (cuts[a][(i, j, k)[a] + 1]) <= b[1][a]
-                               for a in range(3)) for b in self.boxes):
-                        total += ((cuts[0][i + 1] - cuts[0][i]) * (cuts[1][j + 1] - cuts[1][j])
-                                  * (cuts[2][k + 1] - cuts[2][k]))
-        return total
-
-    def samples(self, n: int, rng) -> np.ndarray:
-        lo, hi = self.lo.min(axis=0), self.hi.max(axis=0)
-        size = float(np.linalg.norm(hi - lo))
-        pad = 0.1 * (hi - lo)
-        uni = rng.uniform(lo - pad, hi + pad, (n // 2, 3))
-        m = n - n // 2
-        b = rng.integers(0, len(self.boxes), m)
-        axis = rng.integers(0, 3, m)
-        side = rng.integers(0, 2, m)
-        p = rng.uniform(self.lo[b], self.hi[b])
-        face = np.where(side == 0, self.lo[b, axis], self.hi[b, axis])
-        p[np.arange(m), axis] = face
-        off = size * 10.0 ** rng.uniform(-12, -1, m) * rng.choice([-1.0, 1.0], m)
-        off[rng.random(m) < 0.1] = 0.0
-        p[np.arange(m), axis] += off
-        return np.vstack([uni, p])
-
-
-def _voxels(occ):
-    """Unit voxel surface of ``occ``; where voxels touch only along an edge or at a vertex
-    (not a 2-manifold) each voxel is its own cube, the cubes welded at shared corners."""
-    try:
-        return zoo.voxel_solid(occ, 1.0)
-    except ValueError:
-        one = np.ones((1, 1, 1), dtype=bool)
-        Vs, Fs, n = [], [], 0
-        for idx in zip(*np.nonzero(occ)):
-            V, F = zoo.voxel_solid(one, 1.0, origin=np.asarray(idx, float))
-            Vs.append(V)
-            Fs.append(F + n)
-            n += len(V)
-        V, inverse = np.unique(np.vstack(Vs), axis=0, return_inverse=True)
-        return V, inverse.reshape(-1)[np.vstack(Fs)]
-
-
 def _volume_exact(V: np.ndarray, F: np.ndarray) -> Fraction:
     """Exact enclosed volume of a float triangle surface (six-volume sum on rationals)."""
     total = Fraction(0)
@@ -167,7 +70,8 @@ def _volume_exact(V: np.ndarray, F: np.ndarray) -> Fraction:
     return total / 6
 
 
-def _judge(case: Case, contains, q: np.ndarray, ref: np.ndarray) -> tuple[int, int, float]:
+def _judge(case: hard.VoxelCase, contains, q: np.ndarray,
+           ref: np.ndarray) -> tuple[int, int, float]:
     ours = contains(q)
     false_free = int((~ours & ref).sum())
     fc = ours & ~ref
@@ -175,7 +79,7 @@ def _judge(case: Case, contains, q: np.ndarray, ref: np.ndarray) -> tuple[int, i
     return false_free, int(fc.sum()), far
 
 
-def _cspace_row(case: Case, q, ref, vol_ref, conservative=True) -> dict:
+def _cspace_row(case: hard.VoxelCase, q, ref, vol_ref, conservative=True) -> dict:
     t = time.perf_counter()
     try:
         co = CSpaceObstacle.build((case.vertices, case.faces), case.robot,
@@ -239,7 +143,7 @@ def manifold_sum(V, F, robot):
     return got
 
 
-def _manifold_row(case: Case, q, ref, vol_ref) -> dict:
+def _manifold_row(case: hard.VoxelCase, q, ref, vol_ref) -> dict:
     try:
         import manifold3d  # noqa: F401
     except ImportError:
@@ -303,7 +207,7 @@ def _read_off(path: Path):
     return V, F
 
 
-def _cgal_row(case: Case, q, ref, vol_ref, timeout: float = 300.0) -> dict:
+def _cgal_row(case: hard.VoxelCase, q, ref, vol_ref, timeout: float = 300.0) -> dict:
     import subprocess
     import tempfile
 
@@ -425,7 +329,7 @@ def main() -> None:
     n = 1000 if args.quick else 4000
     if not args.no_cgal:
         _build_cgal()
-    L, cell, robot = _l_cells(), (0.5, 0.5, 0.5), (0.3, 0.3, 0.3)
+    L, cell, robot = hard.l_cells(), (0.5, 0.5, 0.5), (0.3, 0.3, 0.3)
     offsets = [0, 6] if args.quick else [0, 3, 5, 6, 9, 12]
     scales = [-100, 0] if args.quick else [-100, -10, 0, 10, 100]
     thin = [3, 9] if args.quick else [3, 6, 7, 8, 9, 12]
@@ -433,16 +337,19 @@ def main() -> None:
     body = []
     body += voxel_family("Offset: L bracket and box robot moved by 10^k",
                          [f"10^{k}" for k in offsets],
-                         lambda p: Case(L, cell, robot, lambda x, k=int(p[3:]): x + 10.0 ** k),
+                         lambda p: hard.VoxelCase(L, cell, robot,
+                                                  lambda x, k=int(p[3:]): x + 10.0 ** k),
                          n, rng)
     body += voxel_family("Scale: L bracket and box robot scaled by 10^k",
                          [f"10^{k}" for k in scales],
-                         lambda p: Case(L, cell, robot, lambda x, k=int(p[3:]): x * 10.0 ** k),
+                         lambda p: hard.VoxelCase(L, cell, robot,
+                                                  lambda x, k=int(p[3:]): x * 10.0 ** k),
                          n, rng)
     body += voxel_family("Thin: the L as a plate 10^-k thick", [f"10^-{k}" for k in thin],
-                         lambda p: Case(L, (0.5, 0.5, 10.0 ** -int(p[4:])), robot), n, rng)
+                         lambda p: hard.VoxelCase(L, (0.5, 0.5, 10.0 ** -int(p[4:])), robot),
+                         n, rng)
     body += voxel_family("Flat robot against the L", ["panel (z = 0)", "rod (along x)"],
-                         lambda p: Case(L, cell, (0.3, 0.3, 0.0) if p.startswith("panel")
+                         lambda p: hard.VoxelCase(L, cell, (0.3, 0.3, 0.0) if p.startswith("panel")
                                         else (0.3, 0.0, 0.0)), n, rng)
     edge = np.zeros((2, 2, 1), bool)
     edge[0, 0, 0] = edge[1, 1, 0] = True
@@ -521,8 +428,8 @@ def summary() -> list[str]:
     return out
 
 
-def _touching(occ, robot) -> Case:
-    return Case(occ, (0.5, 0.5, 0.5), robot)
+def _touching(occ, robot) -> hard.VoxelCase:
+    return hard.VoxelCase(occ, (0.5, 0.5, 0.5), robot)
 
 
 if __name__ == "__main__":

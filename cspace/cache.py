@@ -28,7 +28,8 @@ from .exact import Grid
 __all__ = ["COCache", "cache_dir", "co_key", "FORMAT"]
 
 # Bump when the stored layout or an algorithm's output changes.
-FORMAT = 3  # 3: C-obstacles grown by their margin (cspace.margin), stored with it
+FORMAT = 4  # 3: C-obstacles grown by their margin (cspace.margin), stored with it;
+# 4: grids centred on the scene (Grid.origin)
 
 
 def cache_dir(directory=None) -> Path:
@@ -50,6 +51,7 @@ def co_key(kind: str, grid: Grid, obstacle_ints, obstacle_faces, robot_ints,
     kind : str
         The algorithm ('convex', 'solid', 'surface').
     grid : Grid
+        The obstacle's grid (its step, bits and origin name the frame of the integers).
     obstacle_ints : (n, 3) int64
         Snapped obstacle vertices (grid units); ``obstacle_faces`` (m, 3) int64 or None.
     robot_ints : (r, 3) int64
@@ -59,7 +61,7 @@ def co_key(kind: str, grid: Grid, obstacle_ints, obstacle_faces, robot_ints,
 
     h = hashlib.sha256()
     h.update(f"cspace {__version__} format {FORMAT} kind {kind} grid {grid.exponent} "
-             f"{grid.bits}".encode())
+             f"{grid.bits} origin {list(grid.origin)}".encode())
     for name, a in (("obstacle", obstacle_ints), ("faces", obstacle_faces),
                     ("robot", robot_ints), ("reference", reference_ints)):
         a = np.zeros((0, 3), np.int64) if a is None else np.ascontiguousarray(a, dtype=np.int64)

@@ -38,10 +38,13 @@ def _operands(args: argparse.Namespace, a_points):
     from .exact import Grid
 
     b = _load_points(args.b)
-    grid = Grid.for_points(a_points, b, bits=args.grid_bits)
-    B = ConvexPolytope.from_points(b, grid=grid, name=args.b)
-    if args.reflect_b is not None:
-        B = B.reflected(args.reflect_b)
+    if args.reflect_b is not None:  # B is the robot: the grid of the C-obstacle A ⊕ (c - B)
+        grid = Grid.for_cobstacle(a_points, b, args.reflect_b, bits=args.grid_bits)
+        rgrid = grid.for_robot(b, args.reflect_b)
+        B = ConvexPolytope.from_points(b, grid=rgrid, name=args.b).reflected(args.reflect_b)
+    else:
+        grid, gb = Grid.for_operands(a_points, b, bits=args.grid_bits)
+        B = ConvexPolytope.from_points(b, grid=gb, name=args.b)
     return grid, B
 
 

@@ -16,7 +16,7 @@ support faces ``A(n) ⊕ B(n)``, computed exactly, so a square facet stays one s
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -361,16 +361,21 @@ class ConvexPolytope:
 
         With ``R`` a robot and ``c`` its reference point, ``O ⊕ R.reflected(c)`` is the
         C-obstacle: the set of positions of ``c`` at which the robot meets ``O``.
-        ``reference_point`` is snapped onto the polytope's grid (exact if already on it).
+        ``reference_point`` is snapped onto the polytope's grid (exact if already on it). The
+        result is on the grid of vectors (origin 0) when ``c - r`` fits it, as for a robot
+        about its reference point; otherwise (a body far from ``c``) on a grid whose origin is
+        ``c`` in this frame.
         """
-        c = self.grid.snap(np.asarray(reference_point, dtype=np.float64).reshape(3))
-        ints = c[None, :] - self.ints
+        c = self.grid.offset(reference_point)
+        ints, grid = c[None, :] - self.ints, self.grid.vectors
+        if ints.size and np.abs(ints).max() > grid.limit:
+            ints, grid = -self.ints, replace(self.grid, origin=tuple(int(v) for v in c))
         # Point reflection reverses orientation: reverse each facet's vertex order.
         o, f = self.facet_offsets, self.facet_indices
         flat = np.concatenate([f[o[i] : o[i + 1]][::-1] for i in range(len(o) - 1)])
         edges, edge_facets = _edges_of(flat, o, len(ints), self.name)
         return ConvexPolytope(
-            grid=self.grid,
+            grid=grid,
             ints=ints,
             facet_offsets=o.copy(),
             facet_indices=flat,
@@ -633,11 +638,11 @@ class MinkowskiSum:
 def _common_grid(A, B) -> tuple[ConvexPolytope, ConvexPolytope]:
     A = A if isinstance(A, ConvexPolytope) else ConvexPolytope.from_points(A, name="A")
     B = B if isinstance(B, ConvexPolytope) else ConvexPolytope.from_points(B, name="B")
-    if A.grid == B.grid:
-        return A, B
-    # Re-snap both onto one grid that holds both (and their sums) exactly.
-    grid = Grid.for_points(A.vertices, B.vertices, bits=min(A.grid.bits, B.grid.bits))
-    return A.on_grid(grid), B.on_grid(grid)
+    if A.grid.same_step(B.grid):
+        return A, B  # integers combine exactly; the sum is in frame A.grid.plus(B.grid)
+    # Re-snap both onto grids of one step that hold both (and their sums) exactly.
+    ga, gb = Grid.for_operands(A.vertices, B.vertices, bits=min(A.grid.bits, B.grid.bits))
+    return A.on_grid(ga), B.on_grid(gb)
 
 
 def _feature(P: ConvexPolytope, support: np.ndarray) -> tuple[int, int]:
@@ -784,7 +789,8 @@ def convex_minkowski_sum(A, B) -> MinkowskiSum:
     ints = A.ints[labels[:, 0]] + B.ints[labels[:, 1]]
     offsets = np.zeros(len(sizes) + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
-    poly = ConvexPolytope._from_csr(ints, offsets, flat.reshape(-1), normals, grid=A.grid, name=f"{A.name}+{B.name}")
+    poly = ConvexPolytope._from_csr(ints, offsets, flat.reshape(-1), normals, grid=A.grid.plus(B.grid),
+                                   name=f"{A.name}+{B.name}")
     kind = np.where(source_a[:, 0] == 2, TRANSLATED, np.where(source_b[:, 0] == 2, CORNER, EDGE)).astype(np.int8)
     return MinkowskiSum(polytope=poly, labels=labels, kind=kind, source_a=source_a, source_b=source_b)
 
@@ -810,7 +816,8 @@ def hull_minkowski_sum(A, B, *, method: str = "auto") -> ConvexPolytope:
     """
     A, B = _common_grid(A, B)
     pts = (A.ints[:, None, :] + B.ints[None, :, :]).reshape(-1, 3)
-    return ConvexPolytope.from_ints(pts, grid=A.grid, name=f"hull({A.name}+{B.name})", method=method)
+    return ConvexPolytope.from_ints(pts, grid=A.grid.plus(B.grid), name=f"hull({A.name}+{B.name})",
+                                    method=method)
 
 
 def _reflex_edge(ints: np.ndarray, faces: np.ndarray):

@@ -19,7 +19,7 @@ No tolerance decides anything here. Signs are returned as int8 arrays in {-1, 0,
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Iterable
 
 import numpy as np
@@ -67,22 +67,38 @@ _MAX_INT = 2**61
 
 # Sums of two snapped coordinates must stay well inside int64 and be exact as float64.
 _MAX_BITS = 28
+# Grid origins (in steps) stay exact as float64.
+_MAX_ORIGIN = 2**53
 # Coordinates beyond this magnitude are refused: squared distances would overflow float64.
 _MAX_EXTENT_EXP = 500
 
 
 @dataclass(frozen=True)
 class Grid:
-    """A dyadic snapping grid: coordinates become integer multiples of ``step = 2**exponent``.
+    """A dyadic snapping grid: a coordinate ``x`` becomes the integer
+    ``k = round(x / step) - origin`` with ``step = 2**exponent``.
 
-    A grid made by :meth:`for_extent` from a scene's largest absolute coordinate ``L`` has
+    The integers are taken relative to an ``origin`` (a grid point, in steps per axis), so that
+    precision depends on the size of what is modelled, not on where it is: a unit part at
+    ``10**9`` gets the same ~26-bit grid as at the origin, as far as float64 resolves it there
+    (``step`` is never below the float64 spacing of the coordinates, so that every grid point
+    is a float64 and ``to_float`` is exact).
+
+    A grid made by :meth:`for_extent` from a largest absolute coordinate ``L`` has origin 0 and
     ``step = 2**(floor(log2 L) + 1 - bits)`` (the smallest power of two above ``L``, over
-    ``2**bits``), so every snapped coordinate ``k`` satisfies
-    ``|k| <= 2**bits``. With the default ``bits=26`` the sum of two snapped points and every
-    predicate on such sums is exact (orient3d needs about 87 bits, done in the exact path).
+    ``2**bits``), so every snapped coordinate satisfies ``|k| <= 2**bits``. :meth:`for_points`
+    and :meth:`for_box` centre the grid on the points' box when that makes the step finer.
+    With the default ``bits=26`` the sum of two snapped points and every predicate on such sums
+    is exact (orient3d needs about 87 bits, done in the exact path).
+
+    Frames: integers of one point set are relative to its grid's origin. A difference of two
+    points of one frame is a vector (origin 0, :attr:`vectors`); the sum of points of frames
+    ``a`` and ``b`` is in frame ``a + b`` (:meth:`plus`). Grids of one step and bits combine
+    this way without re-snapping; their predicates see only integers of one frame at a time.
 
     Snapping moves each coordinate by at most :attr:`error_bound` (= step / 2) and each point
-    by at most :attr:`point_error_bound` (= sqrt(3) * step / 2) in Euclidean distance.
+    by at most :attr:`point_error_bound` (= sqrt(3) * step / 2) in Euclidean distance; the
+    origin moves nothing (it is a whole number of steps).
 
     Attributes
     ----------
@@ -90,14 +106,25 @@ class Grid:
         The grid step is ``2.0 ** exponent`` scene length units.
     bits : int
         Snapped coordinates satisfy ``|k| <= 2**bits``.
+    origin : tuple of 3 int
+        The grid point ``origin * step`` is integer 0 (default the scene origin).
     """
 
     exponent: int
     bits: int = 26
+    origin: tuple = (0, 0, 0)
+
+    def __post_init__(self):
+        o = tuple(int(x) for x in self.origin)
+        if len(o) != 3:
+            raise InvalidArgumentError(f"grid origin must have 3 coordinates, got {self.origin}")
+        if max(abs(x) for x in o) >= _MAX_ORIGIN:
+            raise GridRangeError(f"grid origin {o} is beyond +-2**53 steps")
+        object.__setattr__(self, "origin", o)
 
     @classmethod
     def for_extent(cls, extent: float, *, bits: int = 26) -> "Grid":
-        """Grid for a scene whose coordinates satisfy ``|x| <= extent``."""
+        """Grid centred on the scene origin for coordinates satisfying ``|x| <= extent``."""
         if not 8 <= bits <= _MAX_BITS:
             raise InvalidArgumentError(f"bits must be in [8, {_MAX_BITS}], got {bits}")
         extent = float(extent)
@@ -122,16 +149,159 @@ class Grid:
         return cls(exponent=e - bits, bits=bits)
 
     @classmethod
+    def for_box(cls, lo, hi, *, reach: float = 0.0, far: float = 0.0,
+                bits: int = 26) -> "Grid":
+        """Grid for points in the box ``[lo, hi]`` and vectors up to ``reach`` per coordinate.
+
+        The grid is centred on the box (a grid point near its centre is integer 0) when that
+        gives a finer step than :meth:`for_extent` of the largest ``|x|``: the step then
+        follows the box's half-size (and ``reach``), but never drops below what float64
+        resolves at the box's coordinates (``|x| / step < 2**51``, so that sums of up to
+        four such points are float64 numbers too). Every point of the box
+        snaps within ``|k| <= 2**bits``, and every vector of length ``reach`` too. ``far``:
+        a magnitude the grid's frames must also resolve exactly (a robot's coordinates).
+        """
+        lo = np.asarray(lo, dtype=np.float64).reshape(3)
+        hi = np.asarray(hi, dtype=np.float64).reshape(3)
+        _check_finite(np.stack([lo, hi]), "grid box")
+        reach, also = float(reach), float(far)
+        far = max(float(np.abs(lo).max()), float(np.abs(hi).max()))
+        plain = cls.for_extent(max(far, reach, also), bits=bits)
+        half = float(((hi - lo) / 2.0).max())
+        if not far or not half >= 0.0:
+            return plain
+        # Room for the centre's rounding to a grid point: half a step, below 2**-bits of size.
+        size = max(half * (1.0 + 2.0**-20), reach)
+        _, e_far = math.frexp(max(far, also))
+        exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 51)
+        if exponent >= plain.exponent:
+            return plain
+        centre = lo / 2.0 + hi / 2.0  # no overflow; rounding is absorbed by the room above
+        origin = tuple(int(v) for v in np.rint(np.ldexp(centre, -exponent)))
+        return cls(exponent=exponent, bits=bits, origin=origin)
+
+    @classmethod
     def for_points(cls, *arrays: np.ndarray, bits: int = 26) -> "Grid":
-        """Grid for the union of several ``(n, 3)`` float arrays (their largest |coordinate|)."""
-        extent = 0.0
+        """Grid for the union of several ``(n, 3)`` float arrays (:meth:`for_box` of their box)."""
+        lo = np.full(3, np.inf)
+        hi = np.full(3, -np.inf)
+        extent, boxed = 0.0, True
         for i, a in enumerate(arrays):
             a = np.asarray(a, dtype=np.float64)
             if a.size == 0:
                 continue
             _check_finite(a, f"array {i}")
             extent = max(extent, float(np.abs(a).max()))
-        return cls.for_extent(extent, bits=bits)
+            if a.shape[-1:] != (3,):
+                boxed = False  # not points: validation names it; size the grid from |x|
+                continue
+            a = a.reshape(-1, 3)
+            lo, hi = np.minimum(lo, a.min(axis=0)), np.maximum(hi, a.max(axis=0))
+        if not boxed or not np.isfinite(lo).all():
+            return cls.for_extent(extent, bits=bits)
+        return cls.for_box(lo, hi, bits=bits)
+
+    @classmethod
+    def for_operands(cls, a, b, *, bits: int = 26) -> tuple["Grid", "Grid"]:
+        """Grids of one step for the two operands of a sum ``A ⊕ B`` (``(n, 3)`` float arrays),
+        each centred on its own points when that gives a finer step than one grid from the
+        origin: the sum is then in frame ``ga.plus(gb)``, and the step follows the operands'
+        sizes, not where they are."""
+        a = np.asarray(a, dtype=np.float64).reshape(-1, 3)
+        b = np.asarray(b, dtype=np.float64).reshape(-1, 3)
+        plain = cls.for_points(a, b, bits=bits)
+        if not len(a) or not len(b):
+            return plain, plain
+        _check_finite(a, "A")
+        _check_finite(b, "B")
+        boxes = [(a.min(axis=0), a.max(axis=0)), (b.min(axis=0), b.max(axis=0))]
+        size = max(float(((hi - lo) / 2.0).max()) for lo, hi in boxes) * (1.0 + 2.0**-20)
+        far = max(float(np.abs(v).max()) for box in boxes for v in box)
+        _, e_far = math.frexp(2.0 * far)  # sums of the two included
+        exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 51)
+        if exponent >= plain.exponent:
+            return plain, plain
+        grids = []
+        for lo, hi in boxes:
+            centre = lo / 2.0 + hi / 2.0
+            grids.append(cls(exponent=exponent, bits=bits,
+                             origin=tuple(int(v) for v in np.rint(np.ldexp(centre, -exponent)))))
+        return grids[0], grids[1]
+
+    @classmethod
+    def for_cobstacle(cls, obstacle_points, robot_points, reference_point, *,
+                      bits: int = 26) -> "Grid":
+        """The grid of a C-obstacle ``O ⊕ (c - R)`` from the operands' float coordinates.
+
+        :meth:`for_box` of the obstacle's and the C-obstacle's box, with the vectors ``c - r``
+        within reach: centred on them when that is finer than a grid from the origin, so that
+        a part far from the origin keeps the precision of its size (as far as float64 resolves
+        it there). The robot's own coordinates need only be resolved (``far``); it is snapped
+        with :meth:`for_robot`.
+        """
+        O = np.asarray(obstacle_points, dtype=np.float64)
+        R = np.asarray(robot_points, dtype=np.float64)
+        c = np.asarray(reference_point, dtype=np.float64).reshape(3)
+        if (O.ndim != 2 or R.ndim != 2 or O.shape[1:] != (3,) or R.shape[1:] != (3,)
+                or not len(O) or not len(R) or not (np.isfinite(O).all() and np.isfinite(R).all())):
+            return cls.for_points(O, R, c[None, :], bits=bits)  # validation names the bad one
+        v_lo, v_hi = c - R.max(axis=0), c - R.min(axis=0)  # the box of c - R
+        lo = np.minimum(O.min(axis=0), O.min(axis=0) + v_lo)
+        hi = np.maximum(O.max(axis=0), O.max(axis=0) + v_hi)
+        reach = float(np.abs(np.stack([v_lo, v_hi])).max())
+        far = max(float(np.abs(R).max()), float(np.abs(c).max()))
+        return cls.for_box(lo, hi, reach=reach, far=far, bits=bits)
+
+    # ---- frames ---------------------------------------------------------------------------
+
+    def at(self, point) -> "Grid":
+        """The same step, with the grid point nearest ``point`` (scene units) as origin: the
+        frame for a robot given around its reference point."""
+        p = np.asarray(point, dtype=np.float64).reshape(3)
+        _check_finite(p, "grid origin point")
+        return replace(self, origin=tuple(int(v) for v in np.rint(np.ldexp(p, -self.exponent))))
+
+    @property
+    def vectors(self) -> "Grid":
+        """The same step with origin 0: the frame of differences of points of one frame."""
+        return replace(self, origin=(0, 0, 0))
+
+    def plus(self, other: "Grid") -> "Grid":
+        """The frame of sums ``a + b`` of a point of this frame and one of ``other``'s."""
+        self._check_step(other)
+        return replace(self, origin=tuple(a + b for a, b in zip(self.origin, other.origin)))
+
+    def minus(self, other: "Grid") -> "Grid":
+        """The frame of differences ``a - b`` of a point of this frame and one of ``other``'s."""
+        self._check_step(other)
+        return replace(self, origin=tuple(a - b for a, b in zip(self.origin, other.origin)))
+
+    def for_robot(self, robot_points, reference_point) -> "Grid":
+        """The grid a robot is snapped on: this one when the robot and its reference point fit
+        its range, else the same step about the reference point (:meth:`at`). Either way the
+        vectors ``c - r`` are of this step, so ``O ⊕ (c - R)`` is in this grid's frame."""
+        R = np.asarray(robot_points, dtype=np.float64)
+        c = np.asarray(reference_point, dtype=np.float64).reshape(1, 3)
+        if R.ndim != 2 or R.shape[1:] != (3,):
+            return self  # validation names the bad operand
+        P = np.concatenate([R, c])
+        if not np.isfinite(P).all():
+            return self  # validation names the bad coordinate
+        k = np.rint(np.ldexp(P, -self.exponent)) - np.asarray(self.origin, dtype=np.float64)
+        # exact: both terms are integers below 2**53 wherever the test can pass
+        return self if np.abs(k).max() <= self.limit else self.at(c)
+
+    def same_step(self, other: "Grid") -> bool:
+        """Whether integers of the two grids combine exactly (same step and bits)."""
+        return self.exponent == other.exponent and self.bits == other.bits
+
+    def _check_step(self, other: "Grid") -> None:
+        if not self.same_step(other):
+            raise InvalidArgumentError(
+                f"grids of different steps or bits do not combine: 2**{self.exponent} "
+                f"({self.bits} bits) and 2**{other.exponent} ({other.bits} bits)")
+
+    # ---- properties -----------------------------------------------------------------------
 
     @property
     def step(self) -> float:
@@ -153,6 +323,13 @@ class Grid:
         """Snapped coordinates satisfy ``|k| <= limit``."""
         return 1 << self.bits
 
+    @property
+    def magnitude_exponent(self) -> int:
+        """``W``: scene coordinates of this frame's points within ``4 * limit`` steps of the
+        origin (sums of three snapped operands and a growth box) are below ``2**W`` in
+        magnitude."""
+        return (max(abs(o) for o in self.origin) + 4 * self.limit - 1).bit_length() + self.exponent
+
     def snap(self, points: np.ndarray) -> np.ndarray:
         """Snap float coordinates to grid integers (round half to even).
 
@@ -164,32 +341,67 @@ class Grid:
         Returns
         -------
         ints : (..., 3) int64
-            ``round(points / step)``; ``ints * step`` are the snapped coordinates.
+            ``round(points / step) - origin``; ``(ints + origin) * step`` are the snapped
+            coordinates.
 
         Raises
         ------
         NonFiniteError
             If a coordinate is NaN or infinite (the message gives the first bad row).
         GridRangeError
-            If a coordinate is beyond ``limit * step``: the grid was made for a smaller scene.
+            If a coordinate is beyond ``limit * step`` of the origin: the grid was made for a
+            smaller scene.
         """
         points = np.asarray(points, dtype=np.float64)
         _check_finite(points, "points")
-        # Division by a power of two is exact (no subnormals: see for_extent), rint is exact.
+        # Division by a power of two is exact (no subnormals: see for_extent), rint is exact;
+        # beyond 2**53 the quotient is already an integer. The origin is subtracted in int64.
         with np.errstate(over="ignore"):  # overflow to inf is reported just below
             k = np.rint(np.ldexp(points, -self.exponent))
-        if k.size and np.abs(k).max() > self.limit:
-            flat = np.abs(k).reshape(-1, k.shape[-1]) if k.ndim > 1 else np.abs(k)[None]
-            row = int(np.nonzero(flat.max(axis=-1) > self.limit)[0][0])
+        if not k.size or np.abs(k).max() < 2.0**62:
+            k = k.astype(np.int64) - np.asarray(self.origin, dtype=np.int64)
+            over = np.abs(k) > self.limit
+        else:
+            over = np.abs(k) >= 2.0**62
+        if over.any():
+            flat = over.reshape(-1, 3) if over.ndim > 1 else over[None]
+            row = int(np.nonzero(flat.any(axis=-1))[0][0])
+            where = ("" if not any(self.origin) else
+                     f" around {self.to_float(np.zeros(3, np.int64)).tolist()}")
             raise GridRangeError(
-                f"point {row} has a coordinate beyond the grid's range +-{self.limit * self.step:.6g}; "
-                "build the grid from every object of the scene (Grid.for_points)"
+                f"point {row} has a coordinate beyond the grid's range +-{self.limit * self.step:.6g}"
+                f"{where}; build the grid from every object of the scene (Grid.for_points)"
             )
         return k.astype(np.int64)
 
+    def offset(self, point) -> np.ndarray:
+        """``(3,)`` int64 ``round(point / step) - origin`` without the range check: where a
+        point lies in this frame, however far (for frames of reflections and sums)."""
+        p = np.asarray(point, dtype=np.float64).reshape(3)
+        _check_finite(p, "point")
+        k = np.rint(np.ldexp(p, -self.exponent))
+        if np.abs(k).max() >= 2.0**61:
+            raise GridRangeError(f"point {p.tolist()} is beyond 2**61 grid steps of the origin")
+        return k.astype(np.int64) - np.asarray(self.origin, dtype=np.int64)
+
     def to_float(self, ints: np.ndarray) -> np.ndarray:
-        """Scene coordinates of grid integers (exact while ``|k| < 2**53``)."""
-        return np.ldexp(np.asarray(ints, dtype=np.int64).astype(np.float64), self.exponent)
+        """Scene coordinates of grid integers (exact while ``|k + origin| < 2**53``, which the
+        grid's construction ensures for its points and their sums)."""
+        k = np.asarray(ints, dtype=np.int64)
+        if any(self.origin):
+            k = k + np.asarray(self.origin, dtype=np.int64)
+        return np.ldexp(k.astype(np.float64), self.exponent)
+
+    def inner_box(self, lo, hi) -> np.ndarray:
+        """``(2, 3)`` int64: the grid integers ``k`` (this frame) with ``lo <= world(k) <= hi``
+        are exactly those with ``box[0] <= k <= box[1]`` (ceil and floor, exact)."""
+        lo = np.ceil(np.ldexp(np.asarray(lo, dtype=np.float64), -self.exponent))
+        hi = np.floor(np.ldexp(np.asarray(hi, dtype=np.float64), -self.exponent))
+        lim = 2.0**62
+        o = np.asarray(self.origin, dtype=np.int64)
+        lo = np.clip(lo, -lim, lim).astype(np.int64) - o
+        hi = np.clip(hi, -lim, lim).astype(np.int64) - o
+        return np.stack([lo, hi])
 
 
 def _check_finite(a: np.ndarray, what: str) -> None:

@@ -57,12 +57,14 @@ def snap_deviation(points, grid: Grid) -> np.ndarray:
     """``(3,)`` float64: the largest ``|x - snap(x)|`` per axis over ``(n, 3)`` points, exact.
 
     ``step * k`` is a float and ``x`` lies within half a step of it, so their difference is
-    exact (Sterbenz; for ``k = 0`` it is ``x`` itself).
+    exact (Sterbenz; for ``k = 0`` it is ``x`` itself). The grid's origin, a whole number of
+    steps, changes nothing: any frame of this step will do.
     """
     P = np.asarray(points, dtype=np.float64).reshape(-1, 3)
     if not len(P):
         return np.zeros(3)
-    return np.abs(P - grid.to_float(grid.snap(P))).max(axis=0)
+    snapped = np.ldexp(np.rint(np.ldexp(P, -grid.exponent)), grid.exponent)
+    return np.abs(P - snapped).max(axis=0)
 
 
 @dataclass(frozen=True)
@@ -99,11 +101,12 @@ class Margin:
         Fractions) plus, when the result is stored as float64 vertices (``rounded``), their
         rounding.
 
-        Rounded outputs lie within ``2**(bits + 2)`` steps of the origin (three snapped
-        operands and the box), so half an ulp there is at most ``2**(bits - 51)`` steps.
+        Rounded outputs lie within ``2**(bits + 2)`` steps of the grid's origin (three snapped
+        operands and the box), below ``2**W`` in magnitude (``Grid.magnitude_exponent``), so
+        half an ulp there is at most ``2**(W - 53)`` (``2**(bits - 51)`` steps at origin 0).
         """
         dev = [Fraction(d) for d in deviation]
-        rounding = math.ldexp(1.0, grid.bits - 51 + grid.exponent) if rounded else 0.0
+        rounding = math.ldexp(1.0, grid.magnitude_exponent - 53) if rounded else 0.0
         s = Fraction(grid.step)
         steps = tuple(int(-(-(d + Fraction(rounding)) // s)) for d in dev)
         # Stored as floats rounded up, so that the stated bound stays a bound.

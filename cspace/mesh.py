@@ -470,7 +470,8 @@ def _validate(vertices, faces, grid, name):
     try:
         snapped = grid.snap(v[used])
     except GridRangeError as exc:
-        over = np.abs(np.rint(np.ldexp(v[used], -grid.exponent))).max(axis=1) > grid.limit
+        k = np.rint(np.ldexp(v[used], -grid.exponent)) - np.asarray(grid.origin, np.float64)
+        over = ~(np.abs(k).max(axis=1) <= grid.limit)
         i = int(used[np.argmax(over)])
         raise fail(
             GridRangeError,

@@ -2,7 +2,7 @@
 
 :func:`model_scene` turns a :class:`~cspace.scene.Scene` into a :class:`SceneModel`. Each
 obstacle body (a mesh as its file gives it) goes through these steps, all exact on the
-scene grid (``Grid.for_extent(scene.extent())``):
+scene grid (``scene.grid()``, centred on the scene):
 
 1. **Weld** vertices by exact snapped position; triangles whose corners weld to fewer than
    three points are dropped (they have no area), and counted.
@@ -464,8 +464,8 @@ def _build(body: BodyModel, robot, c, grid, margin: Margin, progress):
     if body.kind == "solid":
         S, m = grown_mesh_sum(body._solid, robot.reflected(c), margin, progress)
         return CSpaceObstacle.from_mesh(S.vertices, S.faces, obstacle=body._solid, robot=robot,
-                                        reference_point=grid.to_float(grid.snap(c)), grid=grid,
-                                        sum=S, name=body.name, margin=m)
+                                        reference_point=robot.grid.to_float(robot.grid.snap(c)),
+                                        grid=grid, sum=S, name=body.name, margin=m)
     grown = margin.grow(robot)
     if body.kind == "surface":
         F = body.faces[body._keep]
@@ -522,25 +522,35 @@ def _without_far_parts(scene):
             lo, hi = V.min(axis=0), V.max(axis=0)
             reach = all(Fraction(float(lo[i])) + c[i] - r_hi[i] <= b_hi[i]
                         and b_lo[i] <= Fraction(float(hi[i])) + c[i] - r_lo[i] for i in range(3))
-            size = float(np.abs(np.concatenate([lo, hi, lo - rel.max(axis=0),
-                                                hi - rel.min(axis=0)])).max())
-            parts.append((faces, reach, size, lo, hi))
+            box = np.stack([np.minimum(lo, lo - rel.max(axis=0)),
+                            np.maximum(hi, hi - rel.min(axis=0))])
+            parts.append((faces, reach, box, lo, hi))
         split.append(parts)
-    keep_sizes = [s for parts in split for _, reach, s, _, _ in parts if reach]
-    near = max([float(np.abs(scene.bounds).max()) + float(np.abs(rel).max()),
-                float(np.abs(scene.robot.vertices).max())] + keep_sizes)
-    if Grid.for_extent(near).exponent >= Grid.for_extent(scene.extent()).exponent:
+    # The box of what is near: the bounds with the robot at their corners, and the parts
+    # that can reach them (each with its C-obstacle's box).
+    near = [np.stack([scene.bounds[0] + rel.min(axis=0), scene.bounds[1] + rel.max(axis=0)]),
+            scene.bounds] + [box for parts in split for _, reach, box, _, _ in parts if reach]
+    near = np.concatenate(near)
+    n_lo, n_hi = near.min(axis=0), near.max(axis=0)
+    r_far = max(float(np.abs(scene.robot.vertices).max()),
+                float(np.abs(scene.reference_point).max()))
+    near_grid = Grid.for_box(n_lo, n_hi, reach=float(np.abs(rel).max()), far=r_far)
+    if near_grid.exponent >= scene.grid().exponent:
         return scene, {}  # nothing far enough to coarsen the grid: model everything as is
+
+    def outside(box) -> bool:  # beyond the near box: it would widen the grid
+        return bool((box[0] < n_lo).any() or (box[1] > n_hi).any())
+
     far, bodies = {}, []
     for body, parts in zip(scene.obstacles, split):
-        gone = [p for p in parts if not p[1] and p[2] > near]
+        gone = [p for p in parts if not p[1] and outside(p[2])]
         if not gone:
             bodies.append(body)
             continue
         lo = np.min([p[3] for p in gone], axis=0) - rel.max(axis=0)
         hi = np.max([p[4] for p in gone], axis=0) - rel.min(axis=0)
         far[body.name] = (len(gone), [lo.tolist(), hi.tolist()])
-        kept = np.sort(np.concatenate([p[0] for p in parts if not (not p[1] and p[2] > near)]
+        kept = np.sort(np.concatenate([p[0] for p in parts if p[1] or not outside(p[2])]
                                       + [np.zeros(0, np.int64)]))
         if len(kept):  # only the vertices the kept triangles use (the body's box shrinks)
             used, faces = np.unique(body.faces[kept], return_inverse=True)
@@ -601,7 +611,7 @@ def _body_operand(body: BodyModel):
 
 def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, grid, bounds_g):
     """C-obstacles of a pair with a non-convex robot part, from built or cached arrays."""
-    c = grid.to_float(c_ints)
+    c = part.grid.to_float(c_ints)
     obstacle = (SurfaceMesh(body.vertices, body.faces[body._keep], body.name)
                 if body.kind == "surface" else body._solid)
     name = f"{body.name} x {part.name}"
@@ -643,8 +653,8 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
     """Build a pair with a non-convex robot part, grown by ``margin`` (the convex obstacle,
     or each triangle pair's piece): arrays for the cache."""
     if construction == "NCC-CVMS swapped":
-        moved = ClosedMesh.from_arrays(grid.to_float(part.ints - c_ints), part.faces, grid=grid,
-                                       name=part.name)
+        moved = ClosedMesh.from_arrays(grid.vectors.to_float(part.ints - c_ints), part.faces,
+                                       grid=grid.vectors, name=part.name)
         S, m = grown_mesh_sum(moved, body._solid.reflected((0.0, 0.0, 0.0)), margin)
         # -(A ⊕ B): negating floats is exact; reversing the triangles keeps them outward.
         return {"vertices": -np.asarray(S.vertices) + 0.0,
@@ -693,7 +703,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         ``progress(fraction, message)`` with the overall fraction in ``[0, 1]``: once per
         body, during long surface builds, and per stage of a non-convex (NCC-CVMS) build.
     grid : Grid, optional
-        Default ``Grid.for_extent`` of what is modelled: obstacle parts that cannot reach the
+        Default ``Scene.grid`` of what is modelled: obstacle parts that cannot reach the
         bounds and lie beyond everything else are dropped first, so that an obstacle far away
         does not coarsen the grid for the rest.
     robot_hull : bool, default False
@@ -717,24 +727,27 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     modelled = scene
     if grid is None:
         modelled, far = _without_far_parts(scene)
-        grid = Grid.for_extent(modelled.extent())
+        grid = modelled.grid()
     c = np.asarray(scene.reference_point, dtype=np.float64)
-    c_ints = grid.snap(c)
+    # The robot is snapped on the scene's step, about its reference point when far from the
+    # grid's origin (Grid.for_robot): c - r are vectors, every C-obstacle is in grid's frame.
+    rgrid = grid.for_robot(scene.robot.vertices, c)
+    c_ints = rgrid.snap(c)
     margin = _margin(modelled, grid, conservative)
     # The box of c - R, grown by the widest margin a build may take (one more step for a
     # float64 surface's rounding), decides what is dropped, exactly, whatever the robot's parts.
-    r_ints = grid.snap(scene.robot.vertices[np.unique(scene.robot.faces)])
+    r_ints = rgrid.snap(scene.robot.vertices[np.unique(scene.robot.faces)])
     g = margin.g + 1
     minus_r_box = (c_ints - r_ints.max(axis=0) - g, c_ints - r_ints.min(axis=0) + g)
     try:
-        robot = ConvexPolytope.from_ints(r_ints, grid=grid, name=scene.robot.name)
+        robot = ConvexPolytope.from_ints(r_ints, grid=rgrid, name=scene.robot.name)
     except InvalidMeshError as exc:  # a flat robot has no hull polytope
         if robot_hull:
             raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r} has no convex "
                              f"hull to stand in for it ({exc})") from exc
         robot = None
-    parts = _model_robot(scene, grid, robot, robot_hull)
-    bounds_g = np.ldexp(np.asarray(scene.bounds, dtype=np.float64), -grid.exponent)
+    parts = _model_robot(scene, rgrid, robot, robot_hull)
+    bounds_g = grid.inner_box(*np.asarray(scene.bounds, dtype=np.float64))
     bodies, sources = [], {}
     kept = {sb.name: sb for sb in modelled.obstacles}
     for sb in scene.obstacles:
@@ -769,7 +782,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         store = COCache(None if cache is True else cache)
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
-        c_snapped = grid.to_float(c_ints)
+        c_snapped = rgrid.to_float(c_ints)
         for i, (b, part) in enumerate(todo):
             construction = pair_construction(b.kind, part.kind)
 

@@ -162,7 +162,11 @@ class _ConvexCO:
         N = poly.normals.astype(np.int64)
         first = poly.ints[poly.facet_indices[poly.facet_offsets[:-1]]]
         self.n_int = [tuple(int(c) for c in n) for n in N.tolist()]
-        self.d_int = [sum(a * b for a, b in zip(n, p)) for n, p in zip(self.n_int, first.tolist())]
+        # Planes in the scene frame (the grid's origin added, exactly, as Python ints): a query
+        # is then only scaled, never shifted, and the filter's bound covers d's rounding.
+        o = poly.grid.origin
+        self.d_int = [sum(a * (b + c) for a, b, c in zip(n, p, o))
+                      for n, p in zip(self.n_int, first.tolist())]
         Nf = N.astype(np.float64)
         df = np.array([float(d) for d in self.d_int])
         # value = [qs, 1] @ A = n . qs - d   (qs = q / step, exact scaling)
@@ -562,7 +566,7 @@ def _flat_convex_mesh(P: np.ndarray, F: np.ndarray) -> bool:
     return total in (hull, 2 * hull)
 
 
-def _flat_operands(obstacle, robot, c, grid, margin: Margin):
+def _flat_operands(obstacle, robot, c, grid, rgrid, margin: Margin):
     """``(C-obstacle polytope, O, R, margin)`` when an operand is a flat convex point set (a
     polygon or a segment): ``O ⊕ (c - R)`` is the hull of the pairwise sums of their points
     (exact on the grid), grown by ``margin``'s box. When both are flat in parallel planes the
@@ -571,7 +575,7 @@ def _flat_operands(obstacle, robot, c, grid, margin: Margin):
     operands have volume, or the obstacle is not a point set or convex mesh."""
     from .errors import DegenerateError, DuplicateFaceError, NonManifoldError
 
-    def points(obj, name):
+    def points(obj, name, grid):
         try:
             return _as_convex(obj, grid, name), None
         except (DegenerateError, DuplicateFaceError):
@@ -582,14 +586,14 @@ def _flat_operands(obstacle, robot, c, grid, margin: Margin):
         except (NotConvexError, NonManifoldError):
             return None, None
 
-    O, o_pts = points(obstacle, "obstacle")
-    R, r_pts = points(robot, "robot")
+    O, o_pts = points(obstacle, "obstacle", grid)
+    R, r_pts = points(robot, "robot", rgrid)
     if o_pts is None and r_pts is None:
         return None
     if (O is None and o_pts is None) or (R is None and r_pts is None):
         return None  # a non-convex mesh with a flat operand: NCC-CVMS takes solids only
     A = O.ints if O is not None else o_pts
-    B = grid.snap(c) - (R.ints if R is not None else r_pts)
+    B = rgrid.snap(c) - (R.ints if R is not None else r_pts)  # vectors: sums in grid's frame
     sums = (A[:, None, :] + B[None, :, :]).reshape(-1, 3)
     try:
         co = ConvexPolytope.from_ints(margin.grow_ints(sums), grid=grid, name="cobstacle")
@@ -597,14 +601,15 @@ def _flat_operands(obstacle, robot, c, grid, margin: Margin):
         margin = margin.at_least(1)
         co = ConvexPolytope.from_ints(margin.grow_ints(sums), grid=grid, name="cobstacle")
     return (co, O if O is not None else _FlatOperand(o_pts, grid),
-            R if R is not None else _FlatOperand(r_pts, grid), margin)
+            R if R is not None else _FlatOperand(r_pts, rgrid), margin)
 
 
 def grown_mesh_sum(A, B, margin: Margin, progress=None):
     """``minkowski_sum(A, B ⊕ box)`` with the box of ``margin`` (chosen for the snapping
     deviation alone), and the margin that holds for the float64 surface returned.
 
-    ``B`` is a ConvexPolytope or ``(n, 3)`` grid ints of a convex set on ``margin.grid``; a
+    ``B`` is a ConvexPolytope or ``(n, 3)`` grid ints of a convex set of vectors (``c - r``)
+    on ``margin.grid``'s step; a
     flat one (a panel, a rod) is grown by at least one step on every axis, so that the sum has
     a solid operand (an error that only adds collisions, within the returned bound).
 
@@ -622,7 +627,7 @@ def grown_mesh_sum(A, B, margin: Margin, progress=None):
     def grown(m: Margin) -> ConvexPolytope:
         if isinstance(B, ConvexPolytope):
             return m.grow(B)
-        return ConvexPolytope.from_ints(m.grow_ints(B), grid=m.grid, name="B")
+        return ConvexPolytope.from_ints(m.grow_ints(B), grid=m.grid.vectors, name="B")
 
     try:
         Bg = grown(margin)
@@ -785,7 +790,10 @@ class CSpaceObstacle:
         reference_point : (3,) float64
             The robot point whose position ``q`` is planned (robot frame).
         grid : Grid, optional
-            Common snapping grid; default ``Grid.for_points`` of every input coordinate.
+            The obstacle's (and the C-obstacle's) snapping grid; default
+            ``Grid.for_cobstacle``: centred on the C-obstacle when that is finer, so that
+            precision follows its size, not its distance from the origin. The robot is
+            snapped on the same step (about its reference point when far from the grid).
         progress : callable, optional
             ``progress(fraction, stage)`` during a non-convex build (see ``minkowski_sum``).
         conservative : bool, default True
@@ -813,7 +821,7 @@ class CSpaceObstacle:
         if not np.isfinite(c).all():
             raise NonFiniteError(f"reference_point is not finite: {c.tolist()}")
         if grid is None:
-            grid = Grid.for_points(_vertices_of(obstacle), _vertices_of(robot), c[None, :])
+            grid = Grid.for_cobstacle(_vertices_of(obstacle), _vertices_of(robot), c)
         m = Margin.for_operands(grid, _vertices_of(obstacle), _vertices_of(robot), c[None, :],
                                 rounded=False)
         return cls._grown(obstacle, robot, c, grid, m if conservative else m.without_growth(),
@@ -825,8 +833,9 @@ class CSpaceObstacle:
         from .errors import DegenerateError, NonManifoldError
         from .mesh import as_mesh
 
-        c_snapped = grid.to_float(grid.snap(c))
-        flat = _flat_operands(obstacle, robot, c, grid, margin)
+        rgrid = grid.for_robot(_vertices_of(robot), c)
+        c_snapped = rgrid.to_float(rgrid.snap(c))
+        flat = _flat_operands(obstacle, robot, c, grid, rgrid, margin)
         if flat is not None:
             co, O, R, m = flat
             out = cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=m)
@@ -835,9 +844,9 @@ class CSpaceObstacle:
             out.semantics = (not o_flat, "surface" if r_flat else "convex")
             return out
         try:
-            R = _as_convex(robot, grid, "robot")
+            R = _as_convex(robot, rgrid, "robot")
         except DegenerateError:  # flat, against a non-convex obstacle: NCC-CVMS thickens it
-            R = _FlatOperand(grid.snap(_vertices_of(robot)), grid)
+            R = _FlatOperand(rgrid.snap(_vertices_of(robot)), rgrid)
         try:
             O = _as_convex(obstacle, grid, "obstacle")
         except (NotConvexError, NonManifoldError):
@@ -845,7 +854,7 @@ class CSpaceObstacle:
                 O = as_mesh(obstacle, grid=grid, name="obstacle")
             except NonManifoldError:  # pieces meeting at edges or vertices: one CO each
                 return cls._of_parts(obstacle, robot, c, grid, margin, progress)
-            B = R.reflected(c) if isinstance(R, ConvexPolytope) else grid.snap(c) - R.ints
+            B = R.reflected(c) if isinstance(R, ConvexPolytope) else rgrid.snap(c) - R.ints
             S, m = grown_mesh_sum(O, B, margin, progress)
             out = cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
                                 reference_point=c_snapped, grid=grid, sum=S, margin=m)
@@ -1107,7 +1116,7 @@ class CSpace:
         ----------
         scene : Scene
         grid : Grid, optional
-            Default ``Grid.for_extent(scene.extent())``.
+            Default ``scene.grid()`` (centred on the scene).
         cache : COCache, path, True, or None
             Disk cache of C-obstacles (:mod:`cspace.cache`); None: none.
         progress : callable, optional

@@ -388,11 +388,15 @@ class _PairsCO:
                  margin=(0, 0, 0)):
         from .surface import _CellGrid
 
-        self.S, self.T = np.asarray(S, np.int64), np.asarray(T, np.int64)
+        # S (obstacle triangles, in grid's frame) moved to the scene frame by the grid's
+        # origin, exactly: T holds vectors (c - t), so every piece and plane is then in the
+        # scene frame and a query is only scaled, never shifted.
+        self.S = np.asarray(S, np.int64) + np.asarray(grid.origin, np.int64)
+        self.T = np.asarray(T, np.int64)
         self.pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
         if not len(self.pairs):
             raise ValueError("a triangle-pair C-obstacle needs at least one pair")
-        self.grid, self.exponent = grid, grid.exponent
+        self.grid, self.exponent = grid.vectors, grid.exponent
         # Pieces grown by the box [-g, g] (outward rounding): 38 slabs instead of 17.
         self.g = np.asarray(margin, dtype=np.int64).reshape(3)
         self.grown = bool(self.g.any())

@@ -135,6 +135,7 @@ import numpy as np
 
 from .convex import ConvexPolytope
 from .errors import InvalidMeshError, SceneError
+from .exact import Grid
 from .meshfile import _is_float, read_mesh_file
 from .transform import axis_angle as _axis_angle
 from .transform import euler_xyz as _euler_xyz
@@ -270,7 +271,7 @@ class Scene:
         ----------
         grid : Grid, optional
             Snapping grid; default the grid for the robot's own coordinates. Pass the scene's
-            grid (e.g. ``Grid.for_extent(scene.extent())``) to combine it with obstacles.
+            grid (e.g. ``scene.grid()``) to combine it with obstacles.
 
         Returns
         -------
@@ -280,6 +281,8 @@ class Scene:
             its vertices, with a :class:`UserWarning` saying why.
         """
         robot = self.robot
+        if grid is not None:  # the scene grid's step, about the reference point if far
+            grid = grid.for_robot(robot.vertices, self.reference_point)
         try:
             return ConvexPolytope.from_mesh(
                 (robot.vertices, robot.faces), grid=grid, name=robot.name
@@ -312,6 +315,25 @@ class Scene:
             b_lo, b_hi = body.bounds
             values += [b_lo, b_hi, b_lo - r_hi, b_hi - r_lo]
         return float(max(np.abs(v).max() for v in values))
+
+    def grid(self, *, bits: int = 26) -> Grid:
+        """The scene's snapping grid: :meth:`Grid.for_box` of everything the C-obstacles'
+        computations meet in the world frame (the bounds, the robot placed at their corners,
+        the obstacles and their C-obstacles' boxes ``O ⊕ (c - R)``), with the robot's vectors
+        ``c - r`` within reach. Centred on that box when it lies away from the origin, so that
+        the step follows the scene's size, not its distance from the origin."""
+        rel = self.robot.vertices - self.reference_point
+        r_lo, r_hi = rel.min(axis=0), rel.max(axis=0)
+        lo, hi = self.bounds
+        boxes = [self.bounds, np.stack([lo + r_lo, hi + r_hi])]
+        for body in self.obstacles:
+            b_lo, b_hi = body.bounds
+            boxes.append(np.stack([b_lo, b_hi, b_lo - r_hi, b_hi - r_lo]))
+        allv = np.concatenate(boxes)
+        far = max(float(np.abs(self.robot.vertices).max()),
+                  float(np.abs(self.reference_point).max()))
+        return Grid.for_box(allv.min(axis=0), allv.max(axis=0),
+                            reach=float(np.abs(rel).max()), far=far, bits=bits)
 
     def __repr__(self) -> str:
         return (

@@ -55,7 +55,7 @@ class Superset:
     Attributes
     ----------
     grid : Grid
-        Common grid of A and B; ``vertices == grid.to_float(ints)`` exactly.
+        The frame of the sums (``A.grid.plus(B.grid)``); ``vertices == grid.to_float(ints)``.
     labels : (n, 2) int64
         For each superset vertex, its vertex of A and vertex of B.
     ints : (n, 3) int64
@@ -166,12 +166,14 @@ class Superset:
         return self.grid.point_error_bound
 
 
-def _common(A, B) -> tuple[ClosedMesh, ConvexPolytope]:
+def on_common_step(A, B) -> tuple[ClosedMesh, ConvexPolytope]:
+    """The operands as a mesh and a convex polytope on grids of one step (re-snapped onto
+    ``Grid.for_operands`` only when their steps differ)."""
     A = as_mesh(A, name=getattr(A, "name", None) or "A")
     B = B if isinstance(B, ConvexPolytope) else ConvexPolytope.from_points(B, name="B")
-    if A.grid != B.grid:
-        grid = Grid.for_points(A.vertices, B.vertices, bits=min(A.grid.bits, B.grid.bits))
-        A, B = A.on_grid(grid), B.on_grid(grid)
+    if not A.grid.same_step(B.grid):  # same step: integers combine, frames add up
+        ga, gb = Grid.for_operands(A.vertices, B.vertices, bits=min(A.grid.bits, B.grid.bits))
+        A, B = A.on_grid(ga), B.on_grid(gb)
     return A, B
 
 
@@ -220,7 +222,7 @@ def minkowski_superset(A, B) -> Superset:
     import time
 
     clock = time.perf_counter()
-    A, B = _common(A, B)
+    A, B = on_common_step(A, B)
     V, F = A.ints, A.faces
     nV, nB = len(V), len(B.ints)
 
@@ -305,7 +307,7 @@ def minkowski_superset(A, B) -> Superset:
     offsets = np.zeros(len(sizes) + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
     out = Superset(
-        grid=A.grid,
+        grid=A.grid.plus(B.grid),
         labels=labels,
         ints=V[labels[:, 0]] + B.ints[labels[:, 1]],
         facet_offsets=offsets,

@@ -57,25 +57,29 @@ class SurfaceMesh:
 
 
 def surface_pieces(ints: np.ndarray, faces: np.ndarray, minus_robot: ConvexPolytope,
-                   progress=None) -> list[ConvexPolytope]:
+                   progress=None, *, grid: Grid | None = None) -> list[ConvexPolytope]:
     """The convex pieces ``t ⊕ (c - R)`` of the triangles ``t`` of a surface, exactly.
 
     Parameters
     ----------
     ints : (n, 3) int64
-        Surface vertices in grid units of ``minus_robot.grid``.
+        Surface vertices in grid units of ``grid``.
     faces : (m, 3) int64
     minus_robot : ConvexPolytope
-        ``R.reflected(c)`` on the same grid.
+        ``R.reflected(c)`` on the same step.
     progress : callable, optional
         ``progress(fraction)`` every 64 pieces.
+    grid : Grid, optional
+        The frame of ``ints`` (default ``minus_robot.grid``'s vectors: origin 0); the pieces
+        are in ``grid.plus(minus_robot.grid)``.
 
     Returns
     -------
     list of ConvexPolytope
         One per triangle (a triangle with collinear corners gives the segment's sum).
     """
-    grid, r = minus_robot.grid, minus_robot.ints
+    grid = (minus_robot.grid.vectors if grid is None else grid).plus(minus_robot.grid)
+    r = minus_robot.ints
     tri = np.asarray(ints, dtype=np.int64)[np.asarray(faces, dtype=np.int64)]  # (m, 3, 3)
     out = []
     for i, t in enumerate(tri):
@@ -353,23 +357,25 @@ class SurfaceObstacle(CSpaceObstacle):
         obstacle : (vertices (n, 3) float64, faces (m, 3) int64)
             Any triangles (open, non-manifold, repeated: each is one piece), world frame.
         robot : ConvexPolytope
-            On ``grid``, in its own frame.
+            On ``grid``'s step (re-snapped onto it otherwise), in its own frame.
         reference_point : (3,) float64
         grid : Grid
             The scene grid; it must hold the C-obstacle's coordinates
-            (``Grid.for_extent(scene.extent())``).
+            (``Scene.grid()``).
         progress : callable, optional
             ``progress(fraction)`` while the pieces are built.
         """
         V, F = obstacle
         F = np.asarray(F, dtype=np.int64)
         ints = grid.snap(np.asarray(V, dtype=np.float64))
-        robot = robot.on_grid(grid)
         c = np.asarray(reference_point, dtype=np.float64).reshape(3)
+        if not robot.grid.same_step(grid):
+            robot = robot.on_grid(grid.for_robot(robot.vertices, c))
+        rgrid = robot.grid
         t0 = time.perf_counter()
-        pieces = surface_pieces(ints, F, robot.reflected(c), progress)
+        pieces = surface_pieces(ints, F, robot.reflected(c), progress, grid=grid)
         out = cls(pieces, obstacle=SurfaceMesh(grid.to_float(ints), F, name), robot=robot,
-                  reference_point=grid.to_float(grid.snap(c)), grid=grid)
+                  reference_point=rgrid.to_float(rgrid.snap(c)), grid=grid)
         out.stats = {"pieces": len(pieces), "seconds": time.perf_counter() - t0}
         return out
 

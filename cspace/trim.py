@@ -48,7 +48,7 @@ from .planar import (
     strict_inner_point,
     triangulate_rings,
 )
-from .superset import Superset, minkowski_superset
+from .superset import Superset, minkowski_superset, on_common_step
 from .workers import can_fork, forked_map, worker_count
 
 __all__ = ["SumPolyhedron", "minkowski_sum"]
@@ -266,18 +266,18 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     """
     t0 = time.perf_counter()
     A, B = _loaded(A), _loaded(B)
-    # Snap both operands once, on one grid for both (snapping on separate grids and then
-    # re-snapping onto the common one would move points twice, beyond the stated bound).
-    grid = _shared_grid(A, B)
-    Bc, thick_b = _convex_or_thickened(B, "B", grid)
+    # Snap both operands once, on grids of one step (snapping on separate grids and then
+    # re-snapping onto a common one would move points twice, beyond the stated bound).
+    grid_a, grid_b = _shared_grids(A, B)
+    Bc, thick_b = _convex_or_thickened(B, "B", grid_b)
     if Bc is None:
         raise NotConvexError("B must be convex (the robot of a translational C-obstacle)")
-    Ac, thick_a = _convex_or_thickened(A, "A", grid)
+    Ac, thick_a = _convex_or_thickened(A, "A", grid_a)
     if Ac is not None:
         out = _from_convex(Ac, Bc, t0)
         out.stats["thickened_operands"] = thick_a + thick_b
         return out
-    A = as_mesh(A, grid=grid, name=getattr(A, "name", None) or "A")
+    A = as_mesh(A, grid=grid_a, name=getattr(A, "name", None) or "A")
     crossing = self_intersections(A)
     if len(crossing):
         i, j = crossing[0].tolist()
@@ -362,13 +362,13 @@ def _raw_points(obj, what: str = "operand") -> np.ndarray | None:
     return points
 
 
-def _shared_grid(A, B) -> Grid | None:
-    """One grid for two unsnapped operands (None: let the operands' own grids decide)."""
+def _shared_grids(A, B) -> tuple[Grid | None, Grid | None]:
+    """Grids of one step for two unsnapped operands, each centred on its own points where
+    that is finer (``Grid.for_operands``); None: let the operands' own grids decide."""
     a, b = _raw_points(A, "A"), _raw_points(B, "B")
     if a is None or b is None:
-        return None
-    return Grid.for_points(np.asarray(a, dtype=np.float64).reshape(-1, 3),
-                           np.asarray(b, dtype=np.float64).reshape(-1, 3))
+        return None, None
+    return Grid.for_operands(a, b)
 
 
 # --------------------------------------------------------------------------------------------
@@ -433,7 +433,7 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 
     report("superset", 0.0)
     t = time.perf_counter()
     S = minkowski_superset(A, B)
-    A, B = _common_operands(A, B, S.grid)
+    A, B = on_common_step(A, B)  # the operands as the superset snapped them
     t = lap("superset", t)
     stats["superset_facets"] = S.n_facets
 
@@ -466,14 +466,6 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 
     result = _result(out, S, stats, workers)
     report("rounding_check", 1.0)
     return result
-
-
-def _common_operands(A: ClosedMesh, B: ConvexPolytope, grid: Grid):
-    if A.grid != grid:
-        A = A.on_grid(grid)
-    if B.grid != grid:
-        B = B.on_grid(grid)
-    return A, B
 
 
 @dataclass
@@ -1432,8 +1424,11 @@ def _volume_sign(points: list, faces: np.ndarray) -> int:
 
 
 def _to_float(points: list, grid: Grid) -> np.ndarray:
-    """Correctly rounded float64 scene coordinates of homogeneous grid points."""
-    V = np.array([(P[0] / P[3], P[1] / P[3], P[2] / P[3]) for P in points], dtype=np.float64)
+    """Correctly rounded float64 scene coordinates of homogeneous grid points (Python's
+    int / int rounds correctly; the grid's origin is added exactly before)."""
+    ox, oy, oz = grid.origin
+    V = np.array([((P[0] + ox * P[3]) / P[3], (P[1] + oy * P[3]) / P[3],
+                   (P[2] + oz * P[3]) / P[3]) for P in points], dtype=np.float64)
     return np.ldexp(V.reshape(-1, 3), grid.exponent)
 
 
@@ -1521,10 +1516,12 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
     e = grid.exponent
     up, down = (1 << e, 1) if e >= 0 else (1, 1 << -e)
 
-    def moved_point(P, v) -> bool:  # v != P[:3] / P[3] * 2**e, decided on integers
+    origin = grid.origin
+
+    def moved_point(P, v) -> bool:  # v != (P[:3] / P[3] + origin) * 2**e, on integers
         for k in range(3):
             num, den = v[k].as_integer_ratio()
-            if num * P[3] * down != P[k] * up * den:
+            if num * P[3] * down != (P[k] + origin[k] * P[3]) * up * den:
                 return True
         return False
 

@@ -237,8 +237,13 @@ def test_reflection_through_reference_point():
     # Reflecting twice about the origin gives back the same polytope.
     assert P.reflected().reflected().planes() == P.planes()
     # A robot touches an obstacle exactly when its reference point is on O ⊕ (-R).
-    O = ConvexPolytope.from_points(CUBE, grid=P.grid)
+    # The cube on the same step about the origin (P's grid is centred on P, far from it):
+    # integers of different frames add up without re-snapping.
+    O = ConvexPolytope.from_points(CUBE, grid=P.grid.at((0.0, 0.0, 0.0)))
     S = convex_minkowski_sum(O, R)
+    assert S.polytope.grid == O.grid.plus(R.grid)
+    assert (np.sort(S.polytope.vertices, axis=0)
+            == np.sort(convex_minkowski_sum(CUBE, c - P.vertices).polytope.vertices, axis=0)).all()
     assert S.volume > O.volume
 
 

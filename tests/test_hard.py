@@ -11,7 +11,7 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hard import GAP_ANGLES, gap_comb, l_robot, rotation_z
+from hard import GAP_ANGLES, VoxelCase, gap_comb, l_cells, l_robot, rotation_z
 from scipy.spatial import ConvexHull
 
 from cspace import ClosedMesh, CSpaceObstacle, Grid, minkowski_sum, model_scene
@@ -96,6 +96,55 @@ def test_gap_comb_is_never_reported_free(depth):
         assert co.margin.holds_true and any(co.margin.steps)
         assert co.error_bound < 1e-6  # a few grid steps of a unit scene
         assert _false_free(co, case.colliding) == 0, f"angle {angle}"
+
+
+def _l_bracket(offset: float = 0.0) -> VoxelCase:
+    """The L bracket (voxels of 0.5) and a 0.3 box robot, the obstacle moved by ``offset``."""
+    return VoxelCase(l_cells(), (0.5, 0.5, 0.5), (0.3, 0.3, 0.3), lambda x: x + offset)
+
+
+@pytest.mark.parametrize("k", [3, 6, 9, 12])
+def test_precision_follows_size_not_position(k):
+    """#17: the same part moved by 10^k keeps the precision of its size, as far as float64
+    resolves coordinates there (the grid is centred on the C-obstacle; its step is never
+    below a few ulps of the coordinates), and is never reported free where it collides:
+    exact reference (a union of boxes in rationals on the float input)."""
+    near, far = _l_bracket(), _l_bracket(10.0 ** k)
+    co0 = CSpaceObstacle.build((near.vertices, near.faces), near.robot)
+    co = CSpaceObstacle.build((far.vertices, far.faces), far.robot)
+    assert any(co.grid.origin) and co.kind == "mesh"
+    ulp = float(np.spacing(10.0 ** k))
+    # step: the unit scene's, or 2**-51 of the coordinates (4 ulps), whichever is coarser
+    assert co.grid.step <= max(co0.grid.step, 4 * ulp)
+    assert co.error_bound <= max(2 * co0.error_bound, 32 * ulp)
+    q = far.samples(3000, np.random.default_rng(k))
+    ref, ours = far.contains(q), co.contains(q)
+    assert not (ref & ~ours).any()  # never a false free
+    if (ours & ~ref).any():  # false collisions only within the stated bound
+        assert far.distance(q[ours & ~ref]).max() <= co.error_bound
+    # and segments: every segment from a sample to its neighbour that ends in the
+    # C-obstacle is blocked
+    hits = ~co.segment_free(q[:-1], q[1:])
+    assert hits[ref[1:] | ref[:-1]].all()
+
+
+def test_offset_scene_has_the_unit_scenes_grid_step():
+    """A scene far from the origin (bounds, obstacles, start and goal moved by 10^6; the
+    robot in its own frame) is modelled on the step of the same scene at the origin, and
+    no known collision is answered free."""
+    case = gap_comb(FAST_ANGLES[0])
+    scene = _gap_scene(case, (case.robot, _box_faces(case.robot)), teeth_apart=False)
+    d = np.full(3, 1e6)
+    moved = Scene("gap far", None, tuple(Body(b.name, b.vertices + d, b.faces, "test")
+                                         for b in scene.obstacles),
+                  scene.robot, scene.reference_point, tuple(np.asarray(scene.bounds) + d),
+                  scene.start + d, scene.goal + d)
+    m0, m = model_scene(scene), model_scene(moved)
+    assert m.grid.exponent == m0.grid.exponent and any(m.grid.origin)
+    assert m.error_bound <= 2 * m0.error_bound
+    cs = m.cspace()
+    assert _false_free(cs, case.colliding + d) == 0
+    assert not cs.contains(moved.start) and not cs.contains(moved.goal)
 
 
 def _gap_scene(case, robot, teeth_apart: bool) -> Scene:

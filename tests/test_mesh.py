@@ -39,8 +39,9 @@ def tetra(offset=(0.0, 0.0, 0.0)):
 
 
 def exact_dets(mesh: ClosedMesh) -> list[int]:
-    """det[v0, v1, v2] of every face, with Python ints."""
-    p = mesh.ints[mesh.faces].astype(object)
+    """det[v0, v1, v2] of every face (scene-frame integers: the grid's origin added), with
+    Python ints."""
+    p = (mesh.ints + np.asarray(mesh.grid.origin, np.int64))[mesh.faces].astype(object)
     return list(
         p[:, 0, 0] * (p[:, 1, 1] * p[:, 2, 2] - p[:, 1, 2] * p[:, 2, 1])
         + p[:, 0, 1] * (p[:, 1, 2] * p[:, 2, 0] - p[:, 1, 0] * p[:, 2, 2])

@@ -182,11 +182,11 @@ def test_operands_are_snapped_once_on_one_grid():
     V, F = cup()
     V = random_rotation(V, seed=3) * 0.3
     B = np.random.default_rng(7).normal(size=(9, 3)) * 2.0
-    grid = Grid.for_points(V, B)
-    assert as_mesh((V, F)).grid != grid  # the case that used to snap twice
+    ga, gb = Grid.for_operands(V, B)  # one step for both, each centred on itself
+    assert not as_mesh((V, F)).grid.same_step(ga)  # the case that used to snap twice
     r = minkowski_sum((V, F), B)
-    once = minkowski_sum(as_mesh((V, F), grid=grid), ConvexPolytope.from_points(B, grid=grid))
-    assert r.grid == grid and r.volume_exact == once.volume_exact
+    once = minkowski_sum(as_mesh((V, F), grid=ga), ConvexPolytope.from_points(B, grid=gb))
+    assert r.grid == ga.plus(gb) and r.volume_exact == once.volume_exact
 
 
 def test_forked_arrangements_give_the_same_sum():
