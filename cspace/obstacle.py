@@ -423,6 +423,30 @@ def _mesh_arrays(obj) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(obj[0], dtype=np.float64), np.asarray(obj[1], dtype=np.int64)
 
 
+def _closed_2cycle(V: np.ndarray, F: np.ndarray) -> bool:
+    """Do the triangles, vertices welded by exact float position, form a closed 2-cycle
+    (every directed edge balanced by its reverse)?"""
+    V = np.asarray(V, dtype=np.float64).reshape(-1, 3)
+    if F.min() < 0 or F.max() >= len(V) or not np.isfinite(V).all():
+        return False
+    _, inv = np.unique(V, axis=0, return_inverse=True)
+    G = inv.reshape(-1)[F]
+    a, b = G.reshape(-1), G[:, [1, 2, 0]].reshape(-1)
+    fwd = np.sort(a * len(V) + b)
+    back = np.sort(b * len(V) + a)
+    return bool(np.array_equal(fwd, back))
+
+
+def _wider_somewhere(R: np.ndarray, O: np.ndarray) -> bool:
+    """Is the robot wider than the obstacle's box on some axis (exact, on the floats)? Then
+    it can never lie inside the obstacle."""
+    for k in range(3):
+        if (Fraction(float(R[:, k].max())) - Fraction(float(R[:, k].min()))
+                > Fraction(float(O[:, k].max())) - Fraction(float(O[:, k].min()))):
+            return True
+    return False
+
+
 class _Mesh:
     """Vertices and faces of several operands joined (for FCL checks and drawing)."""
 
@@ -835,7 +859,10 @@ class CSpaceObstacle:
 
         rgrid = grid.for_robot(_vertices_of(robot), c)
         c_snapped = rgrid.to_float(rgrid.snap(c))
-        flat = _flat_operands(obstacle, robot, c, grid, rgrid, margin)
+        try:
+            flat = _flat_operands(obstacle, robot, c, grid, rgrid, margin)
+        except DegenerateError as exc:  # a non-convex mesh flat on the grid (a thin L plate)
+            return cls._thin(obstacle, robot, c, grid, rgrid, margin, exc)
         if flat is not None:
             co, O, R, m = flat
             out = cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=m)
@@ -854,6 +881,8 @@ class CSpaceObstacle:
                 O = as_mesh(obstacle, grid=grid, name="obstacle")
             except NonManifoldError:  # pieces meeting at edges or vertices: one CO each
                 return cls._of_parts(obstacle, robot, c, grid, margin, progress)
+            except DegenerateError as exc:  # thinner than a grid step somewhere
+                return cls._thin(obstacle, robot, c, grid, rgrid, margin, exc)
             B = R.reflected(c) if isinstance(R, ConvexPolytope) else rgrid.snap(c) - R.ints
             S, m = grown_mesh_sum(O, B, margin, progress)
             out = cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
@@ -863,6 +892,48 @@ class CSpaceObstacle:
             return out
         co = convex_minkowski_sum(O, margin.grow(R).reflected(c)).polytope
         return cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=margin)
+
+    @classmethod
+    def _thin(cls, obstacle, robot, c, grid: Grid, rgrid: Grid, margin: Margin, why):
+        """A closed obstacle with features thinner than a grid step (a plate 1e-9 thick): its
+        snapped solid does not exist, but its surface does. The C-obstacle of a closed solid
+        is that of its surface, ``union over triangles t of t ⊕ (c - R)``, plus the
+        positions where the robot lies wholly inside it; those need the robot to fit in the
+        obstacle's box, so when it does not (on some axis the robot is wider), the union of
+        the triangle pieces, each grown by ``margin``, is the C-obstacle, exactly and
+        conservatively (``kind='union'``, one convex piece per triangle). Otherwise ``why``
+        (the named error that the snapped solid gave) stands.
+        """
+        from .errors import DegenerateError
+
+        if not _is_mesh(obstacle):
+            raise why
+        V, F = _mesh_arrays(obstacle)
+        if F.ndim != 2 or F.shape[1:] != (3,) or not len(F) or not _closed_2cycle(V, F):
+            raise why  # not a closed surface: the snapped solid's error is the answer
+        Rv = np.asarray(_vertices_of(robot), dtype=np.float64).reshape(-1, 3)
+        if not _wider_somewhere(Rv, V[np.unique(F)]):
+            raise type(why)(f"{why} (its surface would stand for it only if the robot could not "
+                            "fit inside it)") from None
+        try:
+            R = margin.grow(_as_convex(robot, rgrid, "robot"))
+        except DegenerateError:  # a flat robot: give it volume
+            margin = margin.at_least(1)
+            R = ConvexPolytope.from_ints(margin.grow_ints(rgrid.snap(Rv)), grid=rgrid, name="robot")
+        B = R.reflected(c)
+        T = grid.snap(V)[np.asarray(F, np.int64)]
+        c_snapped = rgrid.to_float(rgrid.snap(c))
+        cos = []
+        for k, t in enumerate(T):
+            piece = ConvexPolytope.from_ints((t[:, None, :] + B.ints[None]).reshape(-1, 3),
+                                             grid=grid.plus(B.grid), name=f"triangle {k}")
+            co = cls(piece, obstacle=_FlatOperand(t, grid), robot=R, reference_point=c_snapped,
+                     margin=margin)
+            co.semantics = (False, "convex")  # FCL: the obstacle's triangles, as a surface
+            cos.append(co)
+        out = cls.union(cos)
+        out.thin = str(why)
+        return out
 
     @classmethod
     def _of_parts(cls, obstacle, robot, c, grid: Grid, margin: Margin, progress=None):

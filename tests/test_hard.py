@@ -249,9 +249,30 @@ def test_flat_robot_against_a_non_convex_obstacle(flat):
     assert S.stats["thickened_operands"] == 1 and S.error_bound < 1e-5
 
 
+@pytest.mark.parametrize("k", [9, 12, 300])
+def test_features_thinner_than_the_grid_are_answered_by_their_surface(k):
+    """#17 class 1: an L plate 10^-k thick collapses on the grid. Its surface stands for it
+    (the robot is thicker than the plate, so it can never lie inside): one convex piece per
+    triangle, grown like every C-obstacle. Never its hull (the notch stays free), never a
+    false free, false collisions within the stated bound (exact union-of-boxes reference)."""
+    case = VoxelCase(l_cells(), (0.5, 0.5, 10.0 ** -k), (0.3, 0.3, 0.3))
+    co = CSpaceObstacle.build((case.vertices, case.faces), case.robot)
+    assert co.kind == "union" and "collapses" in co.thin
+    assert co.error_bound < 1e-7
+    q = case.samples(3000, np.random.default_rng(k))
+    ref, ours = case.contains(q), co.contains(q)
+    assert not (ref & ~ours).any()
+    assert case.distance(q[ours & ~ref]).max() <= co.error_bound
+    notch = np.array([1.0, 1.0, 0.0])  # in the L's hull, 0.35 from the arms' C-obstacle
+    assert not case.contains(notch[None])[0] and not co.contains(notch)
+    assert not co.segment_free([1.0, 1.0, -1.0], [1.0, 0.1, 0.0])  # ends on the arm's CO
+    r = cross_check(co, n=2000, seed=k)
+    assert r["n_false_free"] == 0
+
+
 def test_a_flat_mesh_is_its_hull_only_when_it_is_convex():
-    # An L plate thinner than the grid step collapses to a flat L: not convex, so it is not
-    # replaced by its hull (that would report collisions far beyond the bound): a named error.
+    # A robot that could lie inside the collapsed L (it fits in the L's box on every axis)
+    # keeps the named error: the surface alone would miss the positions inside.
     from zoo import voxel_solid
 
     from cspace.errors import DegenerateError
@@ -260,8 +281,8 @@ def test_a_flat_mesh_is_its_hull_only_when_it_is_convex():
     occ[:, 0, 0] = occ[0, :, 0] = True
     V, F = voxel_solid(occ, 1.0)
     box = np.array([[x, y, z] for x in (-.15, .15) for y in (-.15, .15) for z in (-.15, .15)])
-    with pytest.raises(DegenerateError, match="collapses"):
-        CSpaceObstacle.build((V * [0.5, 0.5, 1e-9], F), box)
+    with pytest.raises(DegenerateError, match="only if the robot could not fit inside"):
+        CSpaceObstacle.build((V * [0.5, 0.5, 1e-9], F), box * 1e-12)
     # A panel modelled two-sided (each triangle twice, opposite windings) is a flat convex
     # robot: accepted, and FCL agrees.
     P = np.array([[0, 0, 0], [.6, 0, 0], [.6, .4, 0], [0, .4, 0]], dtype=np.float64)
