@@ -7,6 +7,9 @@ Families (parameter swept per table):
 - *thin*: the L flattened to a plate 10^-k thick (unit scene; 10^-300 included);
 - *flat robot*: the L against a panel, a rod (zero thickness on one or two axes);
 - *touching*: two boxes sharing an edge or a vertex, as one mesh;
+- *tilt*: a prism whose top dips by 10^-k along its middle (two nearly coplanar faces); its
+  exact reference is two convex polygons in (x, z) extruded along y (``tests/hard.py``);
+- *parallel structure and high genus*: stairs, and a 10 x 10 grate (genus 100);
 - *gap comb*: a comb whose slots are exactly as wide as the robot, turned by irrational angles
   (``tests/hard.py``); 101 known collisions along a slot, pushed 1e-9 into a tooth.
 
@@ -358,6 +361,16 @@ def main() -> None:
     body += voxel_family("Touching: two boxes sharing an edge or a vertex, one mesh",
                          ["edge", "vertex"],
                          lambda p: _touching(edge if p == "edge" else vertex, robot), n, rng)
+    tilts = [3, 15] if args.quick else [3, 6, 9, 12, 15]
+    body += voxel_family("Tilt: a valley 10^-k deep (two top faces nearly coplanar)",
+                         [f"10^-{k}" for k in tilts],
+                         lambda p: hard.TiltCase(10.0 ** -int(p[4:])), n, rng)
+    shapes = {"stairs (4 steps)": hard.stairs_cells(4)}
+    if not args.quick:
+        shapes["grate 10 x 10 (genus 100)"] = hard.grate_cells(10)
+    body += voxel_family("Parallel structure and high genus (voxels of 0.5, box robot 0.3)",
+                         list(shapes), lambda p: hard.VoxelCase(shapes[p], cell, robot),
+                         n, rng)
     body += gap_family(hard.GAP_ANGLES[:8] if args.quick else hard.GAP_ANGLES)
     total = time.perf_counter() - t0
     try:

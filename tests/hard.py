@@ -11,7 +11,10 @@ translations whose answer is known without cspace:
 - :class:`VoxelCase`: a union of axis-aligned voxels (:func:`voxel_mesh`, e.g. the L of
   :func:`l_cells`) and an axis-aligned box robot, moved or scaled by any float map: the exact
   C-obstacle of the *float input* is a union of boxes in rationals (membership, distance,
-  volume).
+  volume); :func:`stairs_cells` and :func:`grate_cells` (a 10 x 10 grate, genus 100) are such
+  unions too.
+- :class:`TiltCase`: a prism whose top dips by 10^-k (two top faces nearly coplanar), with an
+  exact reference in rationals.
 
 Used only by tests and benchmarks; nothing here depends on :mod:`cspace`.
 """
@@ -25,7 +28,8 @@ from typing import NamedTuple
 import numpy as np
 from zoo import comb_occupancy, voxel_solid
 
-__all__ = ["GapCase", "gap_comb", "GAP_ANGLES", "l_robot", "l_cells", "VoxelCase", "voxel_mesh"]
+__all__ = ["GapCase", "gap_comb", "GAP_ANGLES", "l_robot", "l_cells", "VoxelCase", "voxel_mesh",
+           "stairs_cells", "grate_cells", "TiltCase"]
 
 # Irrational angles (square roots of non-squares, radians): rotated coordinates are not on
 # any dyadic grid.
@@ -168,3 +172,168 @@ def voxel_mesh(occ):
             n += len(V)
         V, inverse = np.unique(np.vstack(Vs), axis=0, return_inverse=True)
         return V, inverse.reshape(-1)[np.vstack(Fs)]
+
+
+def stairs_cells(steps: int = 4) -> np.ndarray:
+    """A staircase of ``steps`` steps, one voxel each, rising along x (parallel structure)."""
+    occ = np.zeros((steps, 1, steps), dtype=bool)
+    for i in range(steps):
+        occ[i, 0, : i + 1] = True
+    return occ
+
+
+def grate_cells(holes: int = 10) -> np.ndarray:
+    """A flat grate with ``holes x holes`` square holes, one voxel each (genus holes**2)."""
+    n = 2 * holes + 1
+    occ = np.ones((n, n, 1), dtype=bool)
+    occ[1::2, 1::2, 0] = False
+    return occ
+
+
+def _hull2(points: list) -> list:
+    """Counter-clockwise convex hull of 2D rational points (Andrew's monotone chain)."""
+    pts = sorted(set(points))
+    if len(pts) <= 2:
+        return pts
+
+    def cross(o, a, b):
+        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+
+    lower, upper = [], []
+    for p in pts:
+        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
+            lower.pop()
+        lower.append(p)
+    for p in reversed(pts):
+        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
+            upper.pop()
+        upper.append(p)
+    return lower[:-1] + upper[:-1]
+
+
+def _area2(poly: list) -> Fraction:
+    """Twice the area of a counter-clockwise polygon (0 when degenerate)."""
+    m = len(poly)
+    return sum((poly[i][0] * poly[(i + 1) % m][1] - poly[(i + 1) % m][0] * poly[i][1]
+                for i in range(m)), Fraction(0)) if m >= 3 else Fraction(0)
+
+
+def _clip2(subject: list, clip: list) -> list:
+    """Intersection of two convex counter-clockwise polygons (Sutherland-Hodgman, exact)."""
+    out = list(subject)
+    m = len(clip)
+    for i in range(m):
+        a, b = clip[i], clip[(i + 1) % m]
+        if not out:
+            break
+
+        def side(p):
+            return (b[0] - a[0]) * (p[1] - a[1]) - (b[1] - a[1]) * (p[0] - a[0])
+
+        res = []
+        for j in range(len(out)):
+            p, q = out[j], out[(j + 1) % len(out)]
+            sp, sq = side(p), side(q)
+            if sp >= 0:
+                res.append(p)
+            if (sp > 0 > sq) or (sp < 0 < sq):
+                t = sp / (sp - sq)
+                res.append((p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])))
+        out = res
+    return out
+
+
+class TiltCase:
+    """A near-coplanar valley: a prism (x in [0, 1], y in [0, 1]) whose top, at height 0.5,
+    dips by ``depth`` along the line x = 0.5 (two top faces tilted by about ``2 depth``
+    against each other), and a box robot (axis-aligned, centred on its reference point).
+
+    Exact reference for the *float input*: the prism is the union of two convex prisms
+    extruded along y, so its C-obstacle is the extrusion over ``[y0 - r_hi, y1 - r_lo]`` of
+    the union of two convex polygons in (x, z), each the hull of the sums of a half's corners
+    and the robot's; membership is decided on them in rationals.
+    """
+
+    def __init__(self, depth: float, robot_size=(0.3, 0.3, 0.3)):
+        h = 0.5
+        v = h - depth  # rounded once: the float input
+        xz = [(0.0, 0.0), (1.0, 0.0), (1.0, h), (0.5, v), (0.0, h)]
+        n = len(xz)
+        V = np.array([[x, y, z] for y in (0.0, 1.0) for x, z in xz])
+        cap = [(0, 1, 2), (0, 2, 3), (0, 3, 4)]  # fan from (0, 0): it sees every corner
+        F = [(a, c, b) for a, b, c in cap]  # y = 0 seen from -y
+        F += [(a + n, b + n, c + n) for a, b, c in cap]
+        for i in range(n):
+            j = (i + 1) % n
+            F += [(i, j, j + n), (i, j + n, i + n)]
+        self.vertices, self.faces = V, np.array(F, dtype=np.int64)
+        half = np.asarray(robot_size, float) / 2
+        self.robot = np.array(list(itertools.product(*[(-s, s) for s in half])))
+        r = [Fraction(float(s)) for s in half]
+        Fr = [[(Fraction(x), Fraction(z)) for x, z in piece]
+              for piece in ([xz[0], (0.5, 0.0), xz[3], xz[4]], [(0.5, 0.0), xz[1], xz[2], xz[3]])]
+        self.polys = [_hull2([(x + sx * r[0], z + sz * r[2]) for x, z in piece
+                              for sx in (-1, 1) for sz in (-1, 1)]) for piece in Fr]
+        self.y = (-r[1], 1 + r[1])
+        self._float = [np.array([[float(a), float(b)] for a, b in p]) for p in self.polys]
+
+    def contains(self, q: np.ndarray) -> np.ndarray:
+        out = np.zeros(len(q), dtype=bool)
+        for k, (x, y, z) in enumerate(q.tolist()):
+            Y = Fraction(y)
+            if not self.y[0] <= Y <= self.y[1]:
+                continue
+            X, Z = Fraction(x), Fraction(z)
+            for poly in self.polys:
+                m = len(poly)
+                if all((poly[(i + 1) % m][0] - poly[i][0]) * (Z - poly[i][1])
+                       - (poly[(i + 1) % m][1] - poly[i][1]) * (X - poly[i][0]) >= 0
+                       for i in range(m)):
+                    out[k] = True
+                    break
+        return out
+
+    def distance(self, q: np.ndarray) -> np.ndarray:
+        """Float distance to the reference (0 inside; the largest of the y gap and the
+        distance in (x, z) to the nearer polygon: a lower bound within a factor sqrt(2))."""
+        y0, y1 = float(self.y[0]), float(self.y[1])
+        gy = np.maximum(np.maximum(y0 - q[:, 1], q[:, 1] - y1), 0.0)
+        best = np.full(len(q), np.inf)
+        p = q[:, [0, 2]]
+        for P in self._float:
+            A, B = P, np.roll(P, -1, axis=0)
+            d = B - A
+            t = np.clip(np.einsum("kmj,mj->km", p[:, None, :] - A[None], d)
+                        / np.einsum("mj,mj->m", d, d), 0.0, 1.0)
+            near = A[None] + t[..., None] * d[None]
+            dist = np.sqrt(((p[:, None, :] - near) ** 2).sum(axis=2)).min(axis=1)
+            side = np.einsum("kmj,mj->km", p[:, None, :] - A[None], d[:, ::-1] * [1, -1])
+            inside = (side <= 0).all(axis=1)
+            best = np.minimum(best, np.where(inside, 0.0, dist))
+        return np.maximum(best, gy)
+
+    def samples(self, n: int, rng) -> np.ndarray:
+        """Half uniform around the reference, half near the valley's C-obstacle boundary
+        (the top, where the tilt is), moved by 10^U(-15, -1)."""
+        uni = rng.uniform([-0.5, -0.5, -0.5], [1.5, 1.5, 1.0], (n // 2, 3))
+        m = n - n // 2
+        x = rng.uniform(-0.2, 1.2, m)
+        top = np.array([max(float(self._top(xi)), 0.0) for xi in x])
+        off = 10.0 ** rng.uniform(-15, -1, m) * rng.choice([-1.0, 1.0], m)
+        near = np.stack([x, rng.uniform(0.0, 1.0, m), top + off], axis=1)
+        return np.vstack([uni, near])
+
+    def volume(self) -> Fraction:
+        """Exact volume of the reference: (area(A) + area(B) - area(A ∩ B)) times its y
+        length, the intersection clipped in rationals."""
+        a, b = self.polys
+        return (_area2(a) + _area2(b) - _area2(_clip2(a, b))) / 2 * (self.y[1] - self.y[0])
+
+    def _top(self, x: float) -> float:
+        """The reference's upper boundary z at x (the largest z of either polygon)."""
+        best = -np.inf
+        for P in self._float:
+            for (ax, az), (bx, bz) in zip(P, np.roll(P, -1, axis=0)):
+                if min(ax, bx) <= x <= max(ax, bx) and ax != bx:
+                    best = max(best, az + (bz - az) * (x - ax) / (bx - ax))
+        return best

@@ -11,7 +11,8 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hard import GAP_ANGLES, VoxelCase, gap_comb, l_cells, l_robot, rotation_z
+from hard import (GAP_ANGLES, TiltCase, VoxelCase, gap_comb, grate_cells, l_cells, l_robot,
+                  rotation_z, stairs_cells)
 from scipy.spatial import ConvexHull
 
 from cspace import ClosedMesh, CSpaceObstacle, Grid, minkowski_sum, model_scene
@@ -117,15 +118,45 @@ def test_precision_follows_size_not_position(k):
     # step: the unit scene's, or 2**-51 of the coordinates (4 ulps), whichever is coarser
     assert co.grid.step <= max(co0.grid.step, 4 * ulp)
     assert co.error_bound <= max(2 * co0.error_bound, 32 * ulp)
-    q = far.samples(3000, np.random.default_rng(k))
-    ref, ours = far.contains(q), co.contains(q)
-    assert not (ref & ~ours).any()  # never a false free
-    if (ours & ~ref).any():  # false collisions only within the stated bound
-        assert far.distance(q[ours & ~ref]).max() <= co.error_bound
-    # and segments: every segment from a sample to its neighbour that ends in the
-    # C-obstacle is blocked
-    hits = ~co.segment_free(q[:-1], q[1:])
-    assert hits[ref[1:] | ref[:-1]].all()
+    _judged(far, co, 3000, k)
+
+
+def _judged(case, co, n: int, seed: int):
+    """No false free on ``n`` samples of an exact reference, false collisions within the
+    stated bound, and every sampled segment that ends in the reference blocked."""
+    q = case.samples(n, np.random.default_rng(seed))
+    ref, ours = case.contains(q), co.contains(q)
+    assert not (ref & ~ours).any()
+    if (ours & ~ref).any():
+        assert case.distance(q[ours & ~ref]).max() <= co.error_bound
+    assert (~co.segment_free(q[:-1], q[1:]))[ref[1:] | ref[:-1]].all()
+    return q, ref
+
+
+@pytest.mark.parametrize("k", [3, 9, 15])
+def test_near_coplanar_tilts_are_never_reported_free(k):
+    """A valley 10^-k deep between two top faces: a non-convex mesh while the grid resolves
+    the dip, a convex one once it snaps flat; exact reference in rationals either way."""
+    case = TiltCase(10.0 ** -k)
+    co = CSpaceObstacle.build((case.vertices, case.faces), case.robot)
+    assert co.kind == ("mesh" if k < 9 else "convex")
+    _judged(case, co, 3000, k)
+    assert co.error_bound < 1e-7
+
+
+@pytest.mark.parametrize("shape", [
+    "stairs", pytest.param("grate", marks=pytest.mark.slow)])
+def test_parallel_structure_and_high_genus(shape):
+    """Stairs (parallel steps) and a 10 x 10 grate (genus 100, holes just wider than the
+    robot): exact union-of-boxes reference; the grate's holes stay free."""
+    occ = stairs_cells(4) if shape == "stairs" else grate_cells(10)
+    case = VoxelCase(occ, (0.5, 0.5, 0.5), (0.3, 0.3, 0.3))
+    co = CSpaceObstacle.build((case.vertices, case.faces), case.robot)
+    _judged(case, co, 2000, 5)
+    if shape == "grate":  # the centre of every hole: 0.25 from the bars' C-obstacle
+        centres = np.array([[0.5 * i + 0.25, 0.5 * j + 0.25, 0.25]
+                            for i in range(1, 21, 2) for j in range(1, 21, 2)])
+        assert not co.contains(centres).any()
 
 
 def test_offset_scene_has_the_unit_scenes_grid_step():
@@ -259,10 +290,7 @@ def test_features_thinner_than_the_grid_are_answered_by_their_surface(k):
     co = CSpaceObstacle.build((case.vertices, case.faces), case.robot)
     assert co.kind == "union" and "collapses" in co.thin
     assert co.error_bound < 1e-7
-    q = case.samples(3000, np.random.default_rng(k))
-    ref, ours = case.contains(q), co.contains(q)
-    assert not (ref & ~ours).any()
-    assert case.distance(q[ours & ~ref]).max() <= co.error_bound
+    _judged(case, co, 3000, k)
     notch = np.array([1.0, 1.0, 0.0])  # in the L's hull, 0.35 from the arms' C-obstacle
     assert not case.contains(notch[None])[0] and not co.contains(notch)
     assert not co.segment_free([1.0, 1.0, -1.0], [1.0, 0.1, 0.0])  # ends on the arm's CO
