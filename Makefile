@@ -9,8 +9,8 @@ STAMP  := $(VENV)/.installed
 $(PY):
 	$(PYTHON) -m venv $(VENV)
 
-# Re-install when the package metadata changes.
-$(STAMP): pyproject.toml Makefile | $(PY)
+# Re-install (and rebuild the compiled kernels) when the package metadata or a kernel changes.
+$(STAMP): pyproject.toml setup.py Makefile $(wildcard cspace/_kernels/*.pyx) | $(PY)
 	$(PY) -m pip install --upgrade pip
 	$(PY) -m pip install -e '.[dev,peers]'
 	touch $(STAMP)

@@ -40,15 +40,16 @@ and a bounding-volume hierarchy for segments and distances whose box test is con
 Distances are float64: the distance to the nearest triangle (its sign from ``contains``),
 error a few ulps of the coordinates.
 
-Hot loops are numba-compiled (``cache=True``: the first call in a fresh environment compiles
-for a few seconds, later processes load the cache).
+The hot loops run compiled (:mod:`cspace._kernels.meshquery`, Cython, built at install time:
+the first query in a fresh process is as fast as the hundredth). The functions below with the
+same names and a leading underscore are their pure-Python references, operation for operation
+(``tests/test_kernels.py`` checks identical outputs); nothing calls them in production.
 """
 
 from __future__ import annotations
 
 from fractions import Fraction
 
-import numba as nb
 import numpy as np
 
 from .arrangement import _cross3 as _cross
@@ -56,6 +57,15 @@ from .arrangement import _dot3 as _dot
 from .arrangement import _sub
 from .errors import EmptyMeshError, InvalidMeshError, NonFiniteError, OpenMeshError
 from .exact import _FILTER, _TINY, _dyadic
+
+try:
+    from ._kernels import meshquery as _compiled
+except ImportError as exc:  # pragma: no cover - an install without its build step
+    raise ImportError(
+        "cspace's compiled kernels (cspace._kernels.meshquery) are missing: install cspace "
+        "with pip (`pip install -e .` in a checkout), which builds them with the system C "
+        f"compiler ({exc})"
+    ) from exc
 
 __all__ = ["MeshCO"]
 
@@ -69,10 +79,9 @@ _STATUS_UNSURE = 2
 
 
 # --------------------------------------------------------------------------------------
-# float filters (numba): value and a rigorous bound on its rounding error
+# float filters: value and a rigorous bound on its rounding error
 
 
-@nb.njit(cache=True, inline="always")
 def _o2(au, av, bu, bv, pu, pv):
     """``(b - a) x (p - a)`` in 2D, and its error bound."""
     l = (bu - au) * (pv - av)
@@ -80,7 +89,6 @@ def _o2(au, av, bu, bv, pu, pv):
     return l - r, _FILTER * (abs(l) + abs(r)) + _TINY
 
 
-@nb.njit(cache=True, inline="always")
 def _o3(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     """``det[a - d; b - d; c - d]`` (= ``n . (a - d)``, ``n = (b - a) x (c - a)``), error bound."""
     adx, ady, adz = ax - dx, ay - dy, az - dz
@@ -101,7 +109,6 @@ def _o3(ax, ay, az, bx, by, bz, cx, cy, cz, dx, dy, dz):
     return det, _FILTER * perm + tiny
 
 
-@nb.njit(cache=True, inline="always")
 def _cell(v, v0, inv, n):
     """Grid cell of coordinate ``v``: monotone non-decreasing in ``v`` (rounding is monotone)."""
     f = (v - v0) * inv
@@ -113,10 +120,9 @@ def _cell(v, v0, inv, n):
 
 
 # --------------------------------------------------------------------------------------
-# membership (numba)
+# membership
 
 
-@nb.njit(cache=True)
 def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny, nz, out, unsure):
     """``out[i]``: inside by the float filters; ``unsure[i]``: undecided (exact path).
     Returns the number of undecided queries."""
@@ -171,7 +177,6 @@ def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny,
     return n_unsure
 
 
-@nb.njit(cache=True)
 def _cell_candidates(q, lo, hi, cstart, ctris, y0, z0, iy, iz, ny, nz):
     """Triangles whose closed box holds ``q``'s (y, z) and reaches ``x >= q_x``."""
     qx, qy, qz = q[0], q[1], q[2]
@@ -187,7 +192,6 @@ def _cell_candidates(q, lo, hi, cstart, ctris, y0, z0, iy, iz, ny, nz):
     return out[:n]
 
 
-@nb.njit(cache=True)
 def _cell_entries(lo, hi, y0, z0, iy, iz, ny, nz):
     """Total number of (cell, triangle) entries :func:`_build_cells` would make."""
     total = 0
@@ -198,7 +202,6 @@ def _cell_entries(lo, hi, y0, z0, iy, iz, ny, nz):
     return total
 
 
-@nb.njit(cache=True)
 def _build_cells(lo, hi, y0, z0, iy, iz, ny, nz):
     """CSR lists of the triangles whose (y, z) box meets each cell (same cell function)."""
     m = lo.shape[0]
@@ -219,21 +222,21 @@ def _build_cells(lo, hi, y0, z0, iy, iz, ny, nz):
 
 
 # --------------------------------------------------------------------------------------
-# bounding-volume hierarchy: distances and segments (numba)
+# bounding-volume hierarchy: distances and segments
 
 
-@nb.njit(cache=True, inline="always")
 def _box_dist2(px, py, pz, lo, hi, n):
     d = 0.0
     for k, p in ((0, px), (1, py), (2, pz)):
         if p < lo[n, k]:
-            d += (lo[n, k] - p) ** 2
+            g = lo[n, k] - p
+            d += g * g
         elif p > hi[n, k]:
-            d += (p - hi[n, k]) ** 2
+            g = p - hi[n, k]
+            d += g * g
     return d
 
 
-@nb.njit(cache=True, inline="always")
 def _seg_dist2(px, py, pz, ax, ay, az, bx, by, bz):
     ex, ey, ez = bx - ax, by - ay, bz - az
     wx, wy, wz = px - ax, py - ay, pz - az
@@ -245,7 +248,6 @@ def _seg_dist2(px, py, pz, ax, ay, az, bx, by, bz):
     return rx * rx + ry * ry + rz * rz
 
 
-@nb.njit(cache=True)
 def _tri_dist2(px, py, pz, T, t):
     """Squared distance from p to the closed triangle ``T[t]`` (float).
 
@@ -292,7 +294,6 @@ def _tri_dist2(px, py, pz, T, t):
     return best
 
 
-@nb.njit(cache=True)
 def _edge_side(ux, uy, uz, vx, vy, vz, px, py, pz, nx, ny, nz):
     """``((v - u) x (p - u)) . n``: positive when p projects to the left of u -> v."""
     ex, ey, ez = vx - ux, vy - uy, vz - uz
@@ -300,7 +301,6 @@ def _edge_side(ux, uy, uz, vx, vy, vz, px, py, pz, nx, ny, nz):
     return (ey * wz - ez * wy) * nx + (ez * wx - ex * wz) * ny + (ex * wy - ey * wx) * nz
 
 
-@nb.njit(cache=True)
 def _nearest_kernel(Q, T, nlo, nhi, left, right, start, count, out):
     """Distance from each query to the nearest triangle (BVH, nearest child first)."""
     stack = np.zeros(256, dtype=np.int64)
@@ -334,7 +334,6 @@ def _nearest_kernel(Q, T, nlo, nhi, left, right, start, count, out):
         out[i] = np.sqrt(best)
 
 
-@nb.njit(cache=True, inline="always")
 def _seg_box(p0x, p0y, p0z, dx, dy, dz, nlo, nhi, n):
     """False only if the segment ``p0 + t d``, ``t in [0, 1]``, surely misses the closed box.
 
@@ -364,7 +363,6 @@ def _seg_box(p0x, p0y, p0z, dx, dy, dz, nlo, nhi, n):
     return True
 
 
-@nb.njit(cache=True)
 def _segment_kernel(P0, P1, T, degen, nlo, nhi, left, right, start, count, first_only):
     """Filtered segment-triangle tests over the BVH.
 
@@ -712,10 +710,10 @@ class MeshCO:
             ny = int(np.clip(np.sqrt(cells * Ly / Lz), 1, 4096))
             nz = int(np.clip(cells / ny, 1, 4096))
             self._grid = (float(ylo), float(zlo), float(ny / Ly), float(nz / Lz), ny, nz)
-            if ny * nz == 1 or _cell_entries(self.lo, self.hi, *self._grid) <= 32 * m:
+            if ny * nz == 1 or _compiled.cell_entries(self.lo, self.hi, *self._grid) <= 32 * m:
                 break
             cells = ny * nz / 4.0
-        self.cstart, self.ctris = _build_cells(self.lo, self.hi, *self._grid)
+        self.cstart, self.ctris = _compiled.build_cells(self.lo, self.hi, *self._grid)
 
     # ---- membership ---------------------------------------------------------------------
 
@@ -724,14 +722,16 @@ class MeshCO:
         q = np.ascontiguousarray(q, dtype=np.float64)
         out = np.zeros(len(q), dtype=np.bool_)
         unsure = np.zeros(len(q), dtype=np.bool_)
-        if _contains_kernel(q, self.T, self.lo, self.hi, self.sx, self.degen, self.cstart,
-                            self.ctris, *self._grid, out, unsure):
+        if _compiled.contains_kernel(q, self.T, self.lo, self.hi, self.sx,
+                                     self.degen.view(np.uint8), self.cstart, self.ctris,
+                                     *self._grid, out.view(np.uint8), unsure.view(np.uint8)):
             for i in np.nonzero(unsure)[0].tolist():
                 out[i] = self._contains_exact(q[i])
         return out
 
     def _contains_exact(self, q: np.ndarray) -> bool:
-        cand = _cell_candidates(q, self.lo, self.hi, self.cstart, self.ctris, *self._grid)
+        cand = _compiled.cell_candidates(q, self.lo, self.hi, self.cstart, self.ctris,
+                                         *self._grid)
         ql = q.tolist()
         w = 0
         for t in cand.tolist():
@@ -749,8 +749,8 @@ class MeshCO:
         """(k,) float64 Euclidean distance to the nearest triangle (unsigned)."""
         q = np.ascontiguousarray(q, dtype=np.float64)
         out = np.zeros(len(q))
-        _nearest_kernel(q, self.T, self.nlo, self.nhi, self.left, self.right, self.start,
-                        self.count, out)
+        _compiled.nearest_kernel(q, self.T, self.nlo, self.nhi, self.left, self.right,
+                                 self.start, self.count, out)
         return out
 
     def signed_distance(self, q: np.ndarray) -> np.ndarray:
@@ -775,9 +775,9 @@ class MeshCO:
         q1 = np.ascontiguousarray(q1, dtype=np.float64)
         k = len(q0)
         tout = np.full(k, np.nan)
-        status, ps, pt, plo, phi = _segment_kernel(
-            q0, q1, self.T, self.degen, self.nlo, self.nhi, self.left, self.right, self.start,
-            self.count, not want_t,
+        status, ps, pt, plo, phi = _compiled.segment_kernel(
+            q0, q1, self.T, self.degen.view(np.uint8), self.nlo, self.nhi, self.left,
+            self.right, self.start, self.count, not want_t,
         )
         if not want_t:
             hit = status == 1
