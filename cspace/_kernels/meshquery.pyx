@@ -191,16 +191,26 @@ def build_cells(const double[:, ::1] lo, const double[:, ::1] hi, double y0, dou
 
 cdef inline double _box_dist2(double px, double py, double pz, const double[:, ::1] lo,
                               const double[:, ::1] hi, Py_ssize_t n) noexcept nogil:
-    cdef double d = 0.0, p, g
-    cdef int k
-    for k in range(3):
-        p = px if k == 0 else (py if k == 1 else pz)
-        if p < lo[n, k]:
-            g = lo[n, k] - p
-            d += g * g
-        elif p > hi[n, k]:
-            g = p - hi[n, k]
-            d += g * g
+    cdef double d = 0.0, g
+    # the reference's loop over the three axes, unrolled (same operations, same order)
+    if px < lo[n, 0]:
+        g = lo[n, 0] - px
+        d += g * g
+    elif px > hi[n, 0]:
+        g = px - hi[n, 0]
+        d += g * g
+    if py < lo[n, 1]:
+        g = lo[n, 1] - py
+        d += g * g
+    elif py > hi[n, 1]:
+        g = py - hi[n, 1]
+        d += g * g
+    if pz < lo[n, 2]:
+        g = lo[n, 2] - pz
+        d += g * g
+    elif pz > hi[n, 2]:
+        g = pz - hi[n, 2]
+        d += g * g
     return d
 
 
@@ -224,7 +234,7 @@ cdef inline double _edge_side(double ux, double uy, double uz, double vx, double
     return (ey * wz - ez * wy) * nx + (ez * wx - ex * wz) * ny + (ex * wy - ey * wx) * nz
 
 
-cdef double _tri_dist2(double px, double py, double pz, const double[:, ::1] T,
+cdef inline double _tri_dist2(double px, double py, double pz, const double[:, ::1] T,
                        Py_ssize_t t) noexcept nogil:
     cdef double ax = T[t, 0], ay = T[t, 1], az = T[t, 2]
     cdef double bx = T[t, 3], by = T[t, 4], bz = T[t, 5]
