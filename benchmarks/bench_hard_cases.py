@@ -365,9 +365,9 @@ def main() -> None:
     body += voxel_family("Tilt: a valley 10^-k deep (two top faces nearly coplanar)",
                          [f"10^-{k}" for k in tilts],
                          lambda p: hard.TiltCase(10.0 ** -int(p[4:])), n, rng)
-    shapes = {"stairs (4 steps)": hard.stairs_cells(4)}
+    shapes = {"stairs (4 steps)": zoo.stairs_occupancy(4, 1)}
     if not args.quick:
-        shapes["grate 10 x 10 (genus 100)"] = hard.grate_cells(10)
+        shapes["grate 10 x 10 (genus 100)"] = zoo.grate_occupancy(10)
     body += voxel_family("Parallel structure and high genus (voxels of 0.5, box robot 0.3)",
                          list(shapes), lambda p: hard.VoxelCase(shapes[p], cell, robot),
                          n, rng)

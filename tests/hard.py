@@ -11,7 +11,7 @@ translations whose answer is known without cspace:
 - :class:`VoxelCase`: a union of axis-aligned voxels (:func:`voxel_mesh`, e.g. the L of
   :func:`l_cells`) and an axis-aligned box robot, moved or scaled by any float map: the exact
   C-obstacle of the *float input* is a union of boxes in rationals (membership, distance,
-  volume); :func:`stairs_cells` and :func:`grate_cells` (a 10 x 10 grate, genus 100) are such
+  volume); the zoo's stairs and grate occupancies (a 10 x 10 grate: genus 100) are such
   unions too.
 - :class:`TiltCase`: a prism whose top dips by 10^-k (two top faces nearly coplanar), with an
   exact reference in rationals.
@@ -29,7 +29,7 @@ import numpy as np
 from zoo import comb_occupancy, voxel_solid
 
 __all__ = ["GapCase", "gap_comb", "GAP_ANGLES", "l_robot", "l_cells", "VoxelCase", "voxel_mesh",
-           "stairs_cells", "grate_cells", "TiltCase"]
+           "TiltCase"]
 
 # Irrational angles (square roots of non-squares, radians): rotated coordinates are not on
 # any dyadic grid.
@@ -172,22 +172,6 @@ def voxel_mesh(occ):
             n += len(V)
         V, inverse = np.unique(np.vstack(Vs), axis=0, return_inverse=True)
         return V, inverse.reshape(-1)[np.vstack(Fs)]
-
-
-def stairs_cells(steps: int = 4) -> np.ndarray:
-    """A staircase of ``steps`` steps, one voxel each, rising along x (parallel structure)."""
-    occ = np.zeros((steps, 1, steps), dtype=bool)
-    for i in range(steps):
-        occ[i, 0, : i + 1] = True
-    return occ
-
-
-def grate_cells(holes: int = 10) -> np.ndarray:
-    """A flat grate with ``holes x holes`` square holes, one voxel each (genus holes**2)."""
-    n = 2 * holes + 1
-    occ = np.ones((n, n, 1), dtype=bool)
-    occ[1::2, 1::2, 0] = False
-    return occ
 
 
 def _hull2(points: list) -> list:

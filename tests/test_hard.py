@@ -11,8 +11,8 @@ from fractions import Fraction
 
 import numpy as np
 import pytest
-from hard import (GAP_ANGLES, TiltCase, VoxelCase, gap_comb, grate_cells, l_cells, l_robot,
-                  rotation_z, stairs_cells)
+from hard import GAP_ANGLES, TiltCase, VoxelCase, gap_comb, l_cells, l_robot, rotation_z
+from zoo import grate_occupancy, stairs_occupancy
 from scipy.spatial import ConvexHull
 
 from cspace import ClosedMesh, CSpaceObstacle, Grid, minkowski_sum, model_scene
@@ -149,7 +149,7 @@ def test_near_coplanar_tilts_are_never_reported_free(k):
 def test_parallel_structure_and_high_genus(shape):
     """Stairs (parallel steps) and a 10 x 10 grate (genus 100, holes just wider than the
     robot): exact union-of-boxes reference; the grate's holes stay free."""
-    occ = stairs_cells(4) if shape == "stairs" else grate_cells(10)
+    occ = stairs_occupancy(4, 1) if shape == "stairs" else grate_occupancy(10)
     case = VoxelCase(occ, (0.5, 0.5, 0.5), (0.3, 0.3, 0.3))
     co = CSpaceObstacle.build((case.vertices, case.faces), case.robot)
     _judged(case, co, 2000, 5)
