@@ -17,7 +17,6 @@ from functools import cached_property, cmp_to_key
 from math import gcd
 from pathlib import Path
 
-import numba as nb
 import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
@@ -50,6 +49,14 @@ from .planar import (
 )
 from .superset import Superset, minkowski_superset, on_common_step
 from .workers import can_fork, forked_map, worker_count
+
+try:
+    from ._kernels import trim as _compiled
+except ImportError as exc:  # pragma: no cover - an install without its build step
+    raise ImportError(
+        "cspace's compiled kernels (cspace._kernels.trim) are missing: install cspace with "
+        f"pip (`pip install -e .` in a checkout), which builds them with the C compiler ({exc})"
+    ) from exc
 
 __all__ = ["SumPolyhedron", "minkowski_sum"]
 
@@ -1546,14 +1553,12 @@ def self_intersections(mesh) -> np.ndarray:
     if not len(T):
         return np.zeros((0, 2), np.int64)
     moved = np.ones(len(mesh.vertices), dtype=bool)  # test every pair, not only moved ones
-    # numpy filters only: an input check must not pay numba's first-call cost.
-    bad, _ = _improper_pairs(np.asarray(mesh.vertices, dtype=np.float64), T, mesh.grid, moved,
-                             compiled_ok=False)
+    bad, _ = _improper_pairs(np.asarray(mesh.vertices, dtype=np.float64), T, mesh.grid, moved)
     return bad
 
 
 def _improper_pairs(V: np.ndarray, T: np.ndarray, grid: Grid, moved: np.ndarray,
-                    workers: int = 1, compiled_ok: bool = True) -> tuple[np.ndarray, int]:
+                    workers: int = 1) -> tuple[np.ndarray, int]:
     """Pairs of triangles ``T`` over float64 vertices ``V`` (with a vertex in ``moved``) that
     meet improperly, decided exactly; and the number of processes used."""
     P = V[T]
@@ -1561,10 +1566,10 @@ def _improper_pairs(V: np.ndarray, T: np.ndarray, grid: Grid, moved: np.ndarray,
     lo = np.floor(np.ldexp(P.min(axis=1), -grid.exponent)).astype(np.int64)
     hi = np.ceil(np.ldexp(P.max(axis=1), -grid.exponent)).astype(np.int64)
     pairs = box_pairs(lo, hi)
-    # The compiled filter costs a one-off load (a few tenths of a second in a fresh process):
-    # worth it only for many pairs, and then fast enough to stay in this process.
-    compiled = compiled_ok and len(pairs) >= _COMPILED_FROM
-    undecided = _undecided_pairs if compiled else _undecided_pairs_np
+    # Many pairs: the compiled filter, fast enough to stay in this process; fewer: numpy's,
+    # forked over workers from _PARALLEL_CHECK pairs on.
+    compiled = len(pairs) >= _COMPILED_FROM
+    undecided = _undecided_pairs_compiled if compiled else _undecided_pairs_np
     Vc, Tc = np.ascontiguousarray(V), np.ascontiguousarray(T)
     Vi, Tl = _common_integers(V), T.tolist()
 
@@ -1713,7 +1718,6 @@ def _undecided_pairs_np(V: np.ndarray, T: np.ndarray, pairs: np.ndarray, moved: 
     return out
 
 
-@nb.njit(cache=True, inline="always")
 def _o2f(V, u, a, b, k0, k1) -> int:
     """Sign of orient2d(u, a, b) on coordinates ``k0, k1`` of float rows of ``V``, 0 where the
     float filter cannot decide."""
@@ -1725,7 +1729,6 @@ def _o2f(V, u, a, b, k0, k1) -> int:
     return 0
 
 
-@nb.njit(cache=True, inline="always")
 def _plane_separates(V, ti, tj) -> bool:
     """Every vertex of triangle ``tj`` not shared with ``ti`` lies strictly on one side of
     the plane of ``ti`` (float filter; undecided: False): then the two triangles meet at
@@ -1752,14 +1755,12 @@ def _plane_separates(V, ti, tj) -> bool:
     return side != 0
 
 
-@nb.njit(cache=True, inline="always")
 def _ray_outside(V, u, x, p, q, k0, k1) -> bool:
     """The ray ``u -> x`` lies strictly outside the convex corner ``(p, q)`` at ``u``."""
     o = _o2f(V, u, p, q, k0, k1)
     return o != 0 and (_o2f(V, u, p, x, k0, k1) * o < 0 or _o2f(V, u, x, q, k0, k1) * o < 0)
 
 
-@nb.njit(cache=True, inline="always")
 def _dominant_axis(V, ti) -> int:
     """The coordinate axis of the largest component of triangle ``ti``'s float normal."""
     a, b, c = ti[0], ti[1], ti[2]
@@ -1769,7 +1770,6 @@ def _dominant_axis(V, ti) -> int:
     return 0 if (n0 >= n1 and n0 >= n2) else (1 if n1 >= n2 else 2)
 
 
-@nb.njit(cache=True, inline="always")
 def _axes_apart(V, ti, tj) -> bool:
     """:func:`_axes_apart_np` for one pair: strictly separated along the cross product of an
     edge of each triangle (float filter of the dot products; undecided: False)."""
@@ -1796,7 +1796,6 @@ def _axes_apart(V, ti, tj) -> bool:
     return False
 
 
-@nb.njit(cache=True, inline="always")
 def _apart_in_projection(V, ti, tj, ax) -> bool:
     """Triangles whose projections along coordinate axis ``ax`` meet only in their shared
     vertices or edge, decided by a float filter (undecided: False). The 3D triangles then
@@ -1853,7 +1852,6 @@ def _apart_in_projection(V, ti, tj, ax) -> bool:
     return False
 
 
-@nb.njit(cache=True)
 def _undecided_pairs(V, T, pairs, moved) -> np.ndarray:
     """Mask of the box-overlapping pairs that the float filters leave to the exact test: a
     pair with a moved vertex that no plane separation (either way), no separation in any of
@@ -1877,6 +1875,14 @@ def _undecided_pairs(V, T, pairs, moved) -> np.ndarray:
                 lone = False
         out[r] = not (lone and _axes_apart(V, ti, tj))
     return out
+
+
+def _undecided_pairs_compiled(V, T, pairs, moved) -> np.ndarray:
+    """:func:`_undecided_pairs` compiled (:mod:`cspace._kernels.trim`): identical output."""
+    return _compiled.undecided_pairs(np.ascontiguousarray(V, np.float64),
+                                     np.ascontiguousarray(T, np.int64),
+                                     np.ascontiguousarray(pairs, np.int64).reshape(-1, 2),
+                                     np.ascontiguousarray(moved, np.bool_).view(np.uint8))
 
 
 def _common_integers(V: np.ndarray) -> list:

@@ -13,6 +13,7 @@ import pytest
 from zoo import comb, l_shape, random_rotation, star, torus
 
 from cspace import meshquery as ref
+from cspace import trim
 from cspace._kernels import meshquery as compiled
 
 MESHES = {
@@ -103,3 +104,24 @@ def test_compiled_queries_are_the_meshes_answers(mesh):
     for i in np.nonzero(unsure)[0].tolist():
         out[i] = mesh._contains_exact(Q[i])
     assert np.array_equal(mesh.contains(Q), out)
+
+
+@pytest.mark.parametrize("name", list(MESHES))
+def test_rounding_check_filter_is_identical(name):
+    """cspace._kernels.trim.undecided_pairs against the reference on a mesh's box-overlapping
+    triangle pairs, its vertices moved by a few ulps (near-coplanar neighbours), a random
+    half of them marked moved."""
+    from cspace.arrangement import box_pairs
+
+    V, F = MESHES[name]()
+    rng = np.random.default_rng(7)
+    V = V + rng.choice([-1, 0, 1], V.shape) * np.spacing(np.abs(V) + 1.0)
+    P = V[F]
+    lo = np.floor(P.min(axis=1) * 64).astype(np.int64)
+    hi = np.ceil(P.max(axis=1) * 64).astype(np.int64)
+    pairs = np.ascontiguousarray(box_pairs(lo, hi), dtype=np.int64)
+    moved = rng.random(len(V)) < 0.5
+    a = trim._undecided_pairs_compiled(V, F, pairs, moved)
+    b = trim._undecided_pairs(V, F, pairs, moved)
+    assert len(pairs) > 100 and a.dtype == b.dtype == np.bool_
+    assert np.array_equal(a, b) and np.array_equal(a, trim._undecided_pairs_np(V, F, pairs, moved))

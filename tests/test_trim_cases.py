@@ -107,7 +107,8 @@ def test_rounding_filter_never_drops_an_improper_pair(seed):
     """The float filters of the rounding check (compiled and numpy) only set aside pairs the
     exact test finds proper: random triangles on a few points (shared vertices and edges, coplanar
     and crossing pairs, points a few ulps off a plane)."""
-    from cspace.trim import _common_integers, _undecided_pairs, _undecided_pairs_np
+    from cspace.trim import (_common_integers, _undecided_pairs, _undecided_pairs_compiled,
+                             _undecided_pairs_np)
 
     rng = np.random.default_rng(seed)
     pool = rng.integers(0, 4, size=(14, 3)).astype(np.float64)
@@ -120,8 +121,10 @@ def test_rounding_filter_never_drops_an_improper_pair(seed):
     i, j = np.triu_indices(len(T), 1)
     pairs = np.stack([i, j], axis=1).astype(np.int64)
     undecided = _undecided_pairs(pool, T, pairs, np.ones(len(pool), dtype=bool))
-    # the numpy filters (used for fewer pairs) decide exactly the same pairs
-    assert np.array_equal(undecided, _undecided_pairs_np(pool, T, pairs, np.ones(len(pool), dtype=bool)))
+    # the numpy filters (used for fewer pairs) and the compiled kernel decide the same pairs
+    every = np.ones(len(pool), dtype=bool)
+    assert np.array_equal(undecided, _undecided_pairs_np(pool, T, pairs, every))
+    assert np.array_equal(undecided, _undecided_pairs_compiled(pool, T, pairs, every))
     Vi, Tl = _common_integers(pool), T.tolist()
     improper = np.array([_improper(Vi, Tl[a], Tl[b]) for a, b in pairs.tolist()])
     assert not (improper & ~undecided).any()
