@@ -13,11 +13,10 @@ Steps 1-3 of :func:`cspace.model.model_scene` (see there), shared with
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .errors import InvalidMeshError
 from .exact import Grid
+from .graphs import component_labels
 
 __all__ = ["weld_dedupe", "edge_uses", "split_parts"]
 
@@ -64,8 +63,7 @@ def split_parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
     first = np.full(len(count), m, dtype=np.int64)
     np.minimum.at(first, edge, face)
     link = count[edge] == 2
-    g = coo_matrix((np.ones(int(link.sum())), (face[link], first[edge][link])), shape=(m, m))
-    ncomp, label = connected_components(g, directed=False)
+    ncomp, label = component_labels(m, face[link], first[edge][link])
     boundary = np.zeros(ncomp, dtype=bool)
     np.logical_or.at(boundary, label[face], count[edge] == 1)
     # Closed components nested in another closed one's box stay with it (possible cavity).
@@ -95,9 +93,7 @@ def split_parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
         probes = np.array([ints[F[label == closed[b]][0, 0]] for b in j[rows].tolist()])
         keep[rows] = solid.contains(probes.astype(np.float64))
     i, j = i[keep], j[keep]
-    _, group = connected_components(
-        coo_matrix((np.ones(len(i)), (closed[i], closed[j])), shape=(ncomp, ncomp)),
-        directed=False)
+    _, group = component_labels(ncomp, closed[i], closed[j])
     group = group[label]
     firsts = np.full(group.max() + 1, m)
     np.minimum.at(firsts, group, np.arange(m))

@@ -23,8 +23,6 @@ import os
 from pathlib import Path
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from .errors import (
     ArgumentTypeError,
@@ -39,6 +37,7 @@ from .errors import (
     OperandTypeError,
 )
 from .exact import Grid, cross
+from .graphs import bfs_predecessors, component_labels
 
 __all__ = ["ClosedMesh", "as_mesh"]
 
@@ -669,8 +668,7 @@ def _components(fa: np.ndarray, fb: np.ndarray, m: int):
     roots : (c,) int64
         First (smallest) face of each component.
     """
-    graph = coo_matrix((np.ones(len(fa), dtype=np.int8), (fa, fb)), shape=(m, m)).tocsr()
-    _, labels = connected_components(graph, directed=False)
+    _, labels = component_labels(m, fa, fb)
     _, first = np.unique(labels, return_index=True)
     by_first = np.argsort(first)
     relabel = np.zeros(len(first), dtype=np.int64)
@@ -692,8 +690,7 @@ def _propagate_flips(fa, fb, same_way, roots, m) -> np.ndarray:
     """
     rows = np.r_[fa, np.full(len(roots), m, dtype=np.int64)]
     cols = np.r_[fb, roots]
-    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(m + 1, m + 1))
-    _, pred = breadth_first_order(graph.tocsr(), m, directed=False, return_predecessors=True)
+    pred = bfs_predecessors(m + 1, rows, cols, m)
     parent = pred[:m].astype(np.int64)
     is_root = parent == m
     # Parity of the tree edge (face, parent): look the face pair up among the edges.
@@ -737,8 +734,7 @@ def _fans(tail, h0, h1, same_way, k) -> np.ndarray:
     rows = np.r_[h0, nxt(h0)]
     cols = np.r_[at_tail, at_head]
     n = len(tail)
-    graph = coo_matrix((np.ones(len(rows), dtype=np.int8), (rows, cols)), shape=(n, n))
-    count, labels = connected_components(graph.tocsr(), directed=False)
+    count, labels = component_labels(n, rows, cols)
     vertex_of = np.zeros(count, dtype=np.int64)
     vertex_of[labels] = tail
     return np.bincount(vertex_of, minlength=k)

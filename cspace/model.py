@@ -45,14 +45,13 @@ from dataclasses import dataclass, field
 from fractions import Fraction
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .cache import COCache, co_key, pack_polytopes, unpack_polytopes
 from .components import edge_uses, split_parts, weld_dedupe
 from .convex import ConvexPolytope
 from .errors import BuildError, InvalidMeshError, NotConvexError
 from .exact import Grid
+from .graphs import component_labels
 from .margin import Margin, snap_deviation
 from .mesh import ClosedMesh
 from .obstacle import CSpace, CSpaceObstacle, grown_mesh_sum
@@ -511,9 +510,7 @@ def _without_far_parts(scene):
         _, inverse = np.unique(body.vertices, axis=0, return_inverse=True)
         F = inverse.reshape(-1)[body.faces]
         n = int(F.max()) + 1
-        g = coo_matrix((np.ones(3 * len(F)), (F.reshape(-1), np.repeat(F[:, 0], 3))),
-                       shape=(n, n))
-        _, label = connected_components(g, directed=False)
+        _, label = component_labels(n, F.reshape(-1), np.repeat(F[:, 0], 3))
         part = label[F[:, 0]]
         parts = []
         for k in np.unique(part):

@@ -58,12 +58,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .convex import ConvexPolytope
 from .errors import DegenerateError
 from .exact import _FILTER, _TINY
+from .graphs import component_labels
 from .margin import Margin, grow_points
 from .obstacle import CSpaceObstacle, exact_plane_sign, exact_segment_entry, segment_filter
 
@@ -284,8 +283,7 @@ def component_points(ints: np.ndarray, faces: np.ndarray, fits_in=None) -> np.nd
     F = np.asarray(faces, np.int64)
     n = len(ints)
     a, b = F.reshape(-1), np.repeat(F[:, 0], 3)
-    g = coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n))
-    _, label = connected_components(g, directed=False)
+    _, label = component_labels(n, a, b)
     used = np.unique(F)
     roots, first = np.unique(label[used], return_index=True)
     points = np.asarray(ints)[used[first]]

@@ -18,8 +18,6 @@ from math import gcd
 from pathlib import Path
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .arrangement import (
     POINT,
@@ -33,6 +31,7 @@ from .arrangement import (
 from .convex import ConvexPolytope, convex_minkowski_sum
 from .errors import ExactnessError, InvalidMeshError, NotConvexError, SelfIntersectionError
 from .exact import Grid
+from .graphs import component_labels
 from .mesh import ClosedMesh, as_mesh
 from .planar import (
     Arrangement2D,
@@ -1090,8 +1089,7 @@ def _shells(cx: _Complex, planes: _Planes) -> _Shells:
     a = np.concatenate(fa)
     b = np.concatenate(ta)
     n_nodes = 2 * len(cx.face_plane)
-    g = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n_nodes, n_nodes))
-    n, of = connected_components(g, directed=False)
+    n, of = component_labels(n_nodes, a, b)
     return _Shells(of=of.astype(np.int64), n=int(n))
 
 
@@ -1463,8 +1461,7 @@ def _nonmanifold(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.nda
     same = u[a] == u[b]
     src = np.concatenate([cu[a], cv[a]])
     dst = np.concatenate([np.where(same, cu[b], cv[b]), np.where(same, cv[b], cu[b])])
-    g = coo_matrix((np.ones(len(src), np.int8), (src, dst)), shape=(3 * m, 3 * m))
-    _, comp = connected_components(g, directed=False)
+    _, comp = component_labels(3 * m, src, dst)
     vert = faces.reshape(-1)
     pairs = np.unique(np.stack([vert, comp], axis=1), axis=0)
     fans = np.bincount(pairs[:, 0], minlength=n_vertices)

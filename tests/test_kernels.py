@@ -125,3 +125,20 @@ def test_rounding_check_filter_is_identical(name):
     b = trim._undecided_pairs(V, F, pairs, moved)
     assert len(pairs) > 100 and a.dtype == b.dtype == np.bool_
     assert np.array_equal(a, b) and np.array_equal(a, trim._undecided_pairs_np(V, F, pairs, moved))
+
+
+def test_import_compiles_nothing_and_loads_no_graph_library():
+    """``import cspace`` loads no JIT compiler (numba is gone) and defers scipy.sparse (about
+    0.12 s) to the first mesh that needs a graph: what a fresh process pays before its first
+    query."""
+    import subprocess
+    import sys
+
+    code = ("import sys, cspace\n"
+            "heavy = [m for m in ('numba', 'llvmlite', 'scipy.sparse', 'Cython') "
+            "if m in sys.modules]\n"
+            "assert not heavy, heavy\n"
+            "from cspace._kernels import meshquery, trim\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=120)
+    assert out.returncode == 0, out.stderr
