@@ -38,6 +38,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_minkowski.py
 	$(PY) benchmarks/bench_queries.py
 	$(PY) benchmarks/bench_hard_cases.py
+	$(PY) benchmarks/bench_cold_start.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache
