@@ -403,7 +403,7 @@ def main() -> None:
         "solid B (touching and flat-robot rows refused).",
         "- Offsets: the grid is centred on what is modelled (`Grid.origin`), so the stated bound "
         "stays that of the unit scene until float64 itself is coarser (the step is never below "
-        "4 ulps of the coordinates: at 10^9 and 10^12 the bound follows the floats' spacing). "
+        "2 ulps of the coordinates: at 10^9 and 10^12 the bound follows the floats' spacing). "
         "Thin: a closed obstacle thinner than a grid step is answered by its surface, one "
         "grown convex piece per triangle (`kind='union'`), since the robot, thicker than the "
         "plate, can never lie inside it.",

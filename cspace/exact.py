@@ -156,8 +156,8 @@ class Grid:
         The grid is centred on the box (a grid point near its centre is integer 0) when that
         gives a finer step than :meth:`for_extent` of the largest ``|x|``: the step then
         follows the box's half-size (and ``reach``), but never drops below what float64
-        resolves at the box's coordinates (``|x| / step < 2**51``, so that sums of up to
-        four such points are float64 numbers too). Every point of the box
+        resolves at the box's coordinates (``|x| / step < 2**52``: two ulps of the largest,
+        so that a point of the box plus a vector as large is a float64 number too). Every point of the box
         snaps within ``|k| <= 2**bits``, and every vector of length ``reach`` too. ``far``:
         a magnitude the grid's frames must also resolve exactly (a robot's coordinates).
         """
@@ -173,7 +173,7 @@ class Grid:
         # Room for the centre's rounding to a grid point: half a step, below 2**-bits of size.
         size = max(half * (1.0 + 2.0**-20), reach)
         _, e_far = math.frexp(max(far, also))
-        exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 51)
+        exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 52)
         if exponent >= plain.exponent:
             return plain
         centre = lo / 2.0 + hi / 2.0  # no overflow; rounding is absorbed by the room above
@@ -218,7 +218,7 @@ class Grid:
         size = max(float(((hi - lo) / 2.0).max()) for lo, hi in boxes) * (1.0 + 2.0**-20)
         far = max(float(np.abs(v).max()) for box in boxes for v in box)
         _, e_far = math.frexp(2.0 * far)  # sums of the two included
-        exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 51)
+        exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 52)
         if exponent >= plain.exponent:
             return plain, plain
         grids = []

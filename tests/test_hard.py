@@ -115,9 +115,9 @@ def test_precision_follows_size_not_position(k):
     co = CSpaceObstacle.build((far.vertices, far.faces), far.robot)
     assert any(co.grid.origin) and co.kind == "mesh"
     ulp = float(np.spacing(10.0 ** k))
-    # step: the unit scene's, or 2**-51 of the coordinates (4 ulps), whichever is coarser
-    assert co.grid.step <= max(co0.grid.step, 4 * ulp)
-    assert co.error_bound <= max(2 * co0.error_bound, 32 * ulp)
+    # step: the unit scene's, or 2**-52 of the coordinates (2 ulps), whichever is coarser
+    assert co.grid.step <= max(co0.grid.step, 2 * ulp)
+    assert co.error_bound <= max(2 * co0.error_bound, 16 * ulp)
     _judged(far, co, 3000, k)
 
 
