@@ -189,27 +189,29 @@ def build_cells(const double[:, ::1] lo, const double[:, ::1] hi, double y0, dou
 
 # ---- bounding-volume hierarchy: distances and segments --------------------------------------
 
-cdef inline double _box_dist2(double px, double py, double pz, const double[:, ::1] lo,
-                              const double[:, ::1] hi, Py_ssize_t n) noexcept nogil:
+cdef inline double _box_dist2(double px, double py, double pz, const double* lo,
+                              const double* hi) noexcept nogil:
+    # lo, hi: the node's box rows (raw pointers: a memoryview argument would cost an atomic
+    # reference count per call)
     cdef double d = 0.0, g
     # the reference's loop over the three axes, unrolled (same operations, same order)
-    if px < lo[n, 0]:
-        g = lo[n, 0] - px
+    if px < lo[0]:
+        g = lo[0] - px
         d += g * g
-    elif px > hi[n, 0]:
-        g = px - hi[n, 0]
+    elif px > hi[0]:
+        g = px - hi[0]
         d += g * g
-    if py < lo[n, 1]:
-        g = lo[n, 1] - py
+    if py < lo[1]:
+        g = lo[1] - py
         d += g * g
-    elif py > hi[n, 1]:
-        g = py - hi[n, 1]
+    elif py > hi[1]:
+        g = py - hi[1]
         d += g * g
-    if pz < lo[n, 2]:
-        g = lo[n, 2] - pz
+    if pz < lo[2]:
+        g = lo[2] - pz
         d += g * g
-    elif pz > hi[n, 2]:
-        g = pz - hi[n, 2]
+    elif pz > hi[2]:
+        g = pz - hi[2]
         d += g * g
     return d
 
@@ -234,11 +236,11 @@ cdef inline double _edge_side(double ux, double uy, double uz, double vx, double
     return (ey * wz - ez * wy) * nx + (ez * wx - ex * wz) * ny + (ex * wy - ey * wx) * nz
 
 
-cdef inline double _tri_dist2(double px, double py, double pz, const double[:, ::1] T,
-                       Py_ssize_t t) noexcept nogil:
-    cdef double ax = T[t, 0], ay = T[t, 1], az = T[t, 2]
-    cdef double bx = T[t, 3], by = T[t, 4], bz = T[t, 5]
-    cdef double cx = T[t, 6], cy = T[t, 7], cz = T[t, 8]
+cdef inline double _tri_dist2(double px, double py, double pz, const double* T) noexcept nogil:
+    # T: the triangle's row of 9 coordinates
+    cdef double ax = T[0], ay = T[1], az = T[2]
+    cdef double bx = T[3], by = T[4], bz = T[5]
+    cdef double cx = T[6], cy = T[7], cz = T[8]
     cdef double best = _min(_min(_seg_dist2(px, py, pz, ax, ay, az, bx, by, bz),
                                  _seg_dist2(px, py, pz, bx, by, bz, cx, cy, cz)),
                             _seg_dist2(px, py, pz, cx, cy, cz, ax, ay, az))
@@ -289,18 +291,18 @@ def nearest_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double[
             while sp > 0:
                 sp -= 1
                 n = stack[sp]
-                if _box_dist2(px, py, pz, nlo, nhi, n) >= best:
+                if _box_dist2(px, py, pz, &nlo[n, 0], &nhi[n, 0]) >= best:
                     continue
                 if left[n] < 0:
                     for t in range(start[n], start[n] + count[n]):
-                        d = _tri_dist2(px, py, pz, T, t)
+                        d = _tri_dist2(px, py, pz, &T[t, 0])
                         if d < best:
                             best = d
                 else:
                     a = left[n]
                     b = right[n]
-                    da = _box_dist2(px, py, pz, nlo, nhi, a)
-                    db = _box_dist2(px, py, pz, nlo, nhi, b)
+                    da = _box_dist2(px, py, pz, &nlo[a, 0], &nhi[a, 0])
+                    db = _box_dist2(px, py, pz, &nlo[b, 0], &nhi[b, 0])
                     if da < db:
                         a, b = b, a
                         da, db = db, da
@@ -314,8 +316,8 @@ def nearest_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double[
 
 
 cdef inline bint _seg_box(double p0x, double p0y, double p0z, double dx, double dy, double dz,
-                          const double[:, ::1] nlo, const double[:, ::1] nhi,
-                          Py_ssize_t n) noexcept nogil:
+                          const double* nlo, const double* nhi) noexcept nogil:
+    # nlo, nhi: the node's box rows
     cdef double t0 = 0.0, t1 = 1.0, p, d, ta, tb, tmp
     cdef int k
     if not (fabs(dx) < INFINITY and fabs(dy) < INFINITY and fabs(dz) < INFINITY):
@@ -328,11 +330,11 @@ cdef inline bint _seg_box(double p0x, double p0y, double p0z, double dx, double 
         else:
             p = p0z; d = dz
         if d == 0.0:
-            if p < nlo[n, k] or p > nhi[n, k]:
+            if p < nlo[k] or p > nhi[k]:
                 return False
         else:
-            ta = (nlo[n, k] - p) / d
-            tb = (nhi[n, k] - p) / d
+            ta = (nlo[k] - p) / d
+            tb = (nhi[k] - p) / d
             if ta > tb:
                 tmp = ta
                 ta = tb
@@ -379,7 +381,7 @@ def segment_kernel(const double[:, ::1] P0, const double[:, ::1] P1, const doubl
         while sp > 0:
             sp -= 1
             n = stack[sp]
-            if not _seg_box(px, py, pz, dx, dy, dz, nlo, nhi, n):
+            if not _seg_box(px, py, pz, dx, dy, dz, &nlo[n, 0], &nhi[n, 0]):
                 continue
             if left[n] >= 0:
                 stack[sp] = left[n]
