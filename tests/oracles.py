@@ -311,21 +311,22 @@ def voxel_intersection_euler(occupancy, robot_vertices, translation, *, size=1.0
 # ---- exact reference for A ⊕ B: libigl's exact (CGAL) union of convex pieces -----------------
 
 
-def _grid_ints(*arrays: np.ndarray):
-    """The arrays as cspace grid integers, checking they already lie on that grid."""
+def _grid_ints(a: np.ndarray, b: np.ndarray):
+    """The two operands as cspace grid integers (each on its grid of ``Grid.for_operands``,
+    as ``minkowski_sum`` snaps them), checking they already lie on those grids."""
     from cspace.exact import Grid
 
-    grid = Grid.for_points(*arrays)
+    grids = Grid.for_operands(a, b)
     out = []
-    for a in arrays:
-        k = grid.snap(a)
-        if not (grid.to_float(k) == a).all():
+    for arr, grid in zip((a, b), grids):
+        k = grid.snap(arr)
+        if not (grid.to_float(k) == arr).all():
             raise ValueError(
-                "coordinates are not on the cspace grid of the pair: snap them first "
-                "(ClosedMesh / ConvexPolytope on one Grid.for_points(A, B))"
+                "coordinates are not on the cspace grids of the pair: snap them first "
+                "(each operand on its grid of Grid.for_operands(A, B))"
             )
         out.append(k)
-    return grid, out
+    return grids, out
 
 
 def _outward_hull(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -463,6 +463,8 @@ def test_random_operands_match_the_exact_union(seed):
     from oracles import exact_sum_volume
     from zoo import ZOO, cube_rotated, random_rotation
 
+    from cspace import Grid
+
     rng = np.random.default_rng(seed)
     name = ["l_shape", "cup", "comb", "twisted_prism", "genus3", "stairs", "star"][seed % 7]
     V, F = ZOO[name][0]()
@@ -478,6 +480,7 @@ def test_random_operands_match_the_exact_union(seed):
         B = cube_rotated(float(rng.uniform(0, 3)), size=float(rng.uniform(0.05, 0.6) * ext))
     r = minkowski_sum((V, F), B)
     _closed_and_oriented(r)
-    g = r.grid
-    ref = exact_sum_volume(g.to_float(g.snap(V)), F, g.to_float(g.snap(B)))
+    ga, gb = Grid.for_operands(V, B)  # the operands as minkowski_sum snaps them
+    assert r.grid == ga.plus(gb)
+    ref = exact_sum_volume(ga.to_float(ga.snap(V)), F, gb.to_float(gb.snap(B)))
     assert abs(r.volume - ref) <= 1e-12 * ref
