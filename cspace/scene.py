@@ -297,25 +297,6 @@ class Scene:
             )
             return ConvexPolytope.from_points(robot.vertices, grid=grid, name=robot.name)
 
-    def extent(self) -> float:
-        """Largest absolute coordinate the scene's computations meet, for ``Grid.for_extent``.
-
-        Returns
-        -------
-        extent : float
-            The maximum of ``|x|`` over the obstacles' vertices, the robot's vertices and
-            reference point (robot frame), the bounds, the robot placed at the corners of the
-            bounds, and the bounding boxes of the C-obstacles ``O ⊕ (c - R)``.
-        """
-        rel = self.robot.vertices - self.reference_point
-        r_lo, r_hi = rel.min(axis=0), rel.max(axis=0)
-        lo, hi = self.bounds
-        values = [self.bounds, lo + r_lo, hi + r_hi, self.robot.vertices, self.reference_point]
-        for body in self.obstacles:
-            b_lo, b_hi = body.bounds
-            values += [b_lo, b_hi, b_lo - r_hi, b_hi - r_lo]
-        return float(max(np.abs(v).max() for v in values))
-
     def grid(self, *, bits: int = 26) -> Grid:
         """The scene's snapping grid: :meth:`Grid.for_box` of everything the C-obstacles'
         computations meet in the world frame (the bounds, the robot placed at their corners,

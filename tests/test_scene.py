@@ -16,7 +16,7 @@ import trimesh
 
 import cspace.meshfile as meshfile
 import cspace.scene as scene_module
-from cspace import ConvexPolytope, Grid, convex_minkowski_sum
+from cspace import ConvexPolytope, convex_minkowski_sum
 from cspace.scene import Body, Scene, SceneError, load_scene
 
 from zoo import l_shape  # tests/ is on sys.path (rootdir conftest)
@@ -135,7 +135,7 @@ WAYPOINTS = {
 def c_obstacle_depth(scene: Scene, points: np.ndarray) -> np.ndarray:
     """(k,) float: the largest signed distance of each point to a C-obstacle's facet planes
     minimised over obstacles (> 0: free of every obstacle; < 0: inside one)."""
-    grid = Grid.for_extent(scene.extent())
+    grid = scene.grid()
     minus_robot = scene.robot_polytope(grid).reflected(scene.reference_point)
     depth = np.full(len(points), np.inf)
     for body in scene.obstacles:
@@ -259,7 +259,7 @@ def test_documented_example_loads(tmp_path):
                        [0.5 * math.cos(math.radians(30)), 0.5 * math.sin(math.radians(30))])
 
 
-def test_extent_covers_the_c_obstacles(tmp_path):
+def test_grid_covers_the_c_obstacles(tmp_path):
     path = write(tmp_path / "s.toml", """
         [robot]
         box = [2, 2, 2]
@@ -274,8 +274,11 @@ def test_extent_covers_the_c_obstacles(tmp_path):
         """)
     scene = load_quietly(path)
     # Robot relative to its reference point spans [0, 2]^3: at the upper bound it reaches 3;
-    # the C-obstacle [-3.5, -2.5] - [0, 2] reaches -5.5.
-    assert scene.extent() == 5.5
+    # the C-obstacle [-3.5, -2.5] - [0, 2] reaches -5.5. The grid holds all of it.
+    grid = scene.grid()
+    corners = np.array([[-5.5, -2.5, -2.5], [3.0, 3.0, 3.0], [-5.5, 3.0, -2.5]])
+    assert (grid.to_float(grid.snap(corners)) == corners).all()
+    assert grid.step <= 2.0**-22  # about 2**-26 of its 8.5 span
 
 
 # --------------------------------------------------------------------------------------
