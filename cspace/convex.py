@@ -638,9 +638,15 @@ class MinkowskiSum:
 def _common_grid(A, B) -> tuple[ConvexPolytope, ConvexPolytope]:
     A = A if isinstance(A, ConvexPolytope) else ConvexPolytope.from_points(A, name="A")
     B = B if isinstance(B, ConvexPolytope) else ConvexPolytope.from_points(B, name="B")
+    return on_one_step(A, B)
+
+
+def on_one_step(A, B):
+    """Two snapped operands (polytopes or meshes) on grids of one step: as they are when
+    their steps agree (integers combine exactly; the sum is in frame ``A.grid.plus(B.grid)``),
+    else both re-snapped onto ``Grid.for_operands``, which hold both and their sums."""
     if A.grid.same_step(B.grid):
-        return A, B  # integers combine exactly; the sum is in frame A.grid.plus(B.grid)
-    # Re-snap both onto grids of one step that hold both (and their sums) exactly.
+        return A, B
     ga, gb = Grid.for_operands(A.vertices, B.vertices, bits=min(A.grid.bits, B.grid.bits))
     return A.on_grid(ga), B.on_grid(gb)
 

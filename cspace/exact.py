@@ -176,9 +176,8 @@ class Grid:
         exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 52)
         if exponent >= plain.exponent:
             return plain
-        centre = lo / 2.0 + hi / 2.0  # no overflow; rounding is absorbed by the room above
-        origin = tuple(int(v) for v in np.rint(np.ldexp(centre, -exponent)))
-        return cls(exponent=exponent, bits=bits, origin=origin)
+        # the centre (no overflow; its rounding is absorbed by the room above) as origin
+        return cls(exponent=exponent, bits=bits).at(lo / 2.0 + hi / 2.0)
 
     @classmethod
     def for_points(cls, *arrays: np.ndarray, bits: int = 26) -> "Grid":
@@ -221,12 +220,8 @@ class Grid:
         exponent = max(cls.for_extent(size, bits=bits).exponent, e_far - 52)
         if exponent >= plain.exponent:
             return plain, plain
-        grids = []
-        for lo, hi in boxes:
-            centre = lo / 2.0 + hi / 2.0
-            grids.append(cls(exponent=exponent, bits=bits,
-                             origin=tuple(int(v) for v in np.rint(np.ldexp(centre, -exponent)))))
-        return grids[0], grids[1]
+        ga, gb = (cls(exponent=exponent, bits=bits).at(lo / 2.0 + hi / 2.0) for lo, hi in boxes)
+        return ga, gb
 
     @classmethod
     def for_cobstacle(cls, obstacle_points, robot_points, reference_point, *,
@@ -270,11 +265,6 @@ class Grid:
         """The frame of sums ``a + b`` of a point of this frame and one of ``other``'s."""
         self._check_step(other)
         return replace(self, origin=tuple(a + b for a, b in zip(self.origin, other.origin)))
-
-    def minus(self, other: "Grid") -> "Grid":
-        """The frame of differences ``a - b`` of a point of this frame and one of ``other``'s."""
-        self._check_step(other)
-        return replace(self, origin=tuple(a - b for a, b in zip(self.origin, other.origin)))
 
     def for_robot(self, robot_points, reference_point) -> "Grid":
         """The grid a robot is snapped on: this one when the robot and its reference point fit

@@ -425,16 +425,19 @@ def _mesh_arrays(obj) -> tuple[np.ndarray, np.ndarray]:
 
 def _closed_2cycle(V: np.ndarray, F: np.ndarray) -> bool:
     """Do the triangles, vertices welded by exact float position, form a closed 2-cycle
-    (every directed edge balanced by its reverse)?"""
+    (every directed edge balanced by its reverse: the mesh queries' own check)?"""
+    from .errors import InvalidMeshError
+    from .meshquery import _closed_mesh_arrays
+
     V = np.asarray(V, dtype=np.float64).reshape(-1, 3)
-    if F.min() < 0 or F.max() >= len(V) or not np.isfinite(V).all():
+    if F.min() < 0 or F.max() >= len(V):
         return False
-    _, inv = np.unique(V, axis=0, return_inverse=True)
-    G = inv.reshape(-1)[F]
-    a, b = G.reshape(-1), G[:, [1, 2, 0]].reshape(-1)
-    fwd = np.sort(a * len(V) + b)
-    back = np.sort(b * len(V) + a)
-    return bool(np.array_equal(fwd, back))
+    U, inv = np.unique(V, axis=0, return_inverse=True)
+    try:
+        _closed_mesh_arrays(U, inv.reshape(-1)[F], "obstacle")
+    except InvalidMeshError:
+        return False
+    return True
 
 
 def _wider_somewhere(R: np.ndarray, O: np.ndarray) -> bool:

@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import exact
-from .convex import ConvexPolytope, _gather, _src, fan_triangles
+from .convex import ConvexPolytope, _gather, _src, fan_triangles, on_one_step
 from .errors import DegenerateError, ExactnessError
 from .exact import Grid, Perturbation
 from .mesh import ClosedMesh, as_mesh
@@ -171,10 +171,7 @@ def on_common_step(A, B) -> tuple[ClosedMesh, ConvexPolytope]:
     ``Grid.for_operands`` only when their steps differ)."""
     A = as_mesh(A, name=getattr(A, "name", None) or "A")
     B = B if isinstance(B, ConvexPolytope) else ConvexPolytope.from_points(B, name="B")
-    if not A.grid.same_step(B.grid):  # same step: integers combine, frames add up
-        ga, gb = Grid.for_operands(A.vertices, B.vertices, bits=min(A.grid.bits, B.grid.bits))
-        A, B = A.on_grid(ga), B.on_grid(gb)
-    return A, B
+    return on_one_step(A, B)
 
 
 def _mesh_edges(F: np.ndarray, n_vertices: int):
