@@ -58,14 +58,9 @@ from .arrangement import _sub
 from .errors import EmptyMeshError, InvalidMeshError, NonFiniteError, OpenMeshError
 from .exact import _FILTER, _TINY, _dyadic
 
-try:
-    from ._kernels import meshquery as _compiled
-except ImportError as exc:  # pragma: no cover - an install without its build step
-    raise ImportError(
-        "cspace's compiled kernels (cspace._kernels.meshquery) are missing: install cspace "
-        "with pip (`pip install -e .` in a checkout), which builds them with the system C "
-        f"compiler ({exc})"
-    ) from exc
+from ._kernels import load
+
+_compiled = load("meshquery")
 
 __all__ = ["MeshCO"]
 

@@ -12,8 +12,10 @@ Everything is exact: coordinates are :class:`fractions.Fraction` (constructed in
 are rationals), every decision is the exact sign of a rational expression. No epsilon, no atan2:
 half-edges are ordered around a vertex by a half-plane test and a cross-product sign.
 
-The structures are pure Python and meant for small inputs (a handful to a few dozen segments);
-see :class:`Arrangement2D` for the complexity.
+The structures are meant for small inputs (a handful to a few dozen segments); see
+:class:`Arrangement2D` for the complexity. The combinatorial core of an arrangement (crossings,
+pieces, half-edge cycles) runs compiled (:mod:`cspace._kernels.planar`); its pure-Python
+reference is :func:`_arrangement_core`.
 """
 
 from __future__ import annotations
@@ -29,6 +31,10 @@ from numbers import Integral, Rational, Real
 import numpy as np
 
 from .arrangement import box_pairs
+
+from ._kernels import load
+
+_compiled = load("planar")
 
 __all__ = [
     "Face",
@@ -368,6 +374,198 @@ def _box_candidates_slow(ids, boxes):
                 yield ids[a], ids[b]
 
 
+def _arrangement_core(segs: list, labels: list) -> tuple:
+    """The exact combinatorics of the arrangement of ``segs`` (canonical homogeneous endpoint
+    pairs, one label each): the pure-Python reference of
+    :func:`cspace._kernels.planar.arrangement_core`, which returns the same.
+
+    Returns ``(order, L, S, vertex_labels, edges, edge_labels, out, nxt, cycles, cyc_of, areas,
+    comp)``:
+
+    - ``order``: the distinct points, homogeneous, sorted lexicographically (x, then y);
+    - ``L``: their common denominator (0 when over :data:`_MAX_SCALE_BITS` bits) and ``S``
+      the points scaled by it (integer pairs), else their :func:`_float_key`;
+    - ``vertex_labels``: labels of the zero-length segments, by vertex;
+    - ``edges``: ``(u, v)``, ``u < v``, sorted; ``edge_labels``: the label set of each;
+    - ``out``: each vertex's outgoing half-edges, counter-clockwise from angle 0 (half-edge
+      ``2k`` is edge k from u to v, ``2k + 1`` back); ``nxt``: the successor of each
+      half-edge along its face (the clockwise neighbour of its twin);
+    - ``cycles``: the face cycles (half-edge lists, each from its smallest half-edge, in
+      order of it), ``cyc_of``: each half-edge's cycle;
+    - ``areas``: each cycle's signed area ``(num, den)``, area ``num / (2 den)``, ``den > 0``;
+    - ``comp``: per vertex, the smallest vertex of its connected component.
+    """
+    H = segs
+    H = segs
+    proper = [i for i, (p, q) in enumerate(H) if p != q]
+    points_only = [i for i, (p, q) in enumerate(H) if p == q]
+    on = {i: {H[i][0], H[i][1]} for i in proper}
+    axis = {i: (0 if H[i][0][0] * H[i][1][2] != H[i][1][0] * H[i][0][2] else 1) for i in proper}
+    lines = {i: _hcross3(H[i][0], H[i][1]) for i in proper}
+    # conservative integer boxes (floor / ceil): a cheap exact filter, decides nothing alone
+    boxes = {}
+    for i in proper:
+        (p, q) = H[i]
+        xa, xb = sorted((p[0] // p[2], q[0] // q[2]))
+        ya, yb = sorted((p[1] // p[2], q[1] // q[2]))
+        boxes[i] = (xa, xb + 1, ya, yb + 1)
+    for i, j in _box_candidates(proper, boxes):
+        p, q = H[i]
+        r, s = H[j]
+        # orient(p, q, x) = (p x q) . x: one dot product with the segment's line
+        li, lj = lines[i], lines[j]
+        d1 = li[0] * r[0] + li[1] * r[1] + li[2] * r[2]
+        d2 = li[0] * s[0] + li[1] * s[1] + li[2] * s[2]
+        o1, o2 = (d1 > 0) - (d1 < 0), (d2 > 0) - (d2 < 0)
+        if o1 == 0 and o2 == 0:  # collinear: overlap or touch
+            for x in (r, s):
+                if _hbetween(p, q, x, axis[i]):
+                    on[i].add(x)
+            for x in (p, q):
+                if _hbetween(r, s, x, axis[j]):
+                    on[j].add(x)
+            continue
+        if o1 * o2 > 0:
+            continue
+        d3 = lj[0] * p[0] + lj[1] * p[1] + lj[2] * p[2]
+        d4 = lj[0] * q[0] + lj[1] * q[1] + lj[2] * q[2]
+        o3, o4 = (d3 > 0) - (d3 < 0), (d4 > 0) - (d4 < 0)
+        if o3 * o4 > 0:
+            continue
+        if o1 == 0:
+            x = r
+        elif o2 == 0:
+            x = s
+        elif o3 == 0:
+            x = p
+        elif o4 == 0:
+            x = q
+        else:
+            x = _hnorm(*_hcross3(lines[i], lines[j]))
+        on[i].add(x)
+        on[j].add(x)
+    vertex_set = set()
+    point_label = {}
+    if points_only:
+        B = np.array([boxes[i] for i in proper], dtype=object).reshape(-1, 4)
+    for k in points_only:
+        x = H[k][0]
+        vertex_set.add(x)
+        point_label.setdefault(x, set()).add(labels[k])
+        xi, yi = x[0] // x[2], x[1] // x[2]
+        near = np.nonzero((B[:, 0] <= xi) & (xi <= B[:, 1]) & (B[:, 2] <= yi) & (yi <= B[:, 3]))[0]
+        for n in near.tolist():
+            i = proper[n]
+            if _hon_segment(x, *H[i]):
+                on[i].add(x)
+    for i in proper:
+        vertex_set.update(on[i])
+    # One common denominator L: scaled integer points compare and orient exactly like
+    # the rational ones (a similarity), without Fractions.
+    L = 1
+    for h in vertex_set:
+        if L % h[2]:
+            L = L * h[2] // gcd(L, h[2])
+            if L.bit_length() > _MAX_SCALE_BITS:
+                break
+    if L.bit_length() > _MAX_SCALE_BITS:
+        # many unrelated denominators: exact Fractions are cheaper than one huge scale
+        L = 0
+        scaled = {h: _float_key(h) for h in vertex_set}
+    else:
+        scaled = {h: (h[0] * (L // h[2]), h[1] * (L // h[2])) for h in vertex_set}
+    pieces = {}
+    for i in proper:
+        ax = axis[i]
+        pts = sorted(on[i], key=lambda h: scaled[h][ax])
+        for a, b in zip(pts, pts[1:]):
+            key = (a, b) if a < b else (b, a)
+            pieces.setdefault(key, set()).add(labels[i])
+
+    order = sorted(vertex_set, key=scaled.__getitem__)
+    S = [scaled[h] for h in order]
+    index = {h: n for n, h in enumerate(order)}
+    vertex_labels = {index[x]: s for x, s in point_label.items()}
+    keyed = sorted(((index[a], index[b]) if index[a] < index[b] else (index[b], index[a]), lab)
+                   for (a, b), lab in pieces.items())
+    E = [k for k, _ in keyed]
+    edge_labels = [lab for _, lab in keyed]
+
+    nh = 2 * len(E)
+    origin = [0] * nh
+    for k, (u, v) in enumerate(E):
+        origin[2 * k] = u
+        origin[2 * k + 1] = v
+    out = [[] for _ in order]
+    for h in range(nh):
+        out[origin[h]].append(h)
+    pos = [0] * nh
+    for v, hs in enumerate(out):
+        if len(hs) > 2:  # two half-edges have one cyclic order
+            o = order[v]
+            dirs = {h: _hdir(o, order[origin[h ^ 1]]) for h in hs}
+            hs.sort(key=cmp_to_key(lambda a, b: _angle_cmp(dirs[a], dirs[b])))
+        for n, h in enumerate(hs):
+            pos[h] = n
+    nxt = [0] * nh
+    for h in range(nh):
+        t = h ^ 1
+        ring = out[origin[t]]
+        nxt[h] = ring[pos[t] - 1]
+
+    cyc_of = [-1] * nh
+    cycles = []
+    for h in range(nh):
+        if cyc_of[h] >= 0:
+            continue
+        c = []
+        g = h
+        while cyc_of[g] < 0:
+            cyc_of[g] = len(cycles)
+            c.append(g)
+            g = nxt[g]
+        cycles.append(c)
+    areas = [_harea(order, origin, c) for c in cycles]
+
+    # components: union-find over edges, the smaller root kept (so each root is its
+    # component's smallest vertex)
+    parent = list(range(len(order)))
+
+    def find(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for u, v in E:
+        ru, rv = find(u), find(v)
+        if ru != rv:
+            parent[max(ru, rv)] = min(ru, rv)
+    comp = [find(a) for a in range(len(order))]
+    return order, L, S, vertex_labels, E, edge_labels, out, nxt, cycles, cyc_of, areas, comp
+
+
+def _harea(H: list, origin: list, cycle: list) -> tuple[int, int]:
+    """Signed area of a half-edge cycle as ``(num, den)``, ``area = num / (2 den)``,
+    ``den > 0``: the sum of (Xa Yb - Ya Xb) / (Wa Wb) / 2 over a common denominator,
+    unreduced."""
+    num, den = 0, 1
+    for h in cycle:
+        a, b = H[origin[h]], H[origin[h ^ 1]]
+        t = a[0] * b[1] - a[1] * b[0]
+        if t:
+            w = a[2] * b[2]
+            if w == den:
+                num += t
+            elif den % w == 0:
+                num += t * (den // w)
+            else:
+                g = gcd(den, w)
+                num = num * (w // g) + t * (den // g)
+                den = den * (w // g)
+    return num, den
+
+
 class Arrangement2D:
     """Exact planar subdivision induced by a set of segments with rational endpoints.
 
@@ -436,171 +634,18 @@ class Arrangement2D:
     # ---------------------------------------------------------------- construction
 
     def _build(self, segs, labels):
-        H = segs
-        proper = [i for i, (p, q) in enumerate(H) if p != q]
-        points_only = [i for i, (p, q) in enumerate(H) if p == q]
-        on = {i: {H[i][0], H[i][1]} for i in proper}
-        axis = {i: (0 if H[i][0][0] * H[i][1][2] != H[i][1][0] * H[i][0][2] else 1) for i in proper}
-        lines = {i: _hcross3(H[i][0], H[i][1]) for i in proper}
-        # conservative integer boxes (floor / ceil): a cheap exact filter, decides nothing alone
-        boxes = {}
-        for i in proper:
-            (p, q) = H[i]
-            xa, xb = sorted((p[0] // p[2], q[0] // q[2]))
-            ya, yb = sorted((p[1] // p[2], q[1] // q[2]))
-            boxes[i] = (xa, xb + 1, ya, yb + 1)
-        for i, j in _box_candidates(proper, boxes):
-            p, q = H[i]
-            r, s = H[j]
-            # orient(p, q, x) = (p x q) . x: one dot product with the segment's line
-            li, lj = lines[i], lines[j]
-            d1 = li[0] * r[0] + li[1] * r[1] + li[2] * r[2]
-            d2 = li[0] * s[0] + li[1] * s[1] + li[2] * s[2]
-            o1, o2 = (d1 > 0) - (d1 < 0), (d2 > 0) - (d2 < 0)
-            if o1 == 0 and o2 == 0:  # collinear: overlap or touch
-                for x in (r, s):
-                    if _hbetween(p, q, x, axis[i]):
-                        on[i].add(x)
-                for x in (p, q):
-                    if _hbetween(r, s, x, axis[j]):
-                        on[j].add(x)
-                continue
-            if o1 * o2 > 0:
-                continue
-            d3 = lj[0] * p[0] + lj[1] * p[1] + lj[2] * p[2]
-            d4 = lj[0] * q[0] + lj[1] * q[1] + lj[2] * q[2]
-            o3, o4 = (d3 > 0) - (d3 < 0), (d4 > 0) - (d4 < 0)
-            if o3 * o4 > 0:
-                continue
-            if o1 == 0:
-                x = r
-            elif o2 == 0:
-                x = s
-            elif o3 == 0:
-                x = p
-            elif o4 == 0:
-                x = q
-            else:
-                x = _hnorm(*_hcross3(lines[i], lines[j]))
-            on[i].add(x)
-            on[j].add(x)
-        vertex_set = set()
-        point_label = {}
-        if points_only:
-            B = np.array([boxes[i] for i in proper], dtype=object).reshape(-1, 4)
-        for k in points_only:
-            x = H[k][0]
-            vertex_set.add(x)
-            point_label.setdefault(x, set()).add(labels[k])
-            xi, yi = x[0] // x[2], x[1] // x[2]
-            near = np.nonzero((B[:, 0] <= xi) & (xi <= B[:, 1]) & (B[:, 2] <= yi) & (yi <= B[:, 3]))[0]
-            for n in near.tolist():
-                i = proper[n]
-                if _hon_segment(x, *H[i]):
-                    on[i].add(x)
-        for i in proper:
-            vertex_set.update(on[i])
-        # One common denominator L: scaled integer points compare and orient exactly like
-        # the rational ones (a similarity), without Fractions.
-        L = 1
-        for h in vertex_set:
-            if L % h[2]:
-                L = L * h[2] // gcd(L, h[2])
-                if L.bit_length() > _MAX_SCALE_BITS:
-                    break
-        if L.bit_length() > _MAX_SCALE_BITS:
-            # many unrelated denominators: exact Fractions are cheaper than one huge scale
-            L = 0
-            scaled = {h: _float_key(h) for h in vertex_set}
-        else:
-            scaled = {h: (h[0] * (L // h[2]), h[1] * (L // h[2])) for h in vertex_set}
-        pieces = {}
-        for i in proper:
-            ax = axis[i]
-            pts = sorted(on[i], key=lambda h: scaled[h][ax])
-            for a, b in zip(pts, pts[1:]):
-                key = (a, b) if a < b else (b, a)
-                pieces.setdefault(key, set()).add(labels[i])
-
-        order = sorted(vertex_set, key=scaled.__getitem__)
-        self._H = order
-        self._L = L
-        self._S = [scaled[h] for h in order]
+        (self._H, self._L, self._S, self.vertex_labels, E, self.edge_labels, out, nxt, cycles,
+         cyc_of, areas, comp) = _compiled.arrangement_core(segs, labels)
         self._vertices = None
-        index = {h: n for n, h in enumerate(order)}
-        self._index = index
-        self.vertex_labels = {index[x]: s for x, s in point_label.items()}
-        keyed = sorted(((index[a], index[b]) if index[a] < index[b] else (index[b], index[a]), lab)
-                       for (a, b), lab in ((k, v) for k, v in pieces.items()))
-        self.edges = np.array([k for k, _ in keyed], dtype=np.int64).reshape(-1, 2)
-        self.edge_labels = [lab for _, lab in keyed]
-        self._trace()
-
-    @property
-    def vertices(self) -> list:
-        """Distinct points as Fraction pairs, sorted lexicographically (made on first use)."""
-        if self._vertices is None:
-            self._vertices = [(Fraction(h[0], h[2]), Fraction(h[1], h[2])) for h in self._H]
-        return self._vertices
-
-    def _trace(self):
+        self._index = {h: n for n, h in enumerate(self._H)}
+        self.edges = np.array(E, dtype=np.int64).reshape(-1, 2)
         V = self._S  # scaled integer points (same order and orientations)
-        E = self.edges.tolist()
         nh = 2 * len(E)
-        origin = [0] * nh
-        for k, (u, v) in enumerate(E):
-            origin[2 * k] = u
-            origin[2 * k + 1] = v
-        self.half_edge_origin = origin
-        out = [[] for _ in V]
-        for h in range(nh):
-            out[origin[h]].append(h)
-        pos = [0] * nh
-        for v, hs in enumerate(out):
-            if len(hs) > 2:  # two half-edges have one cyclic order
-                o = self._H[v]
-                dirs = {h: _hdir(o, self._H[origin[h ^ 1]]) for h in hs}
-                hs.sort(key=cmp_to_key(lambda a, b: _angle_cmp(dirs[a], dirs[b])))
-            for n, h in enumerate(hs):
-                pos[h] = n
+        self.half_edge_origin = origin = [E[h >> 1][h & 1] for h in range(nh)]
         self._out = out
-        nxt = [0] * nh
-        for h in range(nh):
-            t = h ^ 1
-            ring = out[origin[t]]
-            nxt[h] = ring[pos[t] - 1]
         self.next_half_edge = nxt
-
-        # cycles
-        cyc_of = [-1] * nh
-        cycles = []
-        for h in range(nh):
-            if cyc_of[h] >= 0:
-                continue
-            c = []
-            g = h
-            while cyc_of[g] < 0:
-                cyc_of[g] = len(cycles)
-                c.append(g)
-                g = nxt[g]
-            cycles.append(c)
-        areas = [self._harea(c) for c in cycles]  # (num, den): area = num / (2 den), den > 0
         self._cycles = cycles
-
-        # components (union-find over edges) for the Euler count
-        parent = list(range(len(V)))
-
-        def find(a):
-            while parent[a] != a:
-                parent[a] = parent[parent[a]]
-                a = parent[a]
-            return a
-
-        for u, v in E:
-            ru, rv = find(u), find(v)
-            if ru != rv:
-                parent[ru] = rv
-        self.components = sum(1 for a in range(len(V)) if find(a) == a)
+        self.components = sum(1 for a, c in enumerate(comp) if a == c)
 
         positive = [c for c in range(len(cycles)) if areas[c][0] > 0]
         # by area; Python's int division is correctly rounded, so the floats keep the order
@@ -612,16 +657,16 @@ class Arrangement2D:
         self.faces = [Face(outer=cycles[c], _area=[areas[c]]) for c in positive]
         self.unbounded = Face(outer=[])
 
-        comp_of_cycle = [find(origin[c[0]]) for c in cycles]
+        comp_of_cycle = [comp[origin[c[0]]] for c in cycles]
 
-        def host(v, comp):
+        def host(v, component):
             p, hp = V[v], self._H[v]
             # The innermost positive cycle of another component strictly containing p (smallest
             # area first). p is a lexicographically smallest vertex of its component ``comp``:
             # no cycle of its own component strictly contains it, and cycles of other components
             # do not pass through it.
             for c in self._positive:
-                if comp_of_cycle[c] == comp:
+                if comp_of_cycle[c] == component:
                     continue
                 b = self._cycle_box(c)
                 if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
@@ -644,7 +689,7 @@ class Arrangement2D:
                 face._area.append(areas[c])
         for v in range(len(V)):
             if not out[v]:
-                f = host(v, find(v))
+                f = host(v, comp[v])
                 (self.faces[f] if f >= 0 else self.unbounded).isolated.append(v)
         self.half_edge_face = [cycle_face[cyc_of[h]] for h in range(nh)]
         self.edge_faces = np.array(
@@ -658,6 +703,13 @@ class Arrangement2D:
             self.unbounded.sample = (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))
         else:
             self.unbounded.sample = (Fraction(0), Fraction(0))
+
+    @property
+    def vertices(self) -> list:
+        """Distinct points as Fraction pairs, sorted lexicographically (made on first use)."""
+        if self._vertices is None:
+            self._vertices = [(Fraction(h[0], h[2]), Fraction(h[1], h[2])) for h in self._H]
+        return self._vertices
 
     def _cycle_hpoints(self, c: int) -> list:
         """Homogeneous points along cycle ``c``."""
@@ -677,27 +729,6 @@ class Arrangement2D:
             ys = [V[origin[h]][1] for h in self._cycles[c]]
             b = self._bbox[c] = (min(xs), max(xs), min(ys), max(ys))
         return b
-
-    def _harea(self, cycle) -> tuple[int, int]:
-        """Signed area of a half-edge cycle as ``(num, den)``, ``area = num / (2 den)``,
-        ``den > 0``: the sum of (Xa Yb - Ya Xb) / (Wa Wb) / 2 over a common denominator,
-        unreduced."""
-        H, origin = self._H, self.half_edge_origin
-        num, den = 0, 1
-        for h in cycle:
-            a, b = H[origin[h]], H[origin[h ^ 1]]
-            t = a[0] * b[1] - a[1] * b[0]
-            if t:
-                w = a[2] * b[2]
-                if w == den:
-                    num += t
-                elif den % w == 0:
-                    num += t * (den // w)
-                else:
-                    g = gcd(den, w)
-                    num = num * (w // g) + t * (den // g)
-                    den = den * (w // g)
-        return num, den
 
     def _sample(self, face: Face):
         """A point strictly inside a bounded face.

@@ -49,13 +49,9 @@ from .planar import (
 from .superset import Superset, minkowski_superset, on_common_step
 from .workers import can_fork, forked_map, worker_count
 
-try:
-    from ._kernels import trim as _compiled
-except ImportError as exc:  # pragma: no cover - an install without its build step
-    raise ImportError(
-        "cspace's compiled kernels (cspace._kernels.trim) are missing: install cspace with "
-        f"pip (`pip install -e .` in a checkout), which builds them with the C compiler ({exc})"
-    ) from exc
+from ._kernels import load
+
+_compiled = load("trim")
 
 __all__ = ["SumPolyhedron", "minkowski_sum"]
 

@@ -13,8 +13,9 @@ import pytest
 from zoo import comb, l_shape, random_rotation, star, torus
 
 from cspace import meshquery as ref
-from cspace import trim
+from cspace import planar, trim
 from cspace._kernels import meshquery as compiled
+from cspace._kernels import planar as compiled_planar
 
 MESHES = {
     "torus": lambda: torus(sections=12, ring=8),
@@ -127,6 +128,98 @@ def test_rounding_check_filter_is_identical(name):
     assert np.array_equal(a, b) and np.array_equal(a, trim._undecided_pairs_np(V, F, pairs, moved))
 
 
+# --------------------------------------------------------------------------------------------
+# per-plane arrangements (cspace._kernels.planar)
+
+_CORE_FIELDS = ("order", "L", "S", "vertex_labels", "edges", "edge_labels", "out", "nxt",
+                "cycles", "cyc_of", "areas", "comp")
+
+
+def _same_core(segs: list, labels: list | None = None) -> tuple:
+    """Both arrangement cores on one input; every field identical (compared by name)."""
+    segs = [(planar._hpoint(p), planar._hpoint(q)) for p, q in segs]
+    labels = list(range(len(segs))) if labels is None else list(labels)
+    a = planar._arrangement_core(segs, labels)
+    b = compiled_planar.arrangement_core(segs, labels)
+    for name, x, y in zip(_CORE_FIELDS, a, b):
+        assert x == y, f"{name} differs on {len(segs)} segments"
+    return a
+
+
+def _captured_arrangements(monkeypatch, cases) -> list:
+    """The inputs of every per-plane arrangement of real Minkowski sums."""
+    from cspace.convex import ConvexPolytope
+    from cspace.exact import Grid
+    from cspace.mesh import ClosedMesh
+
+    seen = []
+    real = compiled_planar.arrangement_core
+
+    class Spy:
+        @staticmethod
+        def arrangement_core(segs, labels):
+            seen.append((list(segs), list(labels)))
+            return real(segs, labels)
+
+    monkeypatch.setattr(planar, "_compiled", Spy)
+    for (v, f), b in cases:
+        grid = Grid.for_points(v, b)
+        trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                           ConvexPolytope.from_points(b, grid=grid), workers=1)
+    monkeypatch.undo()
+    return seen
+
+
+def test_arrangement_core_is_identical_on_minkowski_sums(monkeypatch):
+    """Every arrangement of three sums with cut triangles (crossing points with large
+    denominators, shared edges, collinear overlaps): the compiled core and the reference
+    agree on all of them."""
+    from zoo import icosphere_points
+
+    ico = icosphere_points(1, radius=0.3)
+    cases = [(star(), ico), (torus(sections=12, ring=8), ico),
+             ((random_rotation(l_shape()[0], seed=4), l_shape()[1]), ico)]
+    seen = _captured_arrangements(monkeypatch, cases)
+    assert len(seen) > 100
+    big = 0
+    for segs, labels in seen:
+        order = _same_core(segs, labels)[0]
+        big += any(h[2] > 2**40 for h in order)
+    assert big > 10  # the filters and the exact fallback both ran
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_arrangement_core_is_identical_on_degenerate_segments(seed):
+    """Segments on a 5 x 5 integer lattice (collinear overlaps, shared endpoints, points on
+    segments, zero-length segments), then the same scaled by a huge or tiny power of two and
+    given homogeneous weights (the float filter ties or is skipped: exact fallback)."""
+    rng = np.random.default_rng(seed)
+    P = rng.integers(0, 5, (18, 2, 2)).tolist()
+    segs = [(tuple(p), tuple(q)) for p, q in P]
+    _same_core(segs)
+    for scale, w in ((2**500, 1), (1, 2**450), (3, 2**61 + 1), (2**29 + 7, 1)):
+        _same_core([((p[0] * scale, p[1] * scale, w), (q[0] * scale, q[1] * scale, w))
+                    for p, q in segs])
+
+
+def test_arrangement_core_is_identical_near_ties():
+    """Crossing points whose rounded coordinates tie (1 / (2**60 + k)): the filter cannot
+    tell them apart and the exact comparison orders them; many unrelated denominators put
+    the points beyond one integer scale (``L == 0``)."""
+    segs = []
+    for k in range(1, 40):
+        w = 2**60 + k * 1009
+        segs.append(((0, 0, 1), (w + k, 1, w)))  # nearly the same direction, distinct
+        segs.append(((1, 0, 1), (0, 1, 1)))
+    core = _same_core(segs)
+    assert core[1] == 0  # L: no common scale
+    _same_core([((0, 0, 1), (7, 3, 1)), ((0, 3, 1), (7, 0, 1)), ((14, 6, 2), (21, 9, 3))])
+
+
+def test_arrangement_scale_limit_is_the_references():
+    assert compiled_planar.MAX_SCALE_BITS == planar._MAX_SCALE_BITS
+
+
 def test_import_compiles_nothing_and_loads_no_graph_library():
     """``import cspace`` loads no JIT compiler (numba is gone) and defers scipy.sparse (about
     0.12 s) to the first mesh that needs a graph: what a fresh process pays before its first
@@ -138,7 +231,7 @@ def test_import_compiles_nothing_and_loads_no_graph_library():
             "heavy = [m for m in ('numba', 'llvmlite', 'scipy.sparse', 'Cython') "
             "if m in sys.modules]\n"
             "assert not heavy, heavy\n"
-            "from cspace._kernels import meshquery, trim\n")
+            "from cspace._kernels import meshquery, planar, trim\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0, out.stderr

@@ -1,0 +1,535 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
+"""Compiled kernel of :mod:`cspace.planar`: the exact combinatorics of a segment arrangement
+(:func:`arrangement_core`), built once per arrangement plane of every Minkowski sum.
+
+It returns exactly what the pure-Python reference ``cspace.planar._arrangement_core`` returns
+(``tests/test_kernels.py``). Every decision is the same exact sign, reached by the first of:
+
+- identity: a point repeated in a predicate (shared endpoints are the common case here);
+- 64-bit integers, for points with integer coordinates below 2**30 (triangle corners);
+- a float filter with a proven error bound, on the points' correctly rounded coordinates;
+- Python's integers, on the homogeneous triples, when neither decides.
+
+Float filter of ``orient(a, b, c)``: each coordinate is ``X / W`` correctly rounded (relative
+error ``u = 2**-53``), and ``det = (bx - ax)(cy - ay) - (by - ay)(cx - ax)`` is evaluated in
+double precision. With ``s = |bx| + |ax|``, ``t = |cy| + |ay|``, ``s' = |by| + |ay|``,
+``t' = |cx| + |ax|``, the computed value is within ``(6u + O(u^2)) (s t + s' t')`` of the
+exact orientation of the exact points: each difference carries ``u s (2 + u)`` (inputs,
+then its own rounding), each product ``(5u + O(u^2)) s t``, the last subtraction ``u`` of
+the sum. The filter decides when ``|det| > 8u (s t + s' t')``; points whose coordinates lie
+outside ``[2**-400, 2**400]`` in magnitude (other than 0) skip it, so nothing under- or
+overflows. Comparisons of one coordinate use the rounded values alone when they differ
+(rounding to nearest is monotone) and the exact ratio when they tie.
+"""
+
+from libc.math cimport fabs
+from libc.stdlib cimport free, malloc, realloc
+
+from math import gcd
+
+# Largest common denominator (in bits) that puts the points on one integer scale: as
+# cspace.planar._MAX_SCALE_BITS (a test checks they agree).
+MAX_SCALE_BITS = 1024
+
+cdef double _U = 2.0 ** -53
+cdef double _FILTER = 8.0 * 2.0 ** -53
+cdef double _TINY = 2.0 ** -400
+cdef double _HUGE = 2.0 ** 400
+cdef object _SMALL = 2 ** 30
+
+cdef enum:
+    SMALL_INT = 0  # integer coordinates, |x|, |y| < 2**30: exact in int64 and in double
+    FILTERED = 1   # rounded coordinates in [2**-400, 2**400] or 0: the float filter applies
+    EXACT_ONLY = 2  # outside that range: Python integers only
+
+
+cdef class _Points:
+    """Distinct homogeneous points (canonical triples) with their rounded coordinates."""
+
+    cdef list h
+    cdef dict ids
+    cdef double* x
+    cdef double* y
+    cdef long long* ix
+    cdef long long* iy
+    cdef char* kind
+    cdef Py_ssize_t n, cap
+
+    def __cinit__(self, Py_ssize_t cap):
+        self.h = []
+        self.ids = {}
+        self.n = 0
+        self.cap = cap if cap > 8 else 8
+        self.x = <double*> malloc(self.cap * sizeof(double))
+        self.y = <double*> malloc(self.cap * sizeof(double))
+        self.ix = <long long*> malloc(self.cap * sizeof(long long))
+        self.iy = <long long*> malloc(self.cap * sizeof(long long))
+        self.kind = <char*> malloc(self.cap * sizeof(char))
+        if not (self.x and self.y and self.ix and self.iy and self.kind):
+            raise MemoryError()
+
+    def __dealloc__(self):
+        free(self.x)
+        free(self.y)
+        free(self.ix)
+        free(self.iy)
+        free(self.kind)
+
+    cdef void _grow(self) except *:
+        cdef Py_ssize_t cap = 2 * self.cap
+        cdef void* p
+        p = realloc(self.x, cap * sizeof(double))
+        if not p:
+            raise MemoryError()
+        self.x = <double*> p
+        p = realloc(self.y, cap * sizeof(double))
+        if not p:
+            raise MemoryError()
+        self.y = <double*> p
+        p = realloc(self.ix, cap * sizeof(long long))
+        if not p:
+            raise MemoryError()
+        self.ix = <long long*> p
+        p = realloc(self.iy, cap * sizeof(long long))
+        if not p:
+            raise MemoryError()
+        self.iy = <long long*> p
+        p = realloc(self.kind, cap * sizeof(char))
+        if not p:
+            raise MemoryError()
+        self.kind = <char*> p
+        self.cap = cap
+
+    cdef Py_ssize_t add(self, tuple h) except -1:
+        k = self.ids.get(h)
+        if k is not None:
+            return <Py_ssize_t> k
+        cdef Py_ssize_t i = self.n
+        if i == self.cap:
+            self._grow()
+        self.h.append(h)
+        self.ids[h] = i
+        self.n = i + 1
+        X, Y, W = h
+        if W == 1 and -_SMALL < X < _SMALL and -_SMALL < Y < _SMALL:
+            self.ix[i] = X
+            self.iy[i] = Y
+            self.x[i] = <double> self.ix[i]
+            self.y[i] = <double> self.iy[i]
+            self.kind[i] = SMALL_INT
+            return i
+        self.x[i] = _rounded(X, W)
+        self.y[i] = _rounded(Y, W)
+        self.kind[i] = FILTERED if (_filterable(self.x[i]) and _filterable(self.y[i])) else EXACT_ONLY
+        return i
+
+    cdef int cmp(self, Py_ssize_t a, Py_ssize_t b, int ax) except -2:
+        """Sign of coordinate ``ax`` of point a minus that of point b."""
+        cdef double da = self.x[a] if ax == 0 else self.y[a]
+        cdef double db = self.x[b] if ax == 0 else self.y[b]
+        if da < db:
+            return -1
+        if da > db:
+            return 1
+        if a == b or (self.kind[a] == SMALL_INT and self.kind[b] == SMALL_INT):
+            return 0
+        ha = <tuple> self.h[a]
+        hb = <tuple> self.h[b]
+        l = ha[ax] * hb[2]
+        r = hb[ax] * ha[2]
+        return (l > r) - (l < r)
+
+    cdef int orient(self, Py_ssize_t a, Py_ssize_t b, Py_ssize_t c) except -2:
+        """Orientation sign of three points (counter-clockwise: +1)."""
+        cdef long long ix, iy, jx, jy, d
+        cdef double bx, by, cx, cy, det, bound
+        if a == b or b == c or a == c:
+            return 0
+        cdef char ka = self.kind[a], kb = self.kind[b], kc = self.kind[c]
+        if ka == SMALL_INT and kb == SMALL_INT and kc == SMALL_INT:
+            # |differences| < 2**31, products < 2**62: no overflow
+            ix = self.ix[b] - self.ix[a]
+            iy = self.iy[b] - self.iy[a]
+            jx = self.ix[c] - self.ix[a]
+            jy = self.iy[c] - self.iy[a]
+            d = ix * jy - iy * jx
+            return (d > 0) - (d < 0)
+        if ka != EXACT_ONLY and kb != EXACT_ONLY and kc != EXACT_ONLY:
+            bx = self.x[b] - self.x[a]
+            by = self.y[b] - self.y[a]
+            cx = self.x[c] - self.x[a]
+            cy = self.y[c] - self.y[a]
+            det = bx * cy - by * cx
+            bound = _FILTER * ((fabs(self.x[b]) + fabs(self.x[a])) * (fabs(self.y[c]) + fabs(self.y[a]))
+                               + (fabs(self.y[b]) + fabs(self.y[a])) * (fabs(self.x[c]) + fabs(self.x[a])))
+            if det > bound:
+                return 1
+            if det < -bound:
+                return -1
+        pa = <tuple> self.h[a]
+        pb = <tuple> self.h[b]
+        pc = <tuple> self.h[c]
+        e = (pa[0] * (pb[1] * pc[2] - pb[2] * pc[1])
+             - pa[1] * (pb[0] * pc[2] - pb[2] * pc[0])
+             + pa[2] * (pb[0] * pc[1] - pb[1] * pc[0]))
+        return (e > 0) - (e < 0)
+
+    cdef bint between(self, Py_ssize_t p, Py_ssize_t q, Py_ssize_t x, int ax) except -1:
+        """For x on the line of p != q (``ax``: an axis along which they differ), is x on the
+        closed segment?"""
+        return self.cmp(x, p, ax) * self.cmp(x, q, ax) <= 0
+
+    cdef int lex(self, Py_ssize_t a, Py_ssize_t b) except -2:
+        cdef int c = self.cmp(a, b, 0)
+        return c if c != 0 else self.cmp(a, b, 1)
+
+    cdef int angle(self, Py_ssize_t o, Py_ssize_t b, Py_ssize_t c) except -2:
+        """Counter-clockwise order, from angle 0 inclusive, of the directions o -> b and
+        o -> c (``cspace.planar._angle_cmp``)."""
+        cdef int by = self.cmp(b, o, 1), cy = self.cmp(c, o, 1)
+        cdef int hb = 0 if (by > 0 or (by == 0 and self.cmp(b, o, 0) > 0)) else 1
+        cdef int hc = 0 if (cy > 0 or (cy == 0 and self.cmp(c, o, 0) > 0)) else 1
+        if hb != hc:
+            return hb - hc
+        return -self.orient(o, b, c)
+
+
+cdef double _rounded(X, W):
+    """``X / W`` correctly rounded (Python's integer true division), infinite beyond the
+    double range (still monotone)."""
+    try:
+        return X / W
+    except OverflowError:
+        return float("inf") if X > 0 else float("-inf")
+
+
+cdef inline bint _filterable(double v) noexcept:
+    return v == 0.0 or (_TINY <= fabs(v) <= _HUGE)
+
+
+cdef tuple _hnorm(tuple h):
+    X, Y, W = h
+    if W < 0:
+        X, Y, W = -X, -Y, -W
+    g = gcd(gcd(X, Y), W)
+    return (X // g, Y // g, W // g)
+
+
+cdef tuple _hcross3(tuple u, tuple v):
+    return (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+
+
+cdef tuple _harea(list H, list origin, list cycle):
+    """As ``cspace.planar._harea``."""
+    num, den = 0, 1
+    for h in cycle:
+        a = <tuple> H[<Py_ssize_t> origin[h]]
+        b = <tuple> H[<Py_ssize_t> origin[(<Py_ssize_t> h) ^ 1]]
+        t = a[0] * b[1] - a[1] * b[0]
+        if t:
+            w = a[2] * b[2]
+            if w == den:
+                num += t
+            elif den % w == 0:
+                num += t * (den // w)
+            else:
+                g = gcd(den, w)
+                num = num * (w // g) + t * (den // g)
+                den = den * (w // g)
+    return num, den
+
+
+cdef inline Py_ssize_t _find(Py_ssize_t* parent, Py_ssize_t a) noexcept:
+    while parent[a] != a:
+        parent[a] = parent[parent[a]]
+        a = parent[a]
+    return a
+
+
+cdef int _merge_sort_lex(_Points P, Py_ssize_t* a, Py_ssize_t* tmp, Py_ssize_t n) except -1:
+    """Sort point ids lexicographically (x, then y; the points are distinct)."""
+    cdef Py_ssize_t m, i, j, k
+    if n < 2:
+        return 0
+    if n <= 8:
+        for i in range(1, n):
+            k = a[i]
+            j = i - 1
+            while j >= 0 and P.lex(a[j], k) > 0:
+                a[j + 1] = a[j]
+                j -= 1
+            a[j + 1] = k
+        return 0
+    m = n // 2
+    _merge_sort_lex(P, a, tmp, m)
+    _merge_sort_lex(P, a + m, tmp, n - m)
+    i, j, k = 0, m, 0
+    while i < m and j < n:
+        if P.lex(a[j], a[i]) < 0:
+            tmp[k] = a[j]
+            j += 1
+        else:
+            tmp[k] = a[i]
+            i += 1
+        k += 1
+    while i < m:
+        tmp[k] = a[i]
+        i += 1
+        k += 1
+    while j < n:
+        tmp[k] = a[j]
+        j += 1
+        k += 1
+    for i in range(n):
+        a[i] = tmp[i]
+    return 0
+
+
+def arrangement_core(list segs, list labels):
+    """The exact combinatorics of the arrangement of ``segs``: see
+    ``cspace.planar._arrangement_core`` (identical outputs)."""
+    cdef Py_ssize_t n = len(segs), i, j, k, m, nv, nh, a, b, r, s, x, ax, t, v, g, h
+    cdef int o1, o2, o3, o4
+    cdef _Points P = _Points(2 * n + 8)
+    cdef Py_ssize_t* sp = <Py_ssize_t*> malloc((2 * n + 1) * sizeof(Py_ssize_t))
+    cdef char* axis = <char*> malloc((n + 1) * sizeof(char))
+    cdef double* box = <double*> malloc((4 * n + 1) * sizeof(double))
+    cdef Py_ssize_t* ids = NULL
+    cdef Py_ssize_t* tmp = NULL
+    cdef Py_ssize_t* rank = NULL
+    cdef Py_ssize_t* origin_c = NULL
+    cdef Py_ssize_t* pos = NULL
+    cdef Py_ssize_t* nxt_c = NULL
+    cdef Py_ssize_t* cyc_c = NULL
+    cdef Py_ssize_t* parent = NULL
+    if not (sp and axis and box):
+        free(sp)
+        free(axis)
+        free(box)
+        raise MemoryError()
+    try:
+        proper = []
+        points_only = []
+        for i in range(n):
+            p, q = segs[i]
+            sp[2 * i] = P.add(p)
+            sp[2 * i + 1] = P.add(q)
+            if sp[2 * i] != sp[2 * i + 1]:
+                proper.append(i)
+                axis[i] = 0 if P.cmp(sp[2 * i], sp[2 * i + 1], 0) != 0 else 1
+                a, b = sp[2 * i], sp[2 * i + 1]
+                # closed boxes of the rounded coordinates: rounding is monotone, so boxes of
+                # meeting segments still meet (a filter only)
+                box[4 * i] = P.x[a] if P.x[a] < P.x[b] else P.x[b]
+                box[4 * i + 1] = P.x[b] if P.x[a] < P.x[b] else P.x[a]
+                box[4 * i + 2] = P.y[a] if P.y[a] < P.y[b] else P.y[b]
+                box[4 * i + 3] = P.y[b] if P.y[a] < P.y[b] else P.y[a]
+            else:
+                points_only.append(i)
+        on = {i: {sp[2 * i], sp[2 * i + 1]} for i in proper}
+        lines = {}
+        m = len(proper)
+        for a in range(m):
+            i = proper[a]
+            for b in range(a + 1, m):
+                j = proper[b]
+                if (box[4 * i + 1] < box[4 * j] or box[4 * j + 1] < box[4 * i]
+                        or box[4 * i + 3] < box[4 * j + 2] or box[4 * j + 3] < box[4 * i + 2]):
+                    continue
+                o1 = P.orient(sp[2 * i], sp[2 * i + 1], sp[2 * j])
+                o2 = P.orient(sp[2 * i], sp[2 * i + 1], sp[2 * j + 1])
+                if o1 == 0 and o2 == 0:  # collinear: overlap or touch
+                    for x in (sp[2 * j], sp[2 * j + 1]):
+                        if P.between(sp[2 * i], sp[2 * i + 1], x, axis[i]):
+                            on[i].add(x)
+                    for x in (sp[2 * i], sp[2 * i + 1]):
+                        if P.between(sp[2 * j], sp[2 * j + 1], x, axis[j]):
+                            on[j].add(x)
+                    continue
+                if o1 * o2 > 0:
+                    continue
+                o3 = P.orient(sp[2 * j], sp[2 * j + 1], sp[2 * i])
+                o4 = P.orient(sp[2 * j], sp[2 * j + 1], sp[2 * i + 1])
+                if o3 * o4 > 0:
+                    continue
+                if o1 == 0:
+                    x = sp[2 * j]
+                elif o2 == 0:
+                    x = sp[2 * j + 1]
+                elif o3 == 0:
+                    x = sp[2 * i]
+                elif o4 == 0:
+                    x = sp[2 * i + 1]
+                else:
+                    li = lines.get(i)
+                    if li is None:
+                        li = lines[i] = _hcross3(P.h[sp[2 * i]], P.h[sp[2 * i + 1]])
+                    lj = lines.get(j)
+                    if lj is None:
+                        lj = lines[j] = _hcross3(P.h[sp[2 * j]], P.h[sp[2 * j + 1]])
+                    x = P.add(_hnorm(_hcross3(li, lj)))
+                on[i].add(x)
+                on[j].add(x)
+        vertex_set = set()
+        point_label = {}
+        for k in points_only:
+            x = sp[2 * k]
+            vertex_set.add(x)
+            point_label.setdefault(x, set()).add(labels[k])
+            for i in proper:
+                if (P.x[x] < box[4 * i] or box[4 * i + 1] < P.x[x]
+                        or P.y[x] < box[4 * i + 2] or box[4 * i + 3] < P.y[x]):
+                    continue
+                if (P.orient(sp[2 * i], sp[2 * i + 1], x) == 0
+                        and P.between(sp[2 * i], sp[2 * i + 1], x, axis[i])):
+                    on[i].add(x)
+        for i in proper:
+            vertex_set.update(on[i])
+
+        # the points sorted lexicographically
+        nv = len(vertex_set)
+        ids = <Py_ssize_t*> malloc((nv + 1) * sizeof(Py_ssize_t))
+        tmp = <Py_ssize_t*> malloc((nv + 1) * sizeof(Py_ssize_t))
+        rank = <Py_ssize_t*> malloc((P.n + 1) * sizeof(Py_ssize_t))
+        if not (ids and tmp and rank):
+            raise MemoryError()
+        k = 0
+        for x in vertex_set:
+            ids[k] = x
+            k += 1
+        _merge_sort_lex(P, ids, tmp, nv)
+        for k in range(nv):
+            rank[ids[k]] = k
+        order = [P.h[ids[k]] for k in range(nv)]
+
+        # one common denominator L, as the reference
+        L = 1
+        for hh in order:
+            w = hh[2]
+            if L % w:
+                L = L * w // gcd(L, w)
+                if L.bit_length() > MAX_SCALE_BITS:
+                    break
+        if L.bit_length() > MAX_SCALE_BITS:
+            from cspace.planar import _float_key  # loaded by now: it imported this module
+
+            L = 0
+            S = [_float_key(hh) for hh in order]
+        else:
+            S = [(hh[0] * (L // hh[2]), hh[1] * (L // hh[2])) for hh in order]
+
+        # pieces: consecutive points along each segment
+        pieces = {}
+        for i in proper:
+            pts = on[i]
+            k = 0
+            for x in pts:
+                tmp[k] = x
+                k += 1
+            ax = axis[i]
+            for a in range(1, k):  # insertion sort along the segment's axis (few points)
+                x = tmp[a]
+                b = a - 1
+                while b >= 0 and P.cmp(tmp[b], x, ax) > 0:
+                    tmp[b + 1] = tmp[b]
+                    b -= 1
+                tmp[b + 1] = x
+            lab = labels[i]
+            for a in range(k - 1):
+                r, s = rank[tmp[a]], rank[tmp[a + 1]]
+                key = (r, s) if r < s else (s, r)
+                got = pieces.get(key)
+                if got is None:
+                    pieces[key] = {lab}
+                else:
+                    got.add(lab)
+        keyed = sorted(pieces.items())
+        E = [kk for kk, _ in keyed]
+        edge_labels = [lab for _, lab in keyed]
+        vertex_labels = {rank[x]: lab for x, lab in point_label.items()}
+
+        # half-edges: 2k is edge k from u to v, 2k + 1 back
+        nh = 2 * len(E)
+        origin_c = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
+        pos = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
+        nxt_c = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
+        cyc_c = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
+        parent = <Py_ssize_t*> malloc((nv + 1) * sizeof(Py_ssize_t))
+        if not (origin_c and pos and nxt_c and cyc_c and parent):
+            raise MemoryError()
+        for k in range(len(E)):
+            r, s = E[k]
+            origin_c[2 * k] = r
+            origin_c[2 * k + 1] = s
+        out = [[] for _ in range(nv)]
+        for h in range(nh):
+            out[origin_c[h]].append(h)
+        for v in range(nv):
+            hs = out[v]
+            m = len(hs)
+            if m > 2:  # two half-edges have one cyclic order
+                o = ids[v]
+                for a in range(m):
+                    tmp[a] = hs[a]
+                for a in range(1, m):
+                    g = tmp[a]
+                    b = a - 1
+                    while b >= 0 and P.angle(o, ids[origin_c[tmp[b] ^ 1]], ids[origin_c[g ^ 1]]) > 0:
+                        tmp[b + 1] = tmp[b]
+                        b -= 1
+                    tmp[b + 1] = g
+                for a in range(m):
+                    hs[a] = tmp[a]
+            for a in range(m):
+                pos[<Py_ssize_t> hs[a]] = a
+        for h in range(nh):
+            t = h ^ 1
+            hs = out[origin_c[t]]
+            # the clockwise neighbour of the twin (indices are not wrapped in this module)
+            nxt_c[h] = hs[pos[t] - 1 if pos[t] > 0 else len(hs) - 1]
+        nxt = [nxt_c[h] for h in range(nh)]
+
+        for h in range(nh):
+            cyc_c[h] = -1
+        cycles = []
+        for h in range(nh):
+            if cyc_c[h] >= 0:
+                continue
+            c = []
+            g = h
+            k = len(cycles)
+            while cyc_c[g] < 0:
+                cyc_c[g] = k
+                c.append(g)
+                g = nxt_c[g]
+            cycles.append(c)
+        cyc_of = [cyc_c[h] for h in range(nh)]
+        origin = [origin_c[h] for h in range(nh)]
+        areas = [_harea(order, origin, c) for c in cycles]
+
+        # components: union-find, the smaller root kept (each root is its component's smallest
+        # vertex)
+        for v in range(nv):
+            parent[v] = v
+        for k in range(len(E)):
+            r = _find(parent, origin_c[2 * k])
+            s = _find(parent, origin_c[2 * k + 1])
+            if r != s:
+                if r < s:
+                    parent[s] = r
+                else:
+                    parent[r] = s
+        comp = [_find(parent, v) for v in range(nv)]
+        return order, L, S, vertex_labels, E, edge_labels, out, nxt, cycles, cyc_of, areas, comp
+    finally:
+        free(sp)
+        free(axis)
+        free(box)
+        free(ids)
+        free(tmp)
+        free(rank)
+        free(origin_c)
+        free(pos)
+        free(nxt_c)
+        free(cyc_c)
+        free(parent)
