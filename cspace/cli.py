@@ -257,9 +257,11 @@ def _plan(args: argparse.Namespace) -> int:
 
     from .ompl_plugin import plan
 
-    path_out = _out(args.output, ("txt", "csv", "npy"), "-o")
+    path_out = _out(args.output, ("txt", "csv", "npy", "path"), "-o")
     result_out = _out(args.result, ("json",), "--result")
     html_out = _out(args.html, ("html",), "--html")
+    if args.slices is not None:
+        return _plan_turning(args, path_out, result_out, html_out)
     m = _model(args)
     if args.explain:
         print(m.explain())
@@ -281,11 +283,7 @@ def _plan(args: argparse.Namespace) -> int:
     # A path file is a solution: written only for a solved, proved path.
     written = None
     if path_out and proved:
-        if path_out.suffix.lower() == ".npy":
-            write_atomic(path_out, lambda p: np.save(p, r.path))
-        else:
-            delimiter = "," if path_out.suffix.lower() == ".csv" else " "
-            write_atomic(path_out, lambda p: np.savetxt(p, r.path, delimiter=delimiter))
+        _write_path(path_out, r.path, _quaternions(scene.start_rotation, len(r.path)))
         written = str(path_out)
         print(f"wrote {path_out}")
     elif path_out:
@@ -293,14 +291,11 @@ def _plan(args: argparse.Namespace) -> int:
     if not r.solved and (args.planner, args.sampler) != ("PRM", "narrow"):
         print("hint: for narrow passages try --planner PRM --sampler narrow (samples in the gaps "
               "between C-obstacles), or a longer --time", file=sys.stderr)
+    result = None
     if result_out:
-        import json
-
         result = {
-            "scene": scene.name, "scene_file": str(args.scene), "planner": args.planner,
-            "seed": args.seed, "time_budget": args.time, "solved": r.solved, "exact": r.exact,
-            "valid_exact_recheck": r.valid, "status": r.status, "seconds": r.time,
-            "length": r.length, "path": r.path.tolist() if proved else None,
+            **_result_head(args, scene, r),
+            "path": r.path.tolist() if proved else None,
             "approximate_path": None if proved else r.path.tolist(),
             "path_file": written, "fcl_recheck": fcl,
             "model": {"counts": m.counts(), "model_seconds": m.seconds["model"],
@@ -310,16 +305,111 @@ def _plan(args: argparse.Namespace) -> int:
                                   "constructions": [p.construction for p in b.pairs],
                                   "cache": b.cache, "seconds": b.seconds} for b in m.bodies]},
         }
+    return _finish(result, result_out, html_out, scene, r.path if proved else None)
+
+
+def _result_head(args: argparse.Namespace, scene, r) -> dict:
+    """The fields every ``plan --result`` JSON starts with."""
+    return {"scene": scene.name, "scene_file": str(args.scene), "planner": args.planner,
+            "seed": args.seed, "time_budget": args.time, "solved": r.solved, "exact": r.exact,
+            "valid_exact_recheck": r.valid, "status": r.status, "seconds": r.time,
+            "length": r.length}
+
+
+def _finish(result, result_out, html_out, scene, path) -> int:
+    """Write ``plan``'s JSON summary and HTML page (the scene, and ``path`` when proved);
+    exit status 0 when there is a proved path."""
+    import json
+
+    if result_out:
         write_atomic(result_out, lambda p: p.write_text(json.dumps(result, indent=1)))
         print(f"wrote {result_out}")
     if html_out:
         from .viz import SceneView, draw_scene
 
         view = SceneView()
-        draw_scene(view, scene, path=r.path if proved else None)
+        draw_scene(view, scene, path=path)
         write_atomic(html_out, lambda p: view.save(p))
-        print(f"wrote {html_out}" + ("" if proved else " (the scene only: no solution)"))
-    return 0 if proved else 1
+        print(f"wrote {html_out}" + ("" if path is not None else " (the scene only: no solution)"))
+    return 0 if path is not None else 1
+
+
+def _quaternions(rotation, n: int):
+    """``(n, 4)`` copies of a rotation's quaternion ``(x, y, z, w)``."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    return np.tile(Rotation.from_matrix(np.asarray(rotation)).as_quat(), (n, 1))
+
+
+def _write_path(path_out, positions, orientations) -> None:
+    """A path file: ``.path`` is OMPL.app's (``x y z qx qy qz qw`` per line); ``.txt``,
+    ``.csv`` and ``.npy`` hold the positions (n x 3), or n x 7 with the orientations when the
+    robot turns along the path."""
+    import numpy as np
+
+    P = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
+    Q = np.asarray(orientations, dtype=np.float64).reshape(-1, 4)
+    turns = len(Q) > 1 and not np.array_equal(Q, np.tile(Q[0], (len(Q), 1)))
+    suffix = path_out.suffix.lower()
+    table = (np.hstack([P, Q]) if suffix == ".path" or turns else P) + 0.0  # no "-0.0"
+    if suffix == ".npy":
+        write_atomic(path_out, lambda p: np.save(p, table))
+    else:
+        delimiter = "," if suffix == ".csv" else " "
+        # shortest round-trip text of each float64 (the path proved is the path read back)
+        text = "".join(delimiter.join(repr(float(x)) for x in row) + "\n" for row in table)
+        write_atomic(path_out, lambda p: p.write_text(text))
+
+
+def _plan_turning(args: argparse.Namespace, path_out, result_out, html_out) -> int:
+    """``cspace plan --slices N``: translations and certified turns over orientation slices."""
+    import numpy as np
+
+    from .ompl_plugin import default_slices, plan_turning
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    cache = None if args.no_cache else (args.cache_dir or True)
+    slices = default_slices(scene, args.slices)
+    r = plan_turning(scene, slices, planner=args.planner, time=args.time, seed=args.seed,
+                     cache=cache, robot_hull=args.robot_hull)
+    status = "solved" if r.solved else f"NOT solved ({r.status})"
+    turns = int((np.diff(r.slices) != 0).sum()) if len(r.slices) else 0
+    print(f"{scene.name}: {args.planner} with {len(slices)} orientation slices {status} in "
+          f"{r.time:.2f} s; {len(r.path)} waypoints ({turns} turns between neighbouring "
+          f"slices), length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
+    if args.explain:
+        print(f"  {slices!r}")
+        print(f"  built lazily: {r.built['slices']} of {len(slices)} slices, {r.built['turns']} "
+              f"of {len(slices)} turns")
+    fcl = None
+    if args.fcl_check and r.solved:
+        from .fcl_check import pose_path_collisions
+
+        size = float(np.linalg.norm(np.ptp(np.asarray(scene.bounds), axis=0))) or 1.0
+        rel = [slices.rotation(k) for k in r.slices]
+        bad, n = pose_path_collisions(scene, r.path, rel, per_metre=1e3 / size, per_degree=100)
+        fcl = {"colliding_samples": bad, "samples": n}
+        print(f"FCL re-check: {bad} colliding of {n} poses along the translations and turns")
+    proved = r.solved and not (fcl and fcl["colliding_samples"])
+    written = None
+    if path_out and proved:
+        _write_path(path_out, r.path, r.orientations)
+        written = str(path_out)
+        print(f"wrote {path_out}")
+    elif path_out:
+        print(f"no path written to {path_out}: the problem was not solved", file=sys.stderr)
+    result = None
+    if result_out:
+        result = {
+            **_result_head(args, scene, r), "slices": len(slices), "built": r.built,
+            "path": r.path.tolist() if proved else None,
+            "orientations": r.orientations.tolist() if proved else None,
+            "slice_ids": r.slices.tolist() if proved else None,
+            "path_file": written, "fcl_recheck": fcl,
+        }
+    return _finish(result, result_out, html_out, scene, r.path if proved else None)
 
 
 def _view(args: argparse.Namespace) -> int:
@@ -363,6 +453,16 @@ def _view(args: argparse.Namespace) -> int:
               "shows those obstacles without them", file=sys.stderr)
         return 1
     return 0
+
+
+def _slices(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number of slices, got {text!r}") from None
+    if n < 2:
+        raise argparse.ArgumentTypeError(f"need at least 2 slices, got {n}")
+    return n
 
 
 def _model_options(p: argparse.ArgumentParser) -> None:
@@ -480,7 +580,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--time", type=_positive, default=5.0,
                    help="planning time budget in seconds")
     p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (none: a new one each run)")
-    p.add_argument("-o", "--output", help="write the path (n x 3): .txt, .csv or .npy; only when solved")
+    p.add_argument("-o", "--output", help="write the path when solved: .txt, .csv or .npy (n x 3, "
+                   "n x 7 with quaternions x y z w when it turns), or OMPL.app's .path "
+                   "(x y z qx qy qz qw per line)")
+    p.add_argument("--slices", type=_slices, default=None, metavar="N",
+                   help="let the robot turn: plan over N orientation slices about the axis of "
+                        "the goal's rotation (z when the goal keeps the start's), every "
+                        "translation and turn in place certified")
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
     p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),
                    help="valid-state sampler of PRM-like planners: 'narrow' draws half its "

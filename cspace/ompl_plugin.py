@@ -28,6 +28,10 @@ from .obstacle import CSpace
 
 __all__ = [
     "MOTIONS",
+    "plan_turning",
+    "default_slices",
+    "plan_sampled",
+    "SAMPLED_SPACES",
     "state_space",
     "PlanResult",
     "CSpaceValidityChecker",
@@ -374,6 +378,16 @@ class PlanResult:
     simplified : bool
         Whether ``path`` is the simplified path (else the raw one; simplification is dropped
         if its result fails the exact re-proof).
+    slices : (n,) int64 or None
+        For a turning robot (``plan(..., slices=...)``): the orientation slice of each
+        waypoint. Consecutive waypoints differ by a translation within one slice or by a
+        turn in place between neighbouring slices, each certified.
+    orientations : (n, 4) float64 or None
+        For a turning robot: each waypoint's orientation as a unit quaternion ``(x, y, z, w)``
+        (world frame, the scene's start rotation included).
+    built : dict or None
+        For a turning robot: ``{'slices': k, 'turns': t, 'of': (n slices, n turns)}``, the
+        C-spaces built (lazily, only those the planner entered) out of those there are.
     """
 
     path: np.ndarray
@@ -389,6 +403,9 @@ class PlanResult:
     state_checks: int
     motion_checks: int
     simplified: bool
+    slices: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+    built: dict | None = None
 
     @property
     def length(self) -> float:
@@ -426,12 +443,67 @@ def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
     return a
 
 
+def _seed(ou, seed) -> None:
+    ou.setLogLevel(ou.LOG_ERROR)
+    if seed is not None:
+        # OMPL logs an error when seeds were already handed out, but still reseeds its seed
+        # generator, so the RNGs created from here on are reproducible.
+        ou.setLogLevel(ou.LOG_NONE)
+        ou.RNG.setSeed(int(seed))
+        ou.setLogLevel(ou.LOG_ERROR)
+
+
+def _solve(si, start, goal, *, planner: str, time: float, optimize: bool,
+           planner_range, simplify: bool, read, dim: int):
+    """Solve from ``start`` to ``goal`` on the set-up ``si``: each a list of state
+    coordinates, or a function that fills an allocated state.
+
+    Returns ``(status, exact, raw, simplified, solve_time)``: OMPL's status, whether the
+    solution is exact, the planner's states read by ``read`` into ``(n, dim)`` rows (none:
+    ``(0, dim)``), the simplified ones (None when not simplified) and the seconds in
+    ``solve()``.
+    """
+    ob, og, _ = _ompl()
+    s0, s1 = si.allocState(), si.allocState()
+    for state, value in ((s0, start), (s1, goal)):
+        if callable(value):
+            value(state)
+        else:
+            state[0:len(value)] = value
+    pdef = ob.ProblemDefinition(si)
+    pdef.setStartAndGoalStates(s0, s1)
+    objective = ob.PathLengthOptimizationObjective(si)
+    if not optimize:
+        objective.setCostThreshold(ob.Cost(float("inf")))
+    pdef.setOptimizationObjective(objective)
+    p = getattr(og, planner)(si)
+    if planner_range is not None and hasattr(p, "setRange"):
+        p.setRange(float(planner_range))
+    p.setProblemDefinition(pdef)
+    p.setup()
+    t0 = _time.perf_counter()
+    status = p.solve(float(time))
+    solve_time = _time.perf_counter() - t0
+    exact = status.getStatus() == ob.PlannerStatus.EXACT_SOLUTION
+    have = exact or status.getStatus() == ob.PlannerStatus.APPROXIMATE_SOLUTION
+    raw = np.zeros((0, dim))
+    simplified = None
+    if have:
+        path = pdef.getSolutionPath()
+        raw = np.array([read(x) for x in path.getStates()]).reshape(-1, dim)
+        if simplify and exact and len(raw) > 2:
+            og.PathSimplifier(si).simplify(path, min(1.0, time / 2.0))
+            simplified = np.array([read(x) for x in path.getStates()]).reshape(-1, dim)
+    return status, exact, raw, simplified, solve_time
+
+
 def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
          time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
          planner_range: float | None = None, cache=None,
-         sampler: str = "uniform", robot_hull: bool = False) -> PlanResult:
-    """Plan a collision-free translation with OMPL, checked exactly.
+         sampler: str = "uniform", robot_hull: bool = False, slices=None) -> PlanResult:
+    """Plan a collision-free translation with OMPL, checked exactly; with ``slices``, a
+    path that also turns the robot, every motion certified.
 
     Parameters
     ----------
@@ -474,12 +546,17 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         sample unchecked states (RRT, RRTConnect, ...) ignore it.
     robot_hull : bool, default False
         For a scene: build against the robot's convex hull instead of its exact parts.
+    slices : int or cspace.turning.Slices, optional
+        Plan with turns (a scene only): over these orientation slices (an int ``n``: ``n``
+        equal steps about the axis of the scene's goal rotation relative to its start, z
+        when they are equal, plus the goal's angle). See :func:`plan_turning`.
 
     Returns
     -------
     PlanResult
         ``path`` is re-proved exactly (:func:`verify_path`) after OMPL returns it; ``solved``
-        requires an exact OMPL solution and a valid path.
+        requires an exact OMPL solution and a valid path. With ``slices``: also
+        ``slices``, ``orientations`` and ``built``.
 
     Raises
     ------
@@ -498,6 +575,13 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         raise InvalidArgumentError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
     if not (time > 0):
         raise InvalidArgumentError(f"time must be positive, got {time}")
+    if slices is not None:
+        if motion != "exact" or sampler != "uniform":
+            raise InvalidArgumentError("planning with turns takes motion='exact' and "
+                                       "sampler='uniform' only")
+        return plan_turning(scene_or_cspace, slices, start, goal, planner=planner, time=time,
+                            seed=seed, simplify=simplify, bounds=bounds, optimize=optimize,
+                            planner_range=planner_range, cache=cache, robot_hull=robot_hull)
     cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull)
     if bounds is None:
         bounds = scene.bounds if scene is not None else cs.bounds
@@ -508,13 +592,7 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
     q0 = _endpoint(cs, start, b, "start")
     q1 = _endpoint(cs, goal, b, "goal")
 
-    ou.setLogLevel(ou.LOG_ERROR)
-    if seed is not None:
-        # OMPL logs an error when seeds were already handed out, but still reseeds its seed
-        # generator, so the RNGs created from here on are reproducible.
-        ou.setLogLevel(ou.LOG_NONE)
-        ou.RNG.setSeed(int(seed))
-        ou.setLogLevel(ou.LOG_ERROR)
+    _seed(ou, seed)
     space = state_space(b)
     si = ob.SpaceInformation(space)
     classes = _classes()
@@ -538,39 +616,14 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         si.setValidStateSamplerAllocator(allocate)
     si.setup()
 
-    s0 = si.allocState()
-    s0[0:3] = q0.tolist()
-    s1 = si.allocState()
-    s1[0:3] = q1.tolist()
-    pdef = ob.ProblemDefinition(si)
-    pdef.setStartAndGoalStates(s0, s1)
-    objective = ob.PathLengthOptimizationObjective(si)
-    if not optimize:
-        objective.setCostThreshold(ob.Cost(float("inf")))
-    pdef.setOptimizationObjective(objective)
-    p = getattr(og, planner)(si)
-    if planner_range is not None and hasattr(p, "setRange"):
-        p.setRange(float(planner_range))
-    p.setProblemDefinition(pdef)
-    p.setup()
-
     t0 = _time.perf_counter()
-    status = p.solve(float(time))
-    solve_time = _time.perf_counter() - t0
-    exact = status.getStatus() == ob.PlannerStatus.EXACT_SOLUTION
-    have = exact or status.getStatus() == ob.PlannerStatus.APPROXIMATE_SOLUTION
-    P = np.zeros((0, 3))
-    simplified = False
+    status, exact, raw, P, solve_time = _solve(
+        si, q0.tolist(), q1.tolist(), planner=planner, time=time, optimize=optimize,
+        planner_range=planner_range, simplify=simplify, read=_vec, dim=3)
+    P = raw if P is None else P
+    simplified = P is not raw
     valid = False
-    if have:
-        path = pdef.getSolutionPath()
-        raw = np.array([_vec(s) for s in path.getStates()]).reshape(-1, 3)
-        P = raw
-        if simplify and exact and len(raw) > 2:
-            ps = og.PathSimplifier(si)
-            ps.simplify(path, min(1.0, time / 2.0))
-            P = np.array([_vec(s) for s in path.getStates()]).reshape(-1, 3)
-            simplified = True
+    if len(P):
         valid = verify_path(cs, P, b)["valid"]
         if simplified and not valid:
             # Keep the planner's own path if shortcutting produced something we cannot prove.
@@ -579,7 +632,7 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
                 P, valid, simplified = raw, True, False
     elapsed = _time.perf_counter() - t0
     return PlanResult(
-        path=np.ascontiguousarray(P, dtype=np.float64),
+        path=np.ascontiguousarray(P, dtype=np.float64).reshape(-1, 3),
         solved=bool(exact and valid),
         exact=bool(exact),
         valid=bool(valid),
@@ -593,3 +646,281 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         motion_checks=int(mv.calls) if mv is not None else 0,
         simplified=simplified,
     )
+
+
+# --------------------------------------------------------------------------------------
+# planning with turns
+
+
+def default_slices(scene, n: int):
+    """``n`` equal orientation steps about the axis of the scene's goal rotation relative to
+    its start (z when they are equal), plus the goal's angle (:meth:`Slices.about`)."""
+    from scipy.spatial.transform import Rotation
+
+    from .turning import Slices
+
+    rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
+    rv = Rotation.from_matrix(rel).as_rotvec()
+    angle = float(np.linalg.norm(rv))
+    if angle <= 1e-12:
+        return Slices.about(n)
+    return Slices.about(n, axis=rv / angle, goal_angle=angle)
+
+
+def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTConnect",
+                 time: float = 1.0, seed: int | None = None, simplify: bool = True,
+                 bounds=None, optimize: bool = False, planner_range: float | None = None,
+                 cache=None, robot_hull: bool = False) -> PlanResult:
+    """Plan translations and turns in place over orientation slices, every motion certified.
+
+    The OMPL state is ``(x, y, z, s)``: the reference point and a slice coordinate ``s``
+    (slice ``k`` at ``s = k w``, ``w`` the arc a step of ``2 pi / n`` moves the robot's
+    farthest point, so turning and translating weigh alike). A state is valid when the robot
+    at slice ``round(s / w)`` is free there; a motion from ``(q0, k0)`` to ``(q1, k1)`` is
+    the translation at ``k0`` followed by the turn in place at ``q1`` through neighbouring
+    slices to ``k1``, valid when each is certified free
+    (:meth:`cspace.turning.TurningCSpace.motion_free`). Slices and turns are built when the
+    planner first enters them. The returned path is expanded to primitive motions and
+    re-proved (:meth:`~cspace.turning.TurningCSpace.verify`).
+
+    Parameters are those of :func:`plan` (the start and goal orientations are the scene's);
+    ``slices`` is a :class:`cspace.turning.Slices` or a count (:func:`default_slices`).
+    """
+    from .turning import Slices, TurningCSpace
+
+    _, _, ou = _ompl()
+    if not (hasattr(scene, "obstacles") and hasattr(scene, "robot")):
+        raise ArgumentTypeError(f"planning with turns needs a Scene, got {type(scene).__name__}")
+    if not isinstance(slices, Slices):
+        if isinstance(slices, bool) or not isinstance(slices, (int, np.integer)):
+            raise ArgumentTypeError(f"slices must be an int or a Slices, got {type(slices).__name__}")
+        slices = default_slices(scene, int(slices))
+    b = _bounds(scene.bounds if bounds is None else bounds)
+    tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull)
+    tcs.bounds = b
+    q0 = np.array(scene.start if start is None else start, dtype=np.float64)
+    q1 = np.array(scene.goal if goal is None else goal, dtype=np.float64)
+    for what, q, k in (("start", q0, 0), ("goal", q1, slices.goal)):
+        if q.shape != (3,) or not np.isfinite(q).all() or not tcs.in_bounds(q):
+            raise InvalidArgumentError(f"{what} {q.tolist()} is not a finite point inside the "
+                                       f"bounds {b.tolist()}")
+        if not tcs.state_free(q, k):
+            raise InvalidArgumentError(f"{what} {q.tolist()} is in collision at its orientation "
+                                       f"(slice {k}; touching counts)")
+    n = len(slices)
+    reach = float(np.linalg.norm(scene.robot.vertices - scene.reference_point, axis=1).max())
+    w = max(reach, 1e-9 * float(np.ptp(b, axis=0).max())) * 2 * np.pi / n
+
+    def slice_of(state) -> int:
+        return int(np.floor(state[3] / w + 0.5)) % n
+
+    ob = _ompl()[0]
+    classes = _turning_classes()
+    _seed(ou, seed)
+    space = ob.RealVectorStateSpace(4)
+    rb = ob.RealVectorBounds(4)
+    for k in range(3):
+        rb.setLow(k, float(b[0, k]))
+        rb.setHigh(k, float(b[1, k]))
+    rb.setLow(3, -0.5 * w)
+    rb.setHigh(3, (n - 0.5) * w)
+    space.setBounds(rb)
+    si = ob.SpaceInformation(space)
+    checker = classes["checker"](si, tcs, slice_of)
+    si.setStateValidityChecker(checker)
+    mv = classes["motion"](si, tcs, slice_of)
+    si.setMotionValidator(mv)
+    si.setup()
+
+    def read(state) -> np.ndarray:
+        return np.array([state[0], state[1], state[2], state[3]], dtype=np.float64)
+
+    t0 = _time.perf_counter()
+    status, exact, raw, simp, solve_time = _solve(
+        si, [*q0.tolist(), 0.0], [*q1.tolist(), slices.goal * w], planner=planner, time=time,
+        optimize=optimize, planner_range=planner_range, simplify=simplify, read=read, dim=4)
+
+    def waypoints(P):
+        return tcs.expand([(p[:3], slice_of(p)) for p in P])
+
+    chosen, valid, simplified = [], False, False
+    for P, is_simplified in ((simp, True), (raw, False)):
+        if P is None or not len(P):
+            continue
+        wp = waypoints(P)
+        if tcs.verify(wp):
+            chosen, valid, simplified = wp, True, is_simplified
+            break
+        if not chosen:
+            chosen = wp
+    elapsed = _time.perf_counter() - t0
+    ks = np.array([k for _, k in chosen], dtype=np.int64)
+    return PlanResult(
+        path=np.array([q for q, _ in chosen], dtype=np.float64).reshape(-1, 3),
+        solved=bool(exact and valid and chosen and np.array_equal(chosen[-1][0], q1)
+                    and chosen[-1][1] == slices.goal),
+        exact=bool(exact),
+        valid=bool(valid),
+        planner=planner,
+        motion="exact",
+        time=elapsed,
+        solve_time=solve_time,
+        n_states=len(chosen),
+        status=status.asString(),
+        state_checks=int(checker.calls),
+        motion_checks=int(mv.calls),
+        simplified=simplified,
+        slices=ks,
+        orientations=tcs.orientations(ks) if len(ks) else np.zeros((0, 4)),
+        built={"slices": len(tcs.built_slices), "turns": len(tcs.built_turns),
+               "of": (n, n)},
+    )
+
+
+_TURNING: dict[str, type] = {}
+
+
+def _turning_classes() -> dict[str, type]:
+    if _TURNING:
+        return _TURNING
+    ob = _ompl()[0]
+
+    class TurningValidityChecker(ob.StateValidityChecker):
+        """``(x, y, z, s)`` is valid when the robot at slice ``slice_of(state)`` is free."""
+
+        def __init__(self, si, tcs, slice_of):
+            super().__init__(si)
+            self.tcs, self.slice_of, self.calls = tcs, slice_of, 0
+
+        def isValid(self, state) -> bool:
+            self.calls += 1
+            return bool(self.tcs.state_free((state[0], state[1], state[2]), self.slice_of(state)))
+
+    class TurningMotionValidator(ob.MotionValidator):
+        """A translation at the first state's slice, then a turn in place to the second's,
+        each certified (:meth:`TurningCSpace.motion_free`)."""
+
+        def __init__(self, si, tcs, slice_of):
+            super().__init__(si)
+            self.tcs, self.slice_of, self.calls = tcs, slice_of, 0
+
+        def checkMotion(self, s1, s2, *last_valid) -> bool:
+            self.calls += 1
+            return bool(self.tcs.motion_free((s1[0], s1[1], s1[2]), self.slice_of(s1),
+                                             (s2[0], s2[1], s2[2]), self.slice_of(s2)))
+
+    _TURNING["checker"] = TurningValidityChecker
+    _TURNING["motion"] = TurningMotionValidator
+    return _TURNING
+
+
+# --------------------------------------------------------------------------------------
+# OMPL.app's way, for comparison: sampled poses, discrete motion checks
+
+SAMPLED_SPACES = ("SE2", "SE3")
+
+
+def plan_sampled(scene, *, space: str = "SE3", planner: str = "RRTConnect", time: float = 1.0,
+                 seed: int | None = None, resolution: float = 0.01,
+                 simplify: bool = True) -> PlanResult:
+    """Plan as OMPL.app does, for comparison: poses checked by FCL, motions by sampling.
+
+    The state is the robot's pose: ``'SE3'`` (position and a rotation relative to the start
+    orientation) or ``'SE2'`` (x, y and a turn about z; z stays the start's). A state is
+    valid when FCL finds the robot mesh at that pose free of every obstacle body (solid
+    semantics, :class:`cspace.fcl_check.PoseCollider`); a motion is valid when OMPL's
+    default discrete validator finds the states every ``resolution`` times the space's
+    maximum extent valid. Nothing is proved between those states: a returned path can clip
+    a thin obstacle or a corner (:func:`cspace.fcl_check.pose_path_collisions` finds out).
+
+    Returns a :class:`PlanResult` whose ``valid`` is only OMPL's discrete verdict, with
+    ``orientations`` (world frame quaternions ``(x, y, z, w)``).
+    """
+    from scipy.spatial.transform import Rotation
+
+    from .fcl_check import PoseCollider
+
+    ob, og, ou = _ompl()
+    if space not in SAMPLED_SPACES:
+        raise InvalidArgumentError(f"{space!r} is not a valid space, must be one of {', '.join(SAMPLED_SPACES)}")
+    if planner not in planner_names():
+        raise InvalidArgumentError(f"{planner!r} is not a valid planner")
+    b = _bounds(scene.bounds)
+    start_rot = np.asarray(scene.start_rotation, dtype=np.float64)
+    rel_goal = Rotation.from_matrix(np.asarray(scene.goal_rotation) @ start_rot.T)
+    collider = PoseCollider(scene)
+    z0 = float(scene.start[2])
+    if space == "SE3":
+        sp = ob.SE3StateSpace()
+        rb = ob.RealVectorBounds(3)
+        for k in range(3):
+            rb.setLow(k, float(b[0, k]))
+            rb.setHigh(k, float(b[1, k]))
+    else:
+        if scene.start[2] != scene.goal[2]:
+            raise InvalidArgumentError("SE2 keeps z: the start and goal must share it")
+        rv = rel_goal.as_rotvec()
+        if abs(rv[0]) > 1e-12 or abs(rv[1]) > 1e-12:
+            raise InvalidArgumentError("SE2 turns about z: the goal rotation is not a turn about z")
+        sp = ob.SE2StateSpace()
+        rb = ob.RealVectorBounds(2)
+        for k in range(2):
+            rb.setLow(k, float(b[0, k]))
+            rb.setHigh(k, float(b[1, k]))
+    sp.setBounds(rb)
+
+    def pose(state) -> tuple[np.ndarray, np.ndarray]:
+        if space == "SE3":
+            r = state.rotation()
+            R = Rotation.from_quat([r.x, r.y, r.z, r.w]).as_matrix()
+            return np.array([state.getX(), state.getY(), state.getZ()]), R
+        R = Rotation.from_euler("z", state.getYaw()).as_matrix()
+        return np.array([state.getX(), state.getY(), z0]), R
+
+    lo, hi = b[0], b[1]
+
+    def valid(state) -> bool:
+        q, R = pose(state)
+        if not ((lo <= q) & (q <= hi)).all():
+            return False
+        return not bool(collider.collides(R[None], q[None])[0])
+
+    def setter(q, rot):
+        def fill(state):
+            if space == "SE3":
+                state.setXYZ(*map(float, q))
+                angle = rot.magnitude()
+                if angle > 0:
+                    state.rotation().setAxisAngle(*map(float, rot.as_rotvec() / angle), float(angle))
+                else:
+                    state.rotation().setIdentity()
+            else:
+                state.setXY(float(q[0]), float(q[1]))
+                state.setYaw(float(rot.as_rotvec()[2]))
+        return fill
+
+    def read(state) -> np.ndarray:
+        q, R = pose(state)
+        return np.concatenate([q, R.ravel()])
+
+    _seed(ou, seed)
+    si = ob.SpaceInformation(sp)
+    si.setStateValidityChecker(valid)
+    si.setStateValidityCheckingResolution(float(resolution))
+    si.setup()
+    t0 = _time.perf_counter()
+    status, exact, raw, simp, solve_time = _solve(
+        si, setter(scene.start, Rotation.identity()), setter(scene.goal, rel_goal),
+        planner=planner, time=time, optimize=False, planner_range=None, simplify=simplify,
+        read=read, dim=12)
+    rows = (simp if simp is not None else raw) if exact else np.zeros((0, 12))
+    simplified = simp is not None and exact
+    poses = [(row[:3], row[3:].reshape(3, 3)) for row in rows]
+    P = np.array([q for q, _ in poses], dtype=np.float64).reshape(-1, 3)
+    R = np.array([r @ start_rot for _, r in poses]).reshape(-1, 3, 3)
+    return PlanResult(
+        path=P, solved=bool(exact), exact=bool(exact), valid=bool(exact), planner=planner,
+        motion=f"discrete {space}", time=_time.perf_counter() - t0, solve_time=solve_time,
+        n_states=len(P), status=status.asString(), state_checks=0, motion_checks=0,
+        simplified=simplified,
+        orientations=Rotation.from_matrix(R).as_quat() if len(R) else np.zeros((0, 4)))

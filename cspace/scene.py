@@ -52,6 +52,9 @@ keys are errors (typos are caught); every number must be finite. A complete exam
     bounds = [[-3, -3, 0], [3, 3, 3]]  # lower and upper corner of the reference point's box
     start = [-2, 0, 1]                 # reference-point positions, inside the bounds
     goal = [2, 0, 1]
+    goal_orientation = [0, 0, 90]      # optional [roll, pitch, yaw] at the goal (as
+                                       # robot.orientation; default: the robot's), reached
+                                       # by planning with orientation slices
 
     [[obstacles]]                      # any number of obstacles, each a box or a mesh
     name = "left-post"                 # optional; default 'obstacle-<index>'; unique
@@ -79,8 +82,9 @@ problem is 3D when ``start.z`` is present. Positions are ``start.x/.y/.z``,
 ``goal.x/.y/.z``; rotations are axis-angle, ``start.axis.x/.y/.z`` and ``start.theta`` in
 radians (the axis is normalised, as OMPL's ``setAxisAngle`` does; a zero axis is the
 identity). In 2D (no ``start.z``) the robot turns by ``start.theta`` about z, z is 0 and the
-bounds' z range is ``[0, 0]``. The **start** rotation is the fixed orientation; a different
-goal rotation gives a warning. Bounds are ``volume.min.*`` / ``volume.max.*`` (all of them,
+bounds' z range is ``[0, 0]``. The **start** rotation is applied to the robot; the goal's is
+:attr:`Scene.goal_rotation`, reached by planning with orientation slices (a warning says
+translation-only planning keeps the start's). Bounds are ``volume.min.*`` / ``volume.max.*`` (all of them,
 or none); without them they are inferred as OMPL.app does: the bounding box of the world,
 grown to hold the start and goal. The world mesh is one obstacle body (it may hold several
 disjoint parts). The robot's reference point is OMPL.app's robot centre
@@ -110,7 +114,8 @@ parasollab/open-ppl and its math library (mathtool):
   rotational robot, with the rotations in units of pi (``MultiBody::GenerateBaseTransformation``:
   ``v * PI``; rx about x, ry about y, rz about z, composed as above). The first line is the
   start, the last the goal (intermediate lines are ignored, with a warning). The start
-  rotation is the fixed orientation; a different goal rotation gives a warning.
+  rotation is applied to the robot, the goal's kept as :attr:`Scene.goal_rotation` (with a
+  warning when it differs: translation-only planning keeps the start's).
 - The robot's reference point is its body origin, i.e. the mean of its file's vertex list.
 - Without a boundary line the bounds are the obstacles' bounding box padded by the robot's
   radius about its reference point, grown to hold the start and goal (with a warning).
@@ -228,6 +233,12 @@ class Scene:
         Lower and upper corner of the box the reference point moves in.
     start, goal : (3,) float64
         Reference-point positions, inside ``bounds``.
+    start_rotation, goal_rotation : (3, 3) float64
+        The robot's orientation at the start (already applied to :attr:`robot`) and the one
+        asked for at the goal, world frame (rotations acting on column vectors; default the
+        identity, the goal's default the start's). Translation-only planning keeps the start
+        orientation; planning with turns (:func:`cspace.ompl_plugin.plan` ``slices=``) reaches
+        the goal's.
     """
 
     name: str
@@ -238,18 +249,28 @@ class Scene:
     bounds: np.ndarray
     start: np.ndarray
     goal: np.ndarray
+    start_rotation: np.ndarray | None = None
+    goal_rotation: np.ndarray | None = None
 
     def __post_init__(self):
         where = f"scene {self.name!r}"
+        if self.start_rotation is None:
+            object.__setattr__(self, "start_rotation", np.eye(3))
+        if self.goal_rotation is None:
+            object.__setattr__(self, "goal_rotation", self.start_rotation)
         arrays = {}
         for key, shape in (("reference_point", (3,)), ("bounds", (2, 3)), ("start", (3,)),
-                           ("goal", (3,))):
+                           ("goal", (3,)), ("start_rotation", (3, 3)), ("goal_rotation", (3, 3))):
             a = np.array(getattr(self, key), dtype=np.float64)
             if a.shape != shape:
                 raise SceneError(f"{where}: {key} must have shape {shape}, got {a.shape}")
             if not np.isfinite(a).all():
                 raise SceneError(f"{where}: {key} is not finite: {a.tolist()}")
             arrays[key] = a
+        for key in ("start_rotation", "goal_rotation"):
+            r = arrays[key]
+            if not (np.abs(r @ r.T - np.eye(3)).max() <= 1e-9 and np.linalg.det(r) > 0):
+                raise SceneError(f"{where}: {key} is not a rotation matrix: {r.tolist()}")
         lo, hi = arrays["bounds"]
         if (lo > hi).any():
             raise SceneError(f"{where}: bounds lower corner {lo.tolist()} exceeds the upper "
@@ -419,7 +440,7 @@ def _obj_vertex_mean(path: Path) -> np.ndarray | None:
 _TOP_KEYS = ("name", "robot", "planning", "obstacles")
 _ROBOT_KEYS = ("mesh", "box", "scale", "orientation", "reference_point")
 _OBSTACLE_KEYS = ("name", "mesh", "box", "scale", "position", "orientation")
-_PLANNING_KEYS = ("bounds", "start", "goal")
+_PLANNING_KEYS = ("bounds", "start", "goal", "goal_orientation")
 
 
 class _Toml:
@@ -512,7 +533,7 @@ def _load_toml(path: Path, notes: list[str]) -> Scene:
     reference = _transform(reference[None], rotation)[0]
 
     # Planning problem.
-    plan = t.table(doc["planning"], "planning", _PLANNING_KEYS, required=_PLANNING_KEYS)
+    plan = t.table(doc["planning"], "planning", _PLANNING_KEYS, required=_PLANNING_KEYS[:3])
     raw = plan["bounds"]
     if not isinstance(raw, list) or len(raw) != 2:
         raise t.error("planning.bounds", "expected [[x0, y0, z0], [x1, y1, z1]] (two corners)")
@@ -553,9 +574,11 @@ def _load_toml(path: Path, notes: list[str]) -> Scene:
         obstacles.append(Body(obstacle_name, _transform(vertices, rotation, position), faces,
                               source))
 
+    goal_rotation = (_euler_xyz(t.vector(plan["goal_orientation"], "planning.goal_orientation"))
+                     if "goal_orientation" in plan else rotation)
     return Scene(name=name, path=path, obstacles=tuple(obstacles), robot=robot,
                  reference_point=reference, bounds=bounds, start=ends["start"],
-                 goal=ends["goal"])
+                 goal=ends["goal"], start_rotation=rotation, goal_rotation=goal_rotation)
 
 
 def _toml_shape(t: _Toml, spec: dict, key: str, base: Path):
@@ -641,7 +664,8 @@ def _load_cfg(path: Path, notes: list[str]) -> Scene:
     r_start, r_goal = rotation("start"), rotation("goal")
     if not np.allclose(r_start, r_goal, rtol=0.0, atol=1e-12):
         notes.append(f"{path}: [problem] the goal rotation differs from the start rotation; "
-                     "translation-only planning keeps the start orientation")
+                     "translation-only planning keeps the start orientation (plan with "
+                     "orientation slices to reach it)")
 
     base = path.parent
     world_path = (base / text("world")).resolve()
@@ -684,7 +708,8 @@ def _load_cfg(path: Path, notes: list[str]) -> Scene:
 
     name = problem.get("name", "").strip() or path.stem
     return Scene(name=name, path=path, obstacles=(world,), robot=robot,
-                 reference_point=reference, bounds=bounds, start=start, goal=goal)
+                 reference_point=reference, bounds=bounds, start=start, goal=goal,
+                 start_rotation=r_start, goal_rotation=r_goal)
 
 
 # --------------------------------------------------------------------------------------
@@ -892,7 +917,8 @@ def _load_parasol(path: Path, notes: list[str]) -> Scene:
     (start_line, start, r_start), (goal_line, goal, r_goal) = configs[0], configs[-1]
     if not np.allclose(r_start, r_goal, rtol=0.0, atol=1e-12):
         notes.append(f"{query_path}:{goal_line}: the goal orientation differs from the start's "
-                     f"(line {start_line}); translation-only planning keeps the start orientation")
+                     f"(line {start_line}); translation-only planning keeps the start orientation "
+                     "(plan with orientation slices to reach it)")
 
     robot = Body(Path(robot_name).name, _transform(robot_v, r_start), robot_f, str(mesh_path))
     reference = _transform(centre[None], r_start)[0]
@@ -913,4 +939,5 @@ def _load_parasol(path: Path, notes: list[str]) -> Scene:
                                         f"box {bounds.tolist()} of {env_path.name}")
 
     return Scene(name=env_path.stem, path=path, obstacles=tuple(obstacles), robot=robot,
-                 reference_point=reference, bounds=bounds, start=start, goal=goal)
+                 reference_point=reference, bounds=bounds, start=start, goal=goal,
+                 start_rotation=r_start, goal_rotation=r_goal)

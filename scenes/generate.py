@@ -1,6 +1,6 @@
 """Regenerate the shipped scenes: ``python scenes/generate.py`` (``--check`` only compares).
 
-Writes ``window.toml``, ``comb.toml``, ``maze.toml``, ``cavity.toml`` and the robot mesh
+Writes ``window.toml``, ``comb.toml``, ``maze.toml``, ``cavity.toml``, ``piano.toml`` and the robot mesh
 ``meshes/octahedron.obj`` beside this script. Every obstacle is an axis-aligned box (so exact
 C-obstacles exist for each through convex ⊕ convex sums), at most 40 per scene. The robots
 are convex with exact coordinates: the elongated octahedron ``meshes/octahedron.obj``
@@ -222,6 +222,29 @@ def cavity() -> str:
                       start=(-2.6, 0.0, 1.0), goal=(0.6, 0.6, 0.6), boxes=boxes)
 
 
+def piano() -> str:
+    """A piano longer than the doorway is wide: it passes only turned, so it must turn."""
+    length, depth, height = 1.8, 0.7, 0.8
+    door, t = 1.0, 0.2  # doorway width, wall thickness
+    boxes = [
+        box("wall-left", (-4.5, -t / 2, 0.0), (-door / 2, t / 2, 2.0)),
+        box("wall-right", (door / 2, -t / 2, 0.0), (4.5, t / 2, 2.0)),
+    ]
+    header = [
+        f"A piano {_num(length)} long, {_num(depth)} deep and {_num(height)} high, and a wall "
+        f"{_num(t)} thick across y = 0 with a doorway",
+        f"{_num(door)} wide (x in [{_num(-door / 2)}, {_num(door / 2)}]). The piano starts and "
+        "ends with its long side along x: it cannot",
+        "pass without turning (the doorway is narrower than the piano is long); turned by 90",
+        f"degrees it passes with {_num((door - depth) / 2)} to spare per side. The wall reaches "
+        "beyond the bounds, so the doorway is the",
+        "only way. Planned with orientation slices (cspace plan --slices); flat: z is fixed.",
+    ]
+    return scene_toml("piano", header, {"box": (length, depth, height)},
+                      bounds=((-2.5, -2.5, 0.5), (2.5, 2.5, 0.5)),
+                      start=(-1.2, -1.6, 0.5), goal=(1.2, 1.6, 0.5), boxes=boxes)
+
+
 def render() -> dict[str, str]:
     """Relative path -> text of every generated file."""
     return {
@@ -230,6 +253,7 @@ def render() -> dict[str, str]:
         "comb.toml": comb(),
         "maze.toml": maze(),
         "cavity.toml": cavity(),
+        "piano.toml": piano(),
     }
 
 
