@@ -260,7 +260,7 @@ def _plan(args: argparse.Namespace) -> int:
     path_out = _out(args.output, ("txt", "csv", "npy", "path"), "-o")
     result_out = _out(args.result, ("json",), "--result")
     html_out = _out(args.html, ("html",), "--html")
-    if args.slices is not None:
+    if args.slices is not None or args.orientations is not None:
         return _plan_turning(args, path_out, result_out, html_out)
     m = _model(args)
     if args.explain:
@@ -366,23 +366,32 @@ def _plan_turning(args: argparse.Namespace, path_out, result_out, html_out) -> i
     """``cspace plan --slices N``: translations and certified turns over orientation slices."""
     import numpy as np
 
+    from .errors import InvalidArgumentError
     from .ompl_plugin import default_slices, plan_turning
     from .scene import load_scene
+    from .turning import Orientations
 
+    if args.slices is not None and args.orientations is not None:
+        raise InvalidArgumentError("--slices and --orientations are alternatives: give one")
     scene = load_scene(args.scene)
     cache = None if args.no_cache else (args.cache_dir or True)
-    slices = default_slices(scene, args.slices)
+    if args.slices is not None:
+        slices = default_slices(scene, args.slices)
+    else:
+        rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
+        slices = Orientations.uniform(args.orientations, goal_rotation=rel)
     r = plan_turning(scene, slices, planner=args.planner, time=args.time, seed=args.seed,
                      cache=cache, robot_hull=args.robot_hull)
     status = "solved" if r.solved else f"NOT solved ({r.status})"
     turns = int((np.diff(r.slices) != 0).sum()) if len(r.slices) else 0
-    print(f"{scene.name}: {args.planner} with {len(slices)} orientation slices {status} in "
+    print(f"{scene.name}: {args.planner} with {len(slices)} orientations {status} in "
           f"{r.time:.2f} s; {len(r.path)} waypoints ({turns} turns between neighbouring "
-          f"slices), length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
+          f"orientations), length {r.length:.4g}; exact re-check: "
+          f"{'valid' if r.valid else 'INVALID'}")
     if args.explain:
         print(f"  {slices!r}")
-        print(f"  built lazily: {r.built['slices']} of {len(slices)} slices, {r.built['turns']} "
-              f"of {len(slices)} turns")
+        print(f"  built lazily: {r.built['slices']} of {r.built['of'][0]} orientations' "
+              f"C-spaces, {r.built['turns']} of {r.built['of'][1]} turns'")
     fcl = None
     if args.fcl_check and r.solved:
         from .fcl_check import pose_path_collisions
@@ -453,6 +462,16 @@ def _view(args: argparse.Namespace) -> int:
               "shows those obstacles without them", file=sys.stderr)
         return 1
     return 0
+
+
+def _count(text: str) -> int:
+    try:
+        n = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if n < 0:
+        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {n}")
+    return n
 
 
 def _slices(text: str) -> int:
@@ -587,6 +606,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="let the robot turn: plan over N orientation slices about the axis of "
                         "the goal's rotation (z when the goal keeps the start's), every "
                         "translation and turn in place certified")
+    p.add_argument("--orientations", type=_count, default=None, metavar="N",
+                   help="let a free-flying robot turn: plan over the 24 axis-aligned "
+                        "orientations, N near-uniform ones of SO(3) and the goal's, each "
+                        "linked to its nearest, every motion certified (0: the 24 alone)")
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
     p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),
                    help="valid-state sampler of PRM-like planners: 'narrow' draws half its "

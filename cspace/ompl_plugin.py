@@ -673,28 +673,37 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
                  cache=None, robot_hull: bool = False) -> PlanResult:
     """Plan translations and turns in place over orientation slices, every motion certified.
 
-    The OMPL state is ``(x, y, z, s)``: the reference point and a slice coordinate ``s``
-    (slice ``k`` at ``s = k w``, ``w`` the arc a step of ``2 pi / n`` moves the robot's
-    farthest point, so turning and translating weigh alike). A state is valid when the robot
-    at slice ``round(s / w)`` is free there; a motion from ``(q0, k0)`` to ``(q1, k1)`` is
-    the translation at ``k0`` followed by the turn in place at ``q1`` through neighbouring
-    slices to ``k1``, valid when each is certified free
+    A state is a position and an orientation of the set: for :class:`~cspace.turning.Slices`
+    (turns about one axis) the OMPL state is ``(x, y, z, s)`` with slice ``k`` at
+    ``s = k w`` (``w`` the arc a step of ``2 pi / n`` moves the robot's farthest point, so
+    turning and translating weigh alike) and ``round(s / w)`` its slice; for
+    :class:`~cspace.turning.Orientations` (free flying) it is an SE(3) state whose rotation
+    is snapped to the nearest orientation of the set. A state is valid when the robot at
+    that orientation is free there; a motion from ``(q0, k0)`` to ``(q1, k1)`` is the
+    translation at ``k0`` followed by the turn in place at ``q1`` through neighbouring
+    orientations to ``k1``, valid when each is certified free
     (:meth:`cspace.turning.TurningCSpace.motion_free`). Slices and turns are built when the
     planner first enters them. The returned path is expanded to primitive motions and
     re-proved (:meth:`~cspace.turning.TurningCSpace.verify`).
 
     Parameters are those of :func:`plan` (the start and goal orientations are the scene's);
-    ``slices`` is a :class:`cspace.turning.Slices` or a count (:func:`default_slices`).
+    ``slices`` is a :class:`~cspace.turning.Slices`, an
+    :class:`~cspace.turning.Orientations`, or a count (:func:`default_slices`).
     """
-    from .turning import Slices, TurningCSpace
+    from .turning import Orientations, Slices, TurningCSpace
 
-    _, _, ou = _ompl()
+    ob, _, ou = _ompl()
     if not (hasattr(scene, "obstacles") and hasattr(scene, "robot")):
         raise ArgumentTypeError(f"planning with turns needs a Scene, got {type(scene).__name__}")
-    if not isinstance(slices, Slices):
+    if not isinstance(slices, (Slices, Orientations)):
         if isinstance(slices, bool) or not isinstance(slices, (int, np.integer)):
-            raise ArgumentTypeError(f"slices must be an int or a Slices, got {type(slices).__name__}")
+            raise ArgumentTypeError("slices must be an int, a Slices or an Orientations, got "
+                                    f"{type(slices).__name__}")
         slices = default_slices(scene, int(slices))
+    rel_goal = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
+    if not np.allclose(slices.rotation(slices.goal), rel_goal, rtol=0.0, atol=1e-9):
+        raise InvalidArgumentError("the orientation set's goal is not the scene's goal rotation "
+                                   "(relative to its start)")
     b = _bounds(scene.bounds if bounds is None else bounds)
     tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull)
     tcs.bounds = b
@@ -706,48 +715,32 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
                                        f"bounds {b.tolist()}")
         if not tcs.state_free(q, k):
             raise InvalidArgumentError(f"{what} {q.tolist()} is in collision at its orientation "
-                                       f"(slice {k}; touching counts)")
+                                       f"({slices.label(k)}; touching counts)")
     n = len(slices)
-    reach = float(np.linalg.norm(scene.robot.vertices - scene.reference_point, axis=1).max())
-    w = max(reach, 1e-9 * float(np.ptp(b, axis=0).max())) * 2 * np.pi / n
-
-    def slice_of(state) -> int:
-        return int(np.floor(state[3] / w + 0.5)) % n
-
-    ob = _ompl()[0]
+    space, start_state, goal_state, position, orientation_of = (
+        _yaw_space if isinstance(slices, Slices) else _flying_space)(scene, slices, b, q0, q1)
     classes = _turning_classes()
     _seed(ou, seed)
-    space = ob.RealVectorStateSpace(4)
-    rb = ob.RealVectorBounds(4)
-    for k in range(3):
-        rb.setLow(k, float(b[0, k]))
-        rb.setHigh(k, float(b[1, k]))
-    rb.setLow(3, -0.5 * w)
-    rb.setHigh(3, (n - 0.5) * w)
-    space.setBounds(rb)
     si = ob.SpaceInformation(space)
-    checker = classes["checker"](si, tcs, slice_of)
+    checker = classes["checker"](si, tcs, position, orientation_of)
     si.setStateValidityChecker(checker)
-    mv = classes["motion"](si, tcs, slice_of)
+    mv = classes["motion"](si, tcs, position, orientation_of)
     si.setMotionValidator(mv)
     si.setup()
 
     def read(state) -> np.ndarray:
-        return np.array([state[0], state[1], state[2], state[3]], dtype=np.float64)
+        return np.array([*position(state), orientation_of(state)], dtype=np.float64)
 
     t0 = _time.perf_counter()
     status, exact, raw, simp, solve_time = _solve(
-        si, [*q0.tolist(), 0.0], [*q1.tolist(), slices.goal * w], planner=planner, time=time,
-        optimize=optimize, planner_range=planner_range, simplify=simplify, read=read, dim=4)
-
-    def waypoints(P):
-        return tcs.expand([(p[:3], slice_of(p)) for p in P])
+        si, start_state, goal_state, planner=planner, time=time, optimize=optimize,
+        planner_range=planner_range, simplify=simplify, read=read, dim=4)
 
     chosen, valid, simplified = [], False, False
     for P, is_simplified in ((simp, True), (raw, False)):
         if P is None or not len(P):
             continue
-        wp = waypoints(P)
+        wp = tcs.expand([(p[:3], int(p[3])) for p in P])
         if tcs.verify(wp):
             chosen, valid, simplified = wp, True, is_simplified
             break
@@ -755,6 +748,7 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
             chosen = wp
     elapsed = _time.perf_counter() - t0
     ks = np.array([k for _, k in chosen], dtype=np.int64)
+    links = n if isinstance(slices, Slices) else sum(map(len, slices.links)) // 2
     return PlanResult(
         path=np.array([q for q, _ in chosen], dtype=np.float64).reshape(-1, 3),
         solved=bool(exact and valid and chosen and np.array_equal(chosen[-1][0], q1)
@@ -773,8 +767,68 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
         slices=ks,
         orientations=tcs.orientations(ks) if len(ks) else np.zeros((0, 4)),
         built={"slices": len(tcs.built_slices), "turns": len(tcs.built_turns),
-               "of": (n, n)},
+               "of": (n, links)},
     )
+
+
+def _yaw_space(scene, slices, b: np.ndarray, q0: np.ndarray, q1: np.ndarray):
+    """``(x, y, z, s)`` over turns about one axis: the space, start and goal coordinates,
+    and readers of a state's position and slice."""
+    ob = _ompl()[0]
+    n = len(slices)
+    reach = float(np.linalg.norm(scene.robot.vertices - scene.reference_point, axis=1).max())
+    w = max(reach, 1e-9 * float(np.ptp(b, axis=0).max())) * 2 * np.pi / n
+    space = ob.RealVectorStateSpace(4)
+    rb = ob.RealVectorBounds(4)
+    for k in range(3):
+        rb.setLow(k, float(b[0, k]))
+        rb.setHigh(k, float(b[1, k]))
+    rb.setLow(3, -0.5 * w)
+    rb.setHigh(3, (n - 0.5) * w)
+    space.setBounds(rb)
+
+    def position(state) -> tuple:
+        return (state[0], state[1], state[2])
+
+    def slice_of(state) -> int:
+        return int(np.floor(state[3] / w + 0.5)) % n
+
+    return (space, [*q0.tolist(), 0.0], [*q1.tolist(), slices.goal * w], position, slice_of)
+
+
+def _flying_space(scene, orientations, b: np.ndarray, q0: np.ndarray, q1: np.ndarray):
+    """SE(3) with rotations snapped to the nearest orientation of the set: the space, start
+    and goal fillers, and readers of a state's position and orientation index."""
+    from scipy.spatial.transform import Rotation
+
+    ob = _ompl()[0]
+    space = ob.SE3StateSpace()
+    rb = ob.RealVectorBounds(3)
+    for k in range(3):
+        rb.setLow(k, float(b[0, k]))
+        rb.setHigh(k, float(b[1, k]))
+    space.setBounds(rb)
+
+    def filler(q, k):
+        rv = Rotation.from_matrix(orientations.rotation(k)).as_rotvec()
+        angle = float(np.linalg.norm(rv))
+
+        def fill(state):
+            state.setXYZ(*map(float, q))
+            if angle > 0:
+                state.rotation().setAxisAngle(*map(float, rv / angle), angle)
+            else:
+                state.rotation().setIdentity()
+        return fill
+
+    def position(state) -> tuple:
+        return (state.getX(), state.getY(), state.getZ())
+
+    def orientation_of(state) -> int:
+        r = state.rotation()
+        return orientations.nearest((r.x, r.y, r.z, r.w))
+
+    return space, filler(q0, 0), filler(q1, orientations.goal), position, orientation_of
 
 
 _TURNING: dict[str, type] = {}
@@ -786,28 +840,29 @@ def _turning_classes() -> dict[str, type]:
     ob = _ompl()[0]
 
     class TurningValidityChecker(ob.StateValidityChecker):
-        """``(x, y, z, s)`` is valid when the robot at slice ``slice_of(state)`` is free."""
+        """A state is valid when the robot at its orientation (``orientation_of(state)``) is
+        free at its position (``position(state)``)."""
 
-        def __init__(self, si, tcs, slice_of):
+        def __init__(self, si, tcs, position, orientation_of):
             super().__init__(si)
-            self.tcs, self.slice_of, self.calls = tcs, slice_of, 0
+            self.tcs, self.position, self.orientation_of, self.calls = tcs, position, orientation_of, 0
 
         def isValid(self, state) -> bool:
             self.calls += 1
-            return bool(self.tcs.state_free((state[0], state[1], state[2]), self.slice_of(state)))
+            return bool(self.tcs.state_free(self.position(state), self.orientation_of(state)))
 
     class TurningMotionValidator(ob.MotionValidator):
-        """A translation at the first state's slice, then a turn in place to the second's,
-        each certified (:meth:`TurningCSpace.motion_free`)."""
+        """A translation at the first state's orientation, then a turn in place to the
+        second's, each certified (:meth:`TurningCSpace.motion_free`)."""
 
-        def __init__(self, si, tcs, slice_of):
+        def __init__(self, si, tcs, position, orientation_of):
             super().__init__(si)
-            self.tcs, self.slice_of, self.calls = tcs, slice_of, 0
+            self.tcs, self.position, self.orientation_of, self.calls = tcs, position, orientation_of, 0
 
         def checkMotion(self, s1, s2, *last_valid) -> bool:
             self.calls += 1
-            return bool(self.tcs.motion_free((s1[0], s1[1], s1[2]), self.slice_of(s1),
-                                             (s2[0], s2[1], s2[2]), self.slice_of(s2)))
+            return bool(self.tcs.motion_free(self.position(s1), self.orientation_of(s1),
+                                             self.position(s2), self.orientation_of(s2)))
 
     _TURNING["checker"] = TurningValidityChecker
     _TURNING["motion"] = TurningMotionValidator

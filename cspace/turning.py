@@ -2,8 +2,10 @@
 
 Translational C-obstacles answer "is the robot free at ``q``" for one orientation. A robot
 that must turn is planned over a finite set of orientations (:class:`Slices`: angles about
-one axis through the reference point, the start's angle 0 and the goal's included). Two
-kinds of motion are certified, exactly and conservatively:
+one axis through the reference point, the start's angle 0 and the goal's included;
+:class:`Orientations`: a near-uniform set of SO(3) for a free-flying robot, the start and
+goal included, each linked to its nearest). Two kinds of motion are certified, exactly and
+conservatively:
 
 - a **translation** within slice ``k``: the segment misses the C-obstacles of the robot at
   ``k`` (:meth:`cspace.CSpace.segment_free`, as for a robot that does not turn);
@@ -37,7 +39,7 @@ import numpy as np
 from .errors import InvalidArgumentError
 from .transform import axis_angle, transform
 
-__all__ = ["Slices", "swept_points", "TurningCSpace"]
+__all__ = ["Slices", "Orientations", "swept_points", "TurningCSpace"]
 
 # Relative slack over the float64 rounding of a rotated point (Rodrigues' matrix and the
 # product each err by a few ulps, 2**-52 each): 2**-40 covers them a thousand times over.
@@ -108,6 +110,13 @@ class Slices:
         """``(3, 3)`` rotation of slice ``k`` (float64)."""
         return axis_angle(self.axis, float(self.angles[k]))
 
+    def label(self, k: int) -> str:
+        return f"{math.degrees(self.angles[k]):.6g} deg"
+
+    def neighbours(self, i: int, j: int) -> bool:
+        n = len(self)
+        return (j - i) % n in (1, n - 1)
+
     def step(self, i: int, j: int) -> float:
         """The angle (radians, > 0) of the turn between neighbours ``i`` and ``j``."""
         n = len(self)
@@ -130,11 +139,163 @@ class Slices:
         return [(i - s) % n for s in range(down + 1)]
 
 
+# The 24 rotations of the cube: axis-aligned scenes often need exactly these.
+def _cube_rotations() -> np.ndarray:
+    out = []
+    for perm in ((0, 1, 2), (1, 2, 0), (2, 0, 1), (1, 0, 2), (0, 2, 1), (2, 1, 0)):
+        for signs in np.ndindex(2, 2, 2):
+            M = np.zeros((3, 3))
+            for row, (col, sg) in enumerate(zip(perm, signs)):
+                M[row, col] = -1.0 if sg else 1.0
+            if np.linalg.det(M) > 0:
+                out.append(M)
+    return np.array(out)
+
+
+def _super_fibonacci(n: int) -> np.ndarray:
+    """``(n, 4)`` unit quaternions ``(x, y, z, w)`` spread near-uniformly over SO(3)
+    (Alexa, "Super-Fibonacci spirals", CVPR 2022)."""
+    phi, psi = math.sqrt(2.0), 1.533751168755204288118041
+    s = np.arange(n) + 0.5
+    r, R = np.sqrt(s / n), np.sqrt(1.0 - s / n)
+    a, b = 2 * math.pi * s / phi, 2 * math.pi * s / psi
+    return np.stack([r * np.sin(a), r * np.cos(a), R * np.sin(b), R * np.cos(b)], axis=1)
+
+
+@dataclass(frozen=True, eq=False)
+class Orientations:
+    """A near-uniform set of orientations in SO(3), for a robot that flies freely.
+
+    Attributes
+    ----------
+    rotations : (n, 3, 3) float64
+        Relative to the start orientation; ``rotations[0]`` is the identity (the start).
+    links : tuple of tuple of int
+        The neighbours of each orientation (symmetric; the graph is connected). A turn in
+        place between neighbours rotates about the axis of ``R_j R_i^T`` by its angle (at
+        most ``max_step``), the shortest arc.
+    goal : int
+        The goal orientation's index.
+    """
+
+    rotations: np.ndarray
+    links: tuple
+    goal: int = 0
+
+    def __post_init__(self):
+        from scipy.spatial.transform import Rotation
+
+        R = np.asarray(self.rotations, dtype=np.float64).reshape(-1, 3, 3)
+        if len(R) < 2 or not np.allclose(R[0], np.eye(3), atol=0.0):
+            raise InvalidArgumentError("orientations: need at least 2, the first the identity")
+        links = tuple(tuple(sorted(set(int(j) for j in row))) for row in self.links)
+        if len(links) != len(R) or any(i in row or not all(0 <= j < len(R) for j in row)
+                                        for i, row in enumerate(links)):
+            raise InvalidArgumentError("orientations: links must name other orientations, one "
+                                       "row per orientation")
+        if any(i not in links[j] for i, row in enumerate(links) for j in row):
+            raise InvalidArgumentError("orientations: links must be symmetric")
+        if not 0 <= self.goal < len(R):
+            raise InvalidArgumentError(f"orientations: goal {self.goal} is not one of {len(R)}")
+        object.__setattr__(self, "rotations", R)
+        object.__setattr__(self, "links", links)
+        object.__setattr__(self, "_quats", Rotation.from_matrix(R).as_quat())
+        if len(self._reach(0)) != len(R):
+            raise InvalidArgumentError("orientations: the neighbour graph is not connected")
+
+    @classmethod
+    def uniform(cls, n: int, *, goal_rotation=None, degree: int = 8) -> "Orientations":
+        """The identity, the goal, the cube's 24 rotations and ``n`` super-Fibonacci ones
+        (duplicates within 1e-9 rad dropped), each linked to its ``degree`` nearest (by
+        rotation angle), symmetrically."""
+        from scipy.spatial.transform import Rotation
+
+        if int(n) != n or n < 0:
+            raise InvalidArgumentError(f"orientations: n must be a whole number >= 0, got {n!r}")
+        goal = np.eye(3) if goal_rotation is None else np.asarray(goal_rotation, dtype=np.float64)
+        cand = np.concatenate([np.eye(3)[None], goal[None], _cube_rotations(),
+                               Rotation.from_quat(_super_fibonacci(int(n))).as_matrix()])
+        quats = Rotation.from_matrix(cand).as_quat()
+        keep: list[int] = []
+        for i, q in enumerate(quats):
+            if not keep or np.abs(quats[keep] @ q).max() < math.cos(0.5e-9):
+                keep.append(i)
+        R = cand[keep]
+        R[0] = np.eye(3)
+        Q = quats[keep]
+        angle = 2 * np.arccos(np.clip(np.abs(Q @ Q.T), 0.0, 1.0))
+        np.fill_diagonal(angle, np.inf)
+        d = min(int(degree), len(R) - 1)
+        near = np.argsort(angle, axis=1)[:, :d]
+        links = [set(row.tolist()) for row in near]
+        for i, row in enumerate(near):
+            for j in row.tolist():
+                links[j].add(i)
+        g = 0 if goal_rotation is None else int(np.argmax(np.abs(Q @ Rotation.from_matrix(goal).as_quat())))
+        return cls(R, tuple(tuple(sorted(x)) for x in links), g)
+
+    def __len__(self) -> int:
+        return len(self.rotations)
+
+    def __repr__(self) -> str:
+        steps = [self.step(i, j) for i, row in enumerate(self.links) for j in row]
+        return (f"Orientations({len(self)} in SO(3), {sum(map(len, self.links)) // 2} links, "
+                f"steps up to {math.degrees(max(steps)):.3g} deg, goal {self.goal})")
+
+    def rotation(self, k: int) -> np.ndarray:
+        return self.rotations[k]
+
+    def label(self, k: int) -> str:
+        return f"orientation {k}"
+
+    def neighbours(self, i: int, j: int) -> bool:
+        return j in self.links[i]
+
+    def step(self, i: int, j: int) -> float:
+        """The angle (radians) of the turn between neighbours ``i`` and ``j``."""
+        if not self.neighbours(i, j):
+            raise InvalidArgumentError(f"orientations {i} and {j} are not neighbours")
+        c = abs(float(self._quats[i] @ self._quats[j]))
+        return 2.0 * math.acos(min(1.0, c))
+
+    def nearest(self, quaternion) -> int:
+        """The orientation closest to a unit quaternion ``(x, y, z, w)``."""
+        return int(np.argmax(np.abs(self._quats @ np.asarray(quaternion, dtype=np.float64))))
+
+    def _reach(self, i: int) -> dict:
+        """Dijkstra from ``i`` over the links, by turn angle: ``{node: previous}``."""
+        import heapq
+
+        prev, dist, heap = {i: -1}, {i: 0.0}, [(0.0, i)]
+        done = set()
+        while heap:
+            d, a = heapq.heappop(heap)
+            if a in done:
+                continue
+            done.add(a)
+            for b in self.links[a]:
+                nd = d + 2.0 * math.acos(min(1.0, abs(float(self._quats[a] @ self._quats[b]))))
+                if nd < dist.get(b, math.inf):
+                    dist[b], prev[b] = nd, a
+                    heapq.heappush(heap, (nd, b))
+        return prev
+
+    def way(self, i: int, j: int) -> list[int]:
+        """The orientations from ``i`` to ``j`` through neighbours, turning the least angle."""
+        if i == j:
+            return [i]
+        prev = self._reach(i)
+        out = [j]
+        while out[-1] != i:
+            out.append(prev[out[-1]])
+        return out[::-1]
+
+
 def _turned(vertices: np.ndarray, c: np.ndarray, R: np.ndarray) -> np.ndarray:
     return transform(np.asarray(vertices, dtype=np.float64) - c, R, c)
 
 
-def swept_points(vertices: np.ndarray, reference_point, slices: Slices, i: int,
+def swept_points(vertices: np.ndarray, reference_point, slices, i: int,
                  j: int) -> np.ndarray:
     """Points whose convex hull holds the robot's part ``vertices`` (robot frame) at every
     instant of the turn in place from slice ``i`` to its neighbour ``j``.
@@ -166,7 +327,7 @@ class TurningCSpace:
     ----------
     scene : Scene
         Obstacles, robot (start orientation applied), reference point, bounds.
-    slices : Slices
+    slices : Slices or Orientations
     cache : COCache, path, True, or None
         The disk cache every slice's and turn's C-obstacles go through
         (:func:`cspace.model.model_scene`).
@@ -178,9 +339,13 @@ class TurningCSpace:
     built_slices, built_turns : dict
         The C-spaces made so far: ``{k: CSpace}``, ``{(i, j): CSpace}`` with ``i < j``
         (a turn's C-space serves both directions).
+    far_answers : int
+        Queries answered free before any C-space: the robot's ball (radius: its farthest
+        vertex from the reference point, which no turn changes) misses every obstacle's box
+        there. So a slice or a turn is built only where the robot comes near an obstacle.
     """
 
-    def __init__(self, scene, slices: Slices, *, cache=None, robot_hull: bool = False):
+    def __init__(self, scene, slices, *, cache=None, robot_hull: bool = False):
         self.scene = scene
         self.slices = slices
         self.cache = cache
@@ -189,6 +354,18 @@ class TurningCSpace:
         self.built_slices: dict = {}
         self.built_turns: dict = {}
         self._parts = None
+        # Broad phase, before anything is built: turning about the reference point keeps
+        # every robot point within ``reach`` of it, so a robot whose ball of that radius
+        # misses every obstacle's box is free at any orientation. The ball is grown by a
+        # relative 1e-9 of the coordinates' size, far above the distances' float rounding.
+        V = np.asarray(scene.robot.vertices, dtype=np.float64)
+        c = np.asarray(scene.reference_point, dtype=np.float64)
+        boxes = np.array([b.bounds for b in scene.obstacles]).reshape(-1, 2, 3)
+        size = max(float(np.abs(boxes).max(initial=0.0)), float(np.abs(self.bounds).max()),
+                   float(np.abs(V).max()), float(np.abs(c).max()))
+        self._box_lo, self._box_hi = boxes[:, 0], boxes[:, 1]
+        self._reach = float(np.sqrt(((V - c) ** 2).sum(axis=1)).max()) * (1 + 1e-9) + 1e-9 * size
+        self.far_answers = 0
 
     def __repr__(self) -> str:
         return (f"TurningCSpace({self.scene.name!r}, {self.slices!r}, built: "
@@ -214,7 +391,7 @@ class TurningCSpace:
         if cs is None:
             robot = self.scene.robot
             V = _turned(robot.vertices, self.scene.reference_point, self.slices.rotation(k))
-            name = f"{robot.name} at {math.degrees(self.slices.angles[k]):.6g} deg"
+            name = f"{robot.name} at {self.slices.label(k)}"
             cs = self.built_slices[k] = self._cspace(self._scene_with(name, V, robot.faces),
                                                      self.robot_hull)
         return cs
@@ -250,9 +427,8 @@ class TurningCSpace:
             for p, V in enumerate(self._robot_parts()):
                 P = swept_points(V, self.scene.reference_point, self.slices, *key)
                 hull = ConvexHull(P)
-                name = (f"{self.scene.robot.name} part {p} turning "
-                        f"{math.degrees(self.slices.angles[key[0]]):.6g}-"
-                        f"{math.degrees(self.slices.angles[key[1]]):.6g} deg")
+                name = (f"{self.scene.robot.name} part {p} turning from "
+                        f"{self.slices.label(key[0])} to {self.slices.label(key[1])}")
                 scene = self._scene_with(name, P, _outward(P, hull))
                 obstacles += list(self._cspace(scene, True).obstacles)
             cs = self.built_turns[key] = CSpace(obstacles, bounds=self.bounds, name="turn")
@@ -264,22 +440,34 @@ class TurningCSpace:
         q = np.asarray(q, dtype=np.float64)
         return bool((self.bounds[0] <= q).all() and (q <= self.bounds[1]).all())
 
+    def _far(self, lo, hi) -> bool:
+        """The robot's ball about every point of the box ``[lo, hi]`` misses every obstacle's
+        box (then it is free there at every orientation)."""
+        gap = np.maximum(np.maximum(self._box_lo - hi, lo - self._box_hi), 0.0)
+        far = bool(((gap * gap).sum(axis=1) > self._reach * self._reach).all())
+        self.far_answers += far
+        return far
+
     def state_free(self, q, k: int) -> bool:
         """The robot at slice ``k`` with its reference point at ``q`` is in bounds and free."""
-        return self.in_bounds(q) and not self.slice(k).contains(np.asarray(q, dtype=np.float64))
+        q = np.asarray(q, dtype=np.float64)
+        return self.in_bounds(q) and (self._far(q, q) or not self.slice(k).contains(q))
 
     def translation_free(self, q0, q1, k: int) -> bool:
         """The straight translation from ``q0`` to ``q1`` at slice ``k`` is free (exact)."""
-        return (self.in_bounds(q0) and self.in_bounds(q1)
-                and self.slice(k).segment_free(np.asarray(q0, dtype=np.float64),
-                                               np.asarray(q1, dtype=np.float64)))
+        q0, q1 = np.asarray(q0, dtype=np.float64), np.asarray(q1, dtype=np.float64)
+        if not (self.in_bounds(q0) and self.in_bounds(q1)):
+            return False
+        return self._far(np.minimum(q0, q1), np.maximum(q0, q1)) or self.slice(k).segment_free(q0, q1)
 
     def turn_free(self, q, i: int, j: int) -> bool:
         """Turning in place at ``q`` from slice ``i`` to ``j`` (the shorter way, through
         neighbours) is free: every step's swept C-obstacles miss ``q``."""
+        q = np.asarray(q, dtype=np.float64)
         if not self.in_bounds(q):
             return False
-        q = np.asarray(q, dtype=np.float64)
+        if self._far(q, q):
+            return True
         way = self.slices.way(int(i), int(j))
         return all(not self.turn(a, b).contains(q) for a, b in zip(way, way[1:]))
 
@@ -317,7 +505,7 @@ class TurningCSpace:
             if k0 == k1:
                 if not self.translation_free(q0, q1, k0):
                     return False
-            elif not (np.array_equal(q0, q1) and len(self.slices.way(k0, k1)) == 2
+            elif not (np.array_equal(q0, q1) and self.slices.neighbours(k0, k1)
                       and self.turn_free(q0, k0, k1)):
                 return False
         return True

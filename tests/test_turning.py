@@ -112,8 +112,10 @@ def test_turning_cspace_is_built_lazily_and_decides(piano):
     assert not t.translation_free(door_lo, door_hi, 0)  # long side along x: stuck
     assert len(t.built_slices) == 1 and not t.built_turns
     assert t.translation_free(door_lo, door_hi, 2)  # turned by 90 degrees: through
-    assert t.turn_free(door_lo, 0, 2) and len(t.built_turns) == 2
+    assert t.turn_free(door_lo, 0, 2) and not t.built_turns  # far from the wall: no build
+    assert t.far_answers == 1
     assert not t.turn_free(np.array([0.0, -0.6, 0.5]), 0, 2)  # too close to the wall
+    assert len(t.built_turns) == 1  # the first step already collides
     # the certified answers agree with FCL along the arcs
     for q, free in ((door_lo, True), (np.array([0.0, -0.6, 0.5]), False)):
         bad, n = pose_path_collisions(piano, [q, q], [t.slices.rotation(0), t.slices.rotation(2)],
@@ -233,3 +235,66 @@ def test_cfg_goal_orientation_is_reached(tmp_path):
     bad, _ = pose_path_collisions(scene, r.path, _relative(scene, r.orientations),
                                   per_metre=1e3, per_degree=1e3)
     assert bad == 0
+
+
+# ----------------------------------------------------------------------------- free flying
+
+
+def _rod_and_holed_wall():
+    """A rod 1.0 long, upright, in front of a wall with a 0.5 x 0.5 hole: it passes only
+    tilted along the hole's axis (a turn about x, not about z)."""
+    import trimesh
+
+    from cspace.scene import Scene
+
+    def box(lo, hi, name):
+        b = trimesh.creation.box(bounds=[lo, hi])
+        return Body(name, b.vertices, b.faces, "box")
+
+    h, t = 0.25, 0.05
+    walls = (box([-3, -t, -3], [-h, t, 3], "left"), box([h, -t, -3], [3, t, 3], "right"),
+             box([-h, -t, -3], [h, t, -h], "below"), box([-h, -t, h], [h, t, 3], "above"))
+    rod = trimesh.creation.box(extents=[0.1, 0.1, 1.0])
+    return Scene(name="rod", path=None, obstacles=walls,
+                 robot=Body("rod", rod.vertices, rod.faces, "box"), reference_point=np.zeros(3),
+                 bounds=np.array([[-1.2, -1.2, -1.2], [1.2, 1.2, 1.2]]),
+                 start=np.array([0.0, -0.9, 0.0]), goal=np.array([0.0, 0.9, 0.0]))
+
+
+def test_orientations_are_linked_near_uniformly():
+    from cspace.turning import Orientations
+
+    goal = axis_angle((0.3, -1.0, 0.2), 2.5)
+    O = Orientations.uniform(100, goal_rotation=goal)
+    assert np.array_equal(O.rotation(0), np.eye(3)) and np.allclose(O.rotation(O.goal), goal)
+    assert len(O) == 1 + 24 + 100  # the identity is a cube rotation; nothing else repeats
+    assert all(i in O.links[j] for i, row in enumerate(O.links) for j in row)
+    steps = [O.step(i, j) for i, row in enumerate(O.links) for j in row]
+    assert max(steps) < math.radians(80)  # near-uniform: no long jump
+    way = O.way(0, O.goal)
+    assert way[0] == 0 and way[-1] == O.goal and all(O.neighbours(a, b) for a, b in zip(way, way[1:]))
+    assert O.nearest(Rotation.from_matrix(O.rotation(17)).as_quat()) == 17
+    # the swept hull holds a turn about a tilted axis too
+    V = np.random.default_rng(0).normal(size=(20, 3))
+    a, b = way[0], way[1]
+    hull = ConvexHull(swept_points(V, np.zeros(3), O, a, b))
+    rel = Rotation.from_matrix(O.rotation(b) @ O.rotation(a).T).as_rotvec()
+    for t in np.linspace(0, 1, 501):
+        P = (Rotation.from_rotvec(t * rel).as_matrix() @ O.rotation(a) @ V.T).T
+        assert (P @ hull.equations[:, :3].T + hull.equations[:, 3] <= 0).all()
+    with pytest.raises(InvalidArgumentError, match="not neighbours"):
+        O.step(0, next(j for j in range(len(O)) if j not in O.links[0] and j != 0))
+
+
+def test_a_free_flying_rod_tilts_through_a_hole():
+    from cspace.turning import Orientations
+
+    scene = _rod_and_holed_wall()
+    assert not plan(scene, slices=8, time=1.0, seed=1).solved  # turns about z do not help
+    r = plan(scene, slices=Orientations.uniform(0, degree=6), time=20.0, seed=1)
+    assert r.solved and r.valid
+    tilted = Rotation.from_quat(r.orientations).as_matrix()[:, :, 2]  # the rod's axis
+    assert np.abs(tilted[:, 1]).max() > 0.99  # it went through along y
+    bad, n = pose_path_collisions(scene, r.path, Rotation.from_quat(r.orientations).as_matrix(),
+                                  per_metre=1e3, per_degree=1e3)
+    assert bad == 0 and n > 10**5
