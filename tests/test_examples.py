@@ -59,3 +59,10 @@ def test_readme_python_runs_from_a_fresh_clone(tmp_path, monkeypatch):
     code = "\n".join(blocks).replace('"out/scene.html"', repr(str(tmp_path / "scene.html")))
     exec(compile(code, "README.md", "exec"), {"__name__": "readme"})
     assert (tmp_path / "scene.html").exists()
+
+
+def test_plan_with_turns(tmp_path):
+    out = run(tmp_path, "plan_with_turns.py")
+    assert "without turning: solved False" in out
+    assert "with 8 orientations: solved True" in out
+    assert "FCL re-check along translations and turns: 0 colliding of" in out
