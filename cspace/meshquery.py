@@ -296,21 +296,42 @@ def _edge_side(ux, uy, uz, vx, vy, vz, px, py, pz, nx, ny, nz):
     return (ey * wz - ez * wy) * nx + (ez * wx - ex * wz) * ny + (ex * wy - ey * wx) * nz
 
 
+def _tri_box_dist2(px, py, pz, T, t):
+    """Squared distance from p to the bounding box of triangle ``T[t]``: no more than the
+    distance to the triangle, a cheap test before it."""
+    d = 0.0
+    for k, p in ((0, px), (1, py), (2, pz)):
+        lo = min(min(T[t, k], T[t, 3 + k]), T[t, 6 + k])
+        hi = max(max(T[t, k], T[t, 3 + k]), T[t, 6 + k])
+        if p < lo:
+            g = lo - p
+            d += g * g
+        elif p > hi:
+            g = p - hi
+            d += g * g
+    return d
+
+
 def _nearest_kernel(Q, T, nlo, nhi, left, right, start, count, out):
-    """Distance from each query to the nearest triangle (BVH, nearest child first)."""
+    """Distance from each query to the nearest triangle (BVH, nearest child first; each
+    node's box distance is kept with it on the stack, each triangle's box tested first)."""
     stack = np.zeros(256, dtype=np.int64)
+    dist = np.zeros(256, dtype=np.float64)
     for i in range(Q.shape[0]):
         px, py, pz = Q[i, 0], Q[i, 1], Q[i, 2]
         best = np.inf
         sp = 1
         stack[0] = 0
+        dist[0] = _box_dist2(px, py, pz, nlo, nhi, 0)
         while sp > 0:
             sp -= 1
             n = stack[sp]
-            if _box_dist2(px, py, pz, nlo, nhi, n) >= best:
+            if dist[sp] >= best:
                 continue
             if left[n] < 0:
                 for t in range(start[n], start[n] + count[n]):
+                    if _tri_box_dist2(px, py, pz, T, t) >= best:
+                        continue
                     d = _tri_dist2(px, py, pz, T, t)
                     if d < best:
                         best = d
@@ -321,10 +342,10 @@ def _nearest_kernel(Q, T, nlo, nhi, left, right, start, count, out):
                 if da < db:  # push the far child first: the near one is popped next
                     a, b, da, db = b, a, db, da
                 if da < best:
-                    stack[sp] = a
+                    stack[sp], dist[sp] = a, da
                     sp += 1
                 if db < best:
-                    stack[sp] = b
+                    stack[sp], dist[sp] = b, db
                     sp += 1
         out[i] = np.sqrt(best)
 

@@ -271,6 +271,36 @@ cdef inline double _tri_dist2(double px, double py, double pz, const double* T) 
     return best
 
 
+cdef inline double _tri_box_dist2(double px, double py, double pz, const double* T) noexcept nogil:
+    # the squared distance to the triangle's bounding box (the reference's order of operations)
+    cdef double d = 0.0, g, lo, hi
+    lo = _min(_min(T[0], T[3]), T[6])
+    hi = _max(_max(T[0], T[3]), T[6])
+    if px < lo:
+        g = lo - px
+        d += g * g
+    elif px > hi:
+        g = px - hi
+        d += g * g
+    lo = _min(_min(T[1], T[4]), T[7])
+    hi = _max(_max(T[1], T[4]), T[7])
+    if py < lo:
+        g = lo - py
+        d += g * g
+    elif py > hi:
+        g = py - hi
+        d += g * g
+    lo = _min(_min(T[2], T[5]), T[8])
+    hi = _max(_max(T[2], T[5]), T[8])
+    if pz < lo:
+        g = lo - pz
+        d += g * g
+    elif pz > hi:
+        g = pz - hi
+        d += g * g
+    return d
+
+
 def nearest_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double[:, ::1] nlo,
                    const double[:, ::1] nhi, const long long[::1] left,
                    const long long[::1] right, const long long[::1] start,
@@ -278,6 +308,8 @@ def nearest_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double[
     """Distance from each query to the nearest triangle (BVH, nearest child first)."""
     stack_arr = np.zeros(256, dtype=np.int64)
     cdef long long[::1] stack = stack_arr
+    dist_arr = np.zeros(256, dtype=np.float64)
+    cdef double[::1] dist = dist_arr
     cdef Py_ssize_t i, sp, n, t, a, b
     cdef double px, py, pz, best, d, da, db
     with nogil:
@@ -288,13 +320,16 @@ def nearest_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double[
             best = INFINITY
             sp = 1
             stack[0] = 0
+            dist[0] = _box_dist2(px, py, pz, &nlo[0, 0], &nhi[0, 0])
             while sp > 0:
                 sp -= 1
                 n = stack[sp]
-                if _box_dist2(px, py, pz, &nlo[n, 0], &nhi[n, 0]) >= best:
+                if dist[sp] >= best:
                     continue
                 if left[n] < 0:
                     for t in range(start[n], start[n] + count[n]):
+                        if _tri_box_dist2(px, py, pz, &T[t, 0]) >= best:
+                            continue
                         d = _tri_dist2(px, py, pz, &T[t, 0])
                         if d < best:
                             best = d
@@ -308,9 +343,11 @@ def nearest_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double[
                         da, db = db, da
                     if da < best:
                         stack[sp] = a
+                        dist[sp] = da
                         sp += 1
                     if db < best:
                         stack[sp] = b
+                        dist[sp] = db
                         sp += 1
             out[i] = sqrt(best)
 
