@@ -12,7 +12,7 @@ $(PY):
 # Re-install (and rebuild the compiled kernels) when the package metadata or a kernel changes.
 $(STAMP): pyproject.toml setup.py Makefile $(wildcard cspace/_kernels/*.pyx) | $(PY)
 	$(PY) -m pip install --upgrade pip
-	$(PY) -m pip install -e '.[dev,peers]'
+	$(PY) -m pip install -e '.[dev,peers,bench]'
 	touch $(STAMP)
 
 demo: $(STAMP)
@@ -39,6 +39,7 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_queries.py
 	$(PY) benchmarks/bench_hard_cases.py
 	$(PY) benchmarks/bench_cold_start.py
+	$(PY) benchmarks/bench_speed_error.py
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

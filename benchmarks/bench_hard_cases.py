@@ -210,17 +210,21 @@ def _read_off(path: Path):
     return V, F
 
 
-def _cgal_row(case: hard.VoxelCase, q, ref, vol_ref, timeout: float = 300.0) -> dict:
+def cgal_sum(V: np.ndarray, F: np.ndarray, robot: np.ndarray, timeout: float = 300.0):
+    """CGAL's exact Nef ``O ⊕ (-R)`` of the float input (``CGAL['binary']``, built by
+    :func:`_build_cgal`): ``('ok', (V, F, seconds, volume))`` with the boundary rounded to
+    float64 and the exact volume (a Fraction), or ``(kind, message)`` when it was not run,
+    refused or timed out."""
     import subprocess
     import tempfile
 
     from scipy.spatial import ConvexHull, QhullError
 
-    B = -case.robot
+    B = -robot
     try:  # Qhull on coordinates scaled to about 1 (it has no hull at 1e-100 or 1e100)
         H = ConvexHull((B - B.mean(axis=0)) / np.ptp(B, axis=0).max())
     except QhullError:
-        return {"result": "not run: B has no volume (a Polyhedron_3 operand must be solid)"}
+        return ("not run", "not run: B has no volume (a Polyhedron_3 operand must be solid)")
     T = H.simplices.copy()
     centre = B[H.vertices].mean(axis=0)
     n = np.cross(B[T[:, 1]] - B[T[:, 0]], B[T[:, 2]] - B[T[:, 0]])
@@ -228,19 +232,27 @@ def _cgal_row(case: hard.VoxelCase, q, ref, vol_ref, timeout: float = 300.0) -> 
     T[inward] = T[inward][:, ::-1]
     with tempfile.TemporaryDirectory() as tmp:
         a, b, o = Path(tmp) / "a.off", Path(tmp) / "b.off", Path(tmp) / "out.off"
-        _write_off(a, case.vertices, case.faces)
+        _write_off(a, V, F)
         _write_off(b, B, T)
         try:
             run = subprocess.run([CGAL["binary"], str(a), str(b), str(o)], capture_output=True,
                                  text=True, timeout=timeout)
         except subprocess.TimeoutExpired:
-            return {"result": f"no answer in {timeout:.0f} s"}
+            return ("timeout", f"no answer in {timeout:.0f} s")
         if run.returncode:
             why = (run.stderr.strip().splitlines() or [f"exit {run.returncode}"])[-1]
-            return {"result": f"refused: {why.split(': ', 1)[-1][:80]}"}
+            return ("refused", f"refused: {why.split(': ', 1)[-1][:80]}")
         words = run.stdout.split()
         dt, vol = float(words[1]), Fraction(words[3])
-        V, F = _read_off(o)
+        Vo, Fo = _read_off(o)
+    return ("ok", (Vo, Fo, dt, vol))
+
+
+def _cgal_row(case: hard.VoxelCase, q, ref, vol_ref, timeout: float = 300.0) -> dict:
+    kind, got = cgal_sum(case.vertices, case.faces, case.robot, timeout)
+    if kind != "ok":
+        return {"result": got}
+    V, F, dt, vol = got
     try:
         co = CSpaceObstacle.from_mesh(V, F)
     except cspace.CspaceError as exc:

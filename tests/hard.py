@@ -250,7 +250,8 @@ class TiltCase:
         for i in range(n):
             j = (i + 1) % n
             F += [(i, j, j + n), (i, j + n, i + n)]
-        self.vertices, self.faces = V, np.array(F, dtype=np.int64)
+        # the triangles above turn inwards: reversed, every face is wound outwards
+        self.vertices, self.faces = V, np.array(F, dtype=np.int64)[:, ::-1].copy()
         half = np.asarray(robot_size, float) / 2
         self.robot = np.array(list(itertools.product(*[(-s, s) for s in half])))
         r = [Fraction(float(s)) for s in half]
