@@ -118,6 +118,21 @@ def _cell(v, v0, inv, n):
 # membership
 
 
+def _off_collinear(T, t, qx, qy, qz) -> bool:
+    """q is certainly off the degenerate (collinear) triangle ``T[t]``: one of its edges'
+    orientations with q, in the (y, z) or the (x, y) projection, is certainly non-zero (q on
+    the segment would make every one zero)."""
+    ax, ay, az = T[t, 0], T[t, 1], T[t, 2]
+    bx, by, bz = T[t, 3], T[t, 4], T[t, 5]
+    cx, cy, cz = T[t, 6], T[t, 7], T[t, 8]
+    for v, e in (_o2(ay, az, by, bz, qy, qz), _o2(by, bz, cy, cz, qy, qz),
+                 _o2(cy, cz, ay, az, qy, qz), _o2(ax, ay, bx, by, qx, qy),
+                 _o2(bx, by, cx, cy, qx, qy), _o2(cx, cy, ax, ay, qx, qy)):
+        if abs(v) > e:
+            return True
+    return False
+
+
 def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny, nz, out, unsure):
     """``out[i]``: inside by the float filters; ``unsure[i]``: undecided (exact path).
     Returns the number of undecided queries."""
@@ -132,14 +147,29 @@ def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny,
             if qy < lo[t, 1] or qy > hi[t, 1] or qz < lo[t, 2] or qz > hi[t, 2] or qx > hi[t, 0]:
                 continue
             inbox = qx >= lo[t, 0]
-            if degen[t]:
-                if inbox:
+            if degen[t]:  # no crossing; q may lie on it (the closed surface) unless certainly off
+                if inbox and not _off_collinear(T, t, qx, qy, qz):
                     status = _STATUS_UNSURE
                     break
                 continue
             ax, ay, az = T[t, 0], T[t, 1], T[t, 2]
             bx, by, bz = T[t, 3], T[t, 4], T[t, 5]
             cx, cy, cz = T[t, 6], T[t, 7], T[t, 8]
+            s = sx[t]
+            if s != 0:
+                # The projection first: q off the projected triangle is off the triangle and
+                # not crossed, whatever its plane side (which a sliver cannot certify near it).
+                v1, e1 = _o2(ay, az, by, bz, qy, qz)
+                v2, e2 = _o2(by, bz, cy, cz, qy, qz)
+                v3, e3 = _o2(cy, cz, ay, az, qy, qz)
+                # Certainly outside the projected triangle if one certain sign disagrees.
+                if (s > 0 and (v1 < -e1 or v2 < -e2 or v3 < -e3)) or (
+                    s < 0 and (v1 > e1 or v2 > e2 or v3 > e3)
+                ):
+                    continue
+                if not (abs(v1) > e1 and abs(v2) > e2 and abs(v3) > e3):
+                    status = _STATUS_UNSURE
+                    break
             dsign = 0
             if inbox:  # q may be on the triangle: its plane side must be certain
                 d, e = _o3(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz)
@@ -147,20 +177,8 @@ def _contains_kernel(Q, T, lo, hi, sx, degen, cstart, ctris, y0, z0, iy, iz, ny,
                     status = _STATUS_UNSURE
                     break
                 dsign = 1 if d > 0 else -1
-            s = sx[t]
             if s == 0:
                 continue
-            v1, e1 = _o2(ay, az, by, bz, qy, qz)
-            v2, e2 = _o2(by, bz, cy, cz, qy, qz)
-            v3, e3 = _o2(cy, cz, ay, az, qy, qz)
-            # Certainly outside the projected triangle if one certain sign disagrees.
-            if (s > 0 and (v1 < -e1 or v2 < -e2 or v3 < -e3)) or (
-                s < 0 and (v1 > e1 or v2 > e2 or v3 > e3)
-            ):
-                continue
-            if not (abs(v1) > e1 and abs(v2) > e2 and abs(v3) > e3):
-                status = _STATUS_UNSURE
-                break
             # Crossing ahead of q: the triangle lies beyond q, or q is behind its plane.
             if not inbox or dsign == s:
                 w += s
@@ -509,7 +527,20 @@ def _entry_exact(p0, p1, tri):
     A zero-length segment gives 0 iff the point is on the triangle.
     """
     X, _ = _dyadic(list(p0) + list(p1) + list(tri))
-    P0, P1, A, B, C = (tuple(X[i : i + 3]) for i in range(0, 15, 3))
+    return _entry_ints(*(tuple(X[i : i + 3]) for i in range(0, 15, 3)))
+
+
+def _on_one_scale(a: tuple, b: tuple) -> tuple[list, list]:
+    """Two dyadic forms ``(ints, exponent)`` (:func:`cspace.exact._dyadic`) as integers on
+    the smaller of their exponents."""
+    (ia, ea), (ib, eb) = a, b
+    lo = min(ea, eb)
+    return [x << (ea - lo) for x in ia], [x << (eb - lo) for x in ib]
+
+
+def _entry_ints(P0, P1, A, B, C):
+    """:func:`_entry_exact` on integer points (the floats times one power of two: the
+    parameter does not depend on the scale)."""
     n = _cross(_sub(B, A), _sub(C, A))
     if n == (0, 0, 0):
         # A degenerate triangle is the segment between its extreme (collinear) corners.
@@ -560,7 +591,11 @@ def _crossing_exact(q, tri, s: int) -> int:
     """Signed crossing (``s`` or 0) of the perturbed ray ``q + t e_x`` with a triangle that
     does not contain ``q``; ``s`` is the exact sign of the triangle's projected (y, z) area."""
     X, _ = _dyadic(list(q) + list(tri))
-    Q, A, B, C = (tuple(X[i : i + 3]) for i in range(0, 12, 3))
+    return _crossing_ints(*(tuple(X[i : i + 3]) for i in range(0, 12, 3)), s)
+
+
+def _crossing_ints(Q, A, B, C, s: int) -> int:
+    """:func:`_crossing_exact` on integer points (the floats times one power of two)."""
     for U, V in ((A, B), (B, C), (C, A)):
         if _perturbed_side(U[1], U[2], V[1], V[2], Q[1], Q[2]) != s:
             return 0
@@ -715,6 +750,7 @@ class MeshCO:
         area = _exact_area_signs(self.T)
         self.sx = np.ascontiguousarray(area[:, 0])
         self.degen = np.ascontiguousarray((area == 0).all(axis=1))
+        self._exact_tris: dict = {}  # triangle -> its dyadic integers, for the exact path
         # (y, z) grid for the +x rays: about two cells per triangle, square-ish cells, fewer
         # if large triangles would make the cell lists long (at most 32 entries per triangle).
         m = len(F)
@@ -748,15 +784,20 @@ class MeshCO:
     def _contains_exact(self, q: np.ndarray) -> bool:
         cand = _compiled.cell_candidates(q, self.lo, self.hi, self.cstart, self.ctris,
                                          *self._grid)
-        ql = q.tolist()
+        qd = _dyadic(q.tolist())
         w = 0
         for t in cand.tolist():
-            tri = self.T[t].tolist()
-            if _entry_exact(ql, ql, tri) is not None:
+            # triangles' integer forms are kept: near-surface queries revisit them
+            td = self._exact_tris.get(t)
+            if td is None:
+                td = self._exact_tris[t] = _dyadic(self.T[t].tolist())
+            Q, X = _on_one_scale(qd, td)
+            Q, A, B, C = tuple(Q), tuple(X[0:3]), tuple(X[3:6]), tuple(X[6:9])
+            if _entry_ints(Q, Q, A, B, C) is not None:
                 return True  # on the surface
             s = int(self.sx[t])
             if s:
-                w += _crossing_exact(ql, tri, s)
+                w += _crossing_ints(Q, A, B, C, s)
         return w != 0
 
     # ---- distances ----------------------------------------------------------------------

@@ -57,6 +57,28 @@ cdef inline void _o3(double ax, double ay, double az, double bx, double by, doub
     err[0] = _FILTER * perm + tiny
 
 
+cdef inline bint _off_collinear(const double* T, double qx, double qy, double qz) noexcept nogil:
+    # as the reference: an edge orientation with q certainly non-zero in (y, z) or (x, y)
+    cdef double v, e
+    _o2(T[1], T[2], T[4], T[5], qy, qz, &v, &e)
+    if fabs(v) > e:
+        return True
+    _o2(T[4], T[5], T[7], T[8], qy, qz, &v, &e)
+    if fabs(v) > e:
+        return True
+    _o2(T[7], T[8], T[1], T[2], qy, qz, &v, &e)
+    if fabs(v) > e:
+        return True
+    _o2(T[0], T[1], T[3], T[4], qx, qy, &v, &e)
+    if fabs(v) > e:
+        return True
+    _o2(T[3], T[4], T[6], T[7], qx, qy, &v, &e)
+    if fabs(v) > e:
+        return True
+    _o2(T[6], T[7], T[0], T[1], qx, qy, &v, &e)
+    return fabs(v) > e
+
+
 cdef inline long _cell(double v, double v0, double inv, long n) noexcept nogil:
     cdef double f = (v - v0) * inv
     if not f > 0.0:
@@ -96,13 +118,25 @@ def contains_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double
                     continue
                 inbox = qx >= lo[t, 0]
                 if degen[t]:
-                    if inbox:
+                    if inbox and not _off_collinear(&T[t, 0], qx, qy, qz):
                         status = _STATUS_UNSURE
                         break
                     continue
                 ax = T[t, 0]; ay = T[t, 1]; az = T[t, 2]
                 bx = T[t, 3]; by = T[t, 4]; bz = T[t, 5]
                 cx = T[t, 6]; cy = T[t, 7]; cz = T[t, 8]
+                s = sx[t]
+                if s != 0:
+                    # the projection first (see the reference)
+                    _o2(ay, az, by, bz, qy, qz, &v1, &e1)
+                    _o2(by, bz, cy, cz, qy, qz, &v2, &e2)
+                    _o2(cy, cz, ay, az, qy, qz, &v3, &e3)
+                    if (s > 0 and (v1 < -e1 or v2 < -e2 or v3 < -e3)) or (
+                            s < 0 and (v1 > e1 or v2 > e2 or v3 > e3)):
+                        continue
+                    if not (fabs(v1) > e1 and fabs(v2) > e2 and fabs(v3) > e3):
+                        status = _STATUS_UNSURE
+                        break
                 dsign = 0
                 if inbox:
                     _o3(ax, ay, az, bx, by, bz, cx, cy, cz, qx, qy, qz, &d, &e)
@@ -110,18 +144,8 @@ def contains_kernel(const double[:, ::1] Q, const double[:, ::1] T, const double
                         status = _STATUS_UNSURE
                         break
                     dsign = 1 if d > 0 else -1
-                s = sx[t]
                 if s == 0:
                     continue
-                _o2(ay, az, by, bz, qy, qz, &v1, &e1)
-                _o2(by, bz, cy, cz, qy, qz, &v2, &e2)
-                _o2(cy, cz, ay, az, qy, qz, &v3, &e3)
-                if (s > 0 and (v1 < -e1 or v2 < -e2 or v3 < -e3)) or (
-                        s < 0 and (v1 > e1 or v2 > e2 or v3 > e3)):
-                    continue
-                if not (fabs(v1) > e1 and fabs(v2) > e2 and fabs(v3) > e3):
-                    status = _STATUS_UNSURE
-                    break
                 if not inbox or dsign == s:
                     w += s
             if status == _STATUS_UNSURE:
