@@ -13,7 +13,8 @@
 - ``cspace build SCENE`` — :func:`cspace.model.model_scene`: model the scene (which bodies
   are convex, solid, surface or dropped, and why: ``--explain``) and build the C-obstacles
   through the disk cache (:mod:`cspace.cache`; ``--no-cache``); progress on stderr
-  (``--quiet``); ``-o`` writes the C-obstacle meshes.
+  (``--quiet``); ``-o`` writes the C-obstacle meshes. ``--workers N`` builds in N processes,
+  ``--scheduler tcp://host:8786`` on a Dask cluster (:func:`cspace.scale.executor_for`).
 - ``cspace plan SCENE`` — the same modelling, then :func:`cspace.ompl_plugin.plan`: an OMPL
   planner with the exact validity checker and motion validator; the path is re-proved
   exactly and written out. ``--explain`` prints the model first.
@@ -214,9 +215,17 @@ def _model(args: argparse.Namespace):
               "(--robot-hull): collisions may be reported where the real robot is free",
               file=sys.stderr)
     progress = _Progress(args.quiet, args.progress)
+    executor = None
     try:
-        return model_scene(scene, cache=cache, progress=progress, robot_hull=args.robot_hull)
+        if getattr(args, "scheduler", None) or getattr(args, "workers", None):
+            from .scale import executor_for
+
+            executor = executor_for(args.scheduler, args.workers)
+        return model_scene(scene, cache=cache, progress=progress, robot_hull=args.robot_hull,
+                           executor=executor)
     finally:
+        if executor is not None:  # all done (or interrupted): stop the pool, close the client
+            executor.shutdown(wait=False, cancel_futures=True)
         progress.close()
 
 
@@ -233,7 +242,13 @@ def _build(args: argparse.Namespace) -> int:
     else:
         c = m.counts()
         print(f"{m.scene.name}: {len(m.bodies)} bodies: " + ", ".join(f"{c[k]} {k}" for k in c))
-    print(f"built {len(built)} C-obstacles in {m.seconds['build']:.2f} s "
+    where = ""
+    if args.scheduler:
+        where = (" on a local Dask cluster" if args.scheduler == "local"
+                 else f" on the Dask cluster at {args.scheduler}")
+    elif args.workers and args.workers > 1:
+        where = f" in {args.workers} processes"
+    print(f"built {len(built)} C-obstacles in {m.seconds['build']:.2f} s{where} "
           f"({hits} from the cache)")
     failed = [b for b in m.bodies if b.error]
     for b in failed:
@@ -590,6 +605,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="write the C-obstacles' meshes to an .npz file")
     _model_options(p)
+    p.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+                   help="build in N processes here (default: this process); with "
+                        "--scheduler local, the local Dask cluster's worker processes")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="build on a Dask cluster: its scheduler's address (tcp://host:8786), "
+                        "or 'local' for a Dask LocalCluster started here; the cache folder is "
+                        "the shared store (needs dask[distributed])")
     p.set_defaults(func=_build)
     p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles", **_help(
         "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html"))

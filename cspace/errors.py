@@ -28,6 +28,7 @@ __all__ = [
     "InvalidArgumentError",
     "ArgumentTypeError",
     "SelfIntersectionError",
+    "MissingDependencyError",
 ]
 
 
@@ -118,3 +119,8 @@ class ArgumentTypeError(CspaceError, TypeError):
 class SelfIntersectionError(InvalidMeshError):
     """A closed mesh intersects itself (two triangles meet beyond a shared edge or vertex):
     it bounds no well-defined solid. The message names two triangles that cross."""
+
+
+class MissingDependencyError(CspaceError, ImportError):
+    """An optional capability needs a package that is not installed (the message names it
+    and the pip command); nothing in the default path needs one."""

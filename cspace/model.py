@@ -39,8 +39,12 @@ meets nothing.
 
 from __future__ import annotations
 
+import dataclasses
+import multiprocessing as mp
+import os
 import time
 import warnings
+from concurrent.futures import FIRST_COMPLETED, wait
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -68,7 +72,8 @@ from .pairs import (
 )
 from .surface import SurfaceMesh, SurfaceObstacle
 
-__all__ = ["KINDS", "BodyModel", "RobotPart", "PairModel", "SceneModel", "model_scene"]
+__all__ = ["KINDS", "BodyModel", "RobotPart", "PairModel", "SceneModel", "model_scene",
+           "build_pair_batch"]
 
 KINDS = ("convex", "solid", "surface", "dropped")
 
@@ -381,7 +386,7 @@ def _closed_kind(name, P, F, grid):
 
 
 def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
-              convex_robot: bool = True) -> BodyModel:
+              convex_robot: bool = True, memo: dict | None = None) -> BodyModel:
     used, local = np.unique(F, return_inverse=True)
     P, F = ints[used], local.reshape(-1, 3)
     V = grid.to_float(P)
@@ -392,7 +397,14 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
         body.reason = (f"its C-obstacle's bounding box {grid.to_float(np.stack([lo, hi])).tolist()} "
                        "misses the planning bounds: the robot can never touch it")
         return body
-    kind, why, operand = _closed_kind(name, P, F, grid)
+    if memo is None:
+        kind, why, operand = _closed_kind(name, P, F, grid)
+    else:  # the kind depends only on these, exactly (bytes compare exactly on a collision)
+        key = (name, grid.exponent, grid.bits, tuple(int(x) for x in grid.origin),
+               P.shape, P.tobytes(), F.tobytes())
+        if key not in memo:
+            memo[key] = _closed_kind(name, P, F, grid)
+        kind, why, operand = memo[key]
     if kind != "surface":
         body.kind, body._solid = kind, operand
         # With a convex robot the body's kind names its algorithm; else each pair's line does.
@@ -457,15 +469,16 @@ def _from_arrays(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
                                     margin=m)
 
 
-def _build(body: BodyModel, robot, c, grid, margin: Margin, progress):
+def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None):
     """The C-obstacle of a body and a convex robot part, grown by ``margin`` (the float64
-    surface of a solid body by what also covers its rounding), with that margin."""
+    surface of a solid body by what also covers its rounding), with that margin.
+    ``grown``: ``margin.grow(robot)`` when the caller has it (one hull per robot part)."""
     if body.kind == "solid":
         S, m = grown_mesh_sum(body._solid, robot.reflected(c), margin, progress)
         return CSpaceObstacle.from_mesh(S.vertices, S.faces, obstacle=body._solid, robot=robot,
                                         reference_point=robot.grid.to_float(robot.grid.snap(c)),
                                         grid=grid, sum=S, name=body.name, margin=m)
-    grown = margin.grow(robot)
+    grown = margin.grow(robot) if grown is None else grown
     if body.kind == "surface":
         F = body.faces[body._keep]
         co = SurfaceObstacle.build((body.vertices, F), grown, c, grid=grid, name=body.name,
@@ -683,9 +696,212 @@ def _pair_detail(construction, arrays) -> str:
     return f"{n} {what}" + (f" ({', '.join(extra)})" if extra else "")
 
 
+@dataclass(frozen=True, eq=False)
+class _Context:
+    """What every pair of one scene's build shares."""
+
+    c: np.ndarray        # the reference point as given
+    c_ints: np.ndarray   # ... snapped on the robot's grid
+    c_snapped: np.ndarray
+    grid: Grid
+    bounds_g: tuple
+    margin: Margin
+    store: COCache | None
+    grown: dict = field(default_factory=dict)  # per robot part: its grown polytope
+
+
+def _grown(memo: dict, margin: Margin, part: RobotPart):
+    """``margin.grow`` of a convex robot part, made once per part (an exact hull)."""
+    if id(part) not in memo:
+        memo[id(part)] = (part, margin.grow(part.operand))  # the part pins its id
+    return memo[id(part)][1]
+
+
+def _lookup(ctx: _Context, construction, b: BodyModel, part: RobotPart, pair: PairModel):
+    """The pair's cache key and its cached arrays (None: a miss or no cache); sets
+    ``pair.cache``."""
+    store = ctx.store
+    if store is None:
+        key = None
+    elif part.kind == "convex":  # the grown robot names the growth
+        key = _key(b, _grown(ctx.grown, ctx.margin, part), ctx.c_ints, ctx.grid)
+    else:
+        key = _pair_key(construction, b, part, ctx.c_ints, ctx.grid, ctx.margin)
+    arrays = store.load(key) if store is not None else None
+    pair.cache = "hit" if arrays is not None else ("off" if store is None else "miss")
+    return key, arrays
+
+
+def _assemble(ctx: _Context, construction, b: BodyModel, part: RobotPart, pair: PairModel,
+              arrays: dict) -> None:
+    """The pair's C-obstacles from built or cached arrays (the one way for both)."""
+    if part.kind == "convex":
+        pair.cos = [_from_arrays(arrays, b, part.operand, ctx.c_snapped, ctx.grid, ctx.margin)]
+        return
+    pair.cos = _pair_cos(construction, arrays, b, part, ctx.c_ints, ctx.grid, ctx.bounds_g)
+    pair.detail = _pair_detail(construction, arrays)
+    for co in pair.cos:  # one margin for the pair's union
+        co.margin = _margin_from(arrays, ctx.margin)
+
+
+def _store(ctx: _Context, key, pair: PairModel, arrays) -> None:
+    """Write a built pair's arrays to the cache (an unwritable cache only warns)."""
+    if ctx.store is not None and pair.cache == "miss":
+        try:
+            ctx.store.store(key, arrays)
+        except OSError as exc:  # an unwritable cache must not fail the build
+            warnings.warn(f"C-obstacle cache: cannot write {ctx.store.path(key)}: {exc}",
+                          UserWarning, stacklevel=3)
+
+
+def _failed(ctx: _Context, b: BodyModel, part: RobotPart, pair: PairModel, parts: list,
+            error: str) -> None:
+    b.error = error if len(parts) == 1 else f"{b.error}; {part.name}: {error}".lstrip("; ")
+    pair.cache = "off" if ctx.store is None else "miss"
+
+
+def _pair_arrays(construction, body: BodyModel, part: RobotPart, c, c_ints, grid, bounds_g,
+                 margin: Margin, grown: dict) -> dict:
+    """Build one pair: the arrays the cache stores (what :func:`_assemble` reads)."""
+    if part.kind == "convex":
+        return _to_arrays(_build(body, part.operand, c, grid, margin, None,
+                                 _grown(grown, margin, part)))
+    return _build_pair_arrays(construction, body, part, c_ints, grid, bounds_g, margin, None)
+
+
+def build_pair_batch(jobs: list, c, c_ints, grid: Grid, bounds_g, margin: Margin) -> list:
+    """Build (body, robot part) pairs in an executor's worker; a top-level function, so that
+    any Executor (processes, Dask) can pickle it by name.
+
+    Parameters
+    ----------
+    jobs : list of (construction, BodyModel, RobotPart)
+        Bodies without their pairs (only what modelling made: grid integers, triangles and
+        the exact operand).
+    c, c_ints, grid, bounds_g, margin
+        The scene's reference point (float and snapped), grid, bounds in grid integers and
+        margin, as :func:`model_scene` has them.
+
+    Returns
+    -------
+    list of (ok, value, seconds)
+        Per job: ``(True, arrays, s)`` with the arrays the cache stores, or
+        ``(False, "ErrorName: message", s)``: one pair's failure does not fail the others.
+    """
+    if mp.parent_process() is not None and not os.environ.get("CSPACE_WORKERS", "").strip():
+        os.environ["CSPACE_WORKERS"] = "1"  # a worker is one unit: do not fork more
+    out, grown = [], {}
+    for construction, body, part in jobs:
+        t = time.perf_counter()
+        try:
+            arrays = _pair_arrays(construction, body, part, c, c_ints, grid, bounds_g, margin,
+                                  grown)
+            out.append((True, arrays, time.perf_counter() - t))
+        except Exception as exc:  # noqa: BLE001 - returned, recorded per body by the caller
+            out.append((False, f"{type(exc).__name__}: {exc}", time.perf_counter() - t))
+    return out
+
+
+# Pairs of two convex operands per task (cheap: milliseconds); every other pair is a task.
+_BATCH = 16
+
+
+def _build_with(executor, todo: list, parts: list, ctx: _Context, progress) -> None:
+    """Step 6 through an Executor: cache hits here, misses submitted as
+    :func:`build_pair_batch` tasks, results assembled here (in ``todo``'s order: the same
+    pairs, C-obstacles and reports as the local loop)."""
+    n = len(todo)
+    done = 0
+    pairs, keys, pending = [], [], []
+    errors = {}  # pair index -> error text, recorded in todo's order at the end (as locally)
+    for i, (b, part) in enumerate(todo):
+        construction = pair_construction(b.kind, part.kind)
+        pair = PairModel(part.name, construction)
+        b.pairs.append(pair)
+        pairs.append(pair)
+        t = time.perf_counter()
+        key = None
+        try:
+            key, arrays = _lookup(ctx, construction, b, part, pair)
+            if arrays is not None:
+                _assemble(ctx, construction, b, part, pair, arrays)
+                done += 1
+            else:
+                pending.append(i)
+        except Exception as exc:
+            errors[i] = f"{type(exc).__name__}: {exc}"
+            done += 1
+        keys.append(key)
+        pair.seconds = time.perf_counter() - t
+
+    def report(i):
+        if progress is not None:
+            b, part = todo[i]
+            progress(done / n, f"{b.name} ({b.kind})"
+                     + (f" x {part.name}" if len(parts) > 1 else ""))
+
+    # Expensive pairs first (each its own task), then the convex ones in batches.
+    cheap = [i for i in pending if pairs[i].construction == "CVMS"]
+    dear = sorted((i for i in pending if pairs[i].construction != "CVMS"),
+                  key=lambda i: -len(todo[i][0].faces) * len(todo[i][1].faces))
+    size = max(1, min(_BATCH, len(cheap) // 64))
+    tasks = [[i] for i in dear] + [cheap[k:k + size] for k in range(0, len(cheap), size)]
+    slim = {}  # one pickled copy per body: no pairs, no C-obstacles
+
+    def job(i):
+        b, part = todo[i]
+        if id(b) not in slim:
+            slim[id(b)] = dataclasses.replace(b, pairs=[], co=None)
+        return pairs[i].construction, slim[id(b)], part
+
+    futures = {}
+    try:
+        for task in tasks:
+            f = executor.submit(build_pair_batch, [job(i) for i in task], ctx.c, ctx.c_ints,
+                                ctx.grid, ctx.bounds_g, ctx.margin)
+            futures[f] = task
+        waiting = set(futures)
+        while waiting:
+            finished, waiting = wait(waiting, return_when=FIRST_COMPLETED)
+            for f in finished:
+                task = futures.pop(f)
+                try:
+                    results = f.result()
+                except Exception as exc:  # the task itself failed: a lost worker, pickling
+                    results = [(False, f"{type(exc).__name__}: {exc}", 0.0)] * len(task)
+                for i, (ok, value, seconds) in zip(task, results):
+                    b, part = todo[i]
+                    t = time.perf_counter()
+                    try:
+                        if not ok:
+                            raise _TaskError(value)
+                        _assemble(ctx, pairs[i].construction, b, part, pairs[i], value)
+                        _store(ctx, keys[i], pairs[i], value)
+                    except _TaskError as exc:
+                        errors[i] = str(exc)
+                    except Exception as exc:
+                        errors[i] = f"{type(exc).__name__}: {exc}"
+                    pairs[i].seconds += seconds + time.perf_counter() - t
+                    done += 1
+                    report(i)
+    finally:
+        for f in futures:  # only left on an interrupt or a bug here: cancel the rest
+            f.cancel()
+    for i in sorted(errors):
+        _failed(ctx, *todo[i], pairs[i], parts, errors[i])
+    for (b, part), pair in zip(todo, pairs):
+        b.seconds += pair.seconds
+        b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"
+
+
+class _TaskError(Exception):
+    """An error a worker reported as text (already ``ErrorName: message``)."""
+
+
 def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                 grid: Grid | None = None, robot_hull: bool = False,
-                conservative: bool = True) -> SceneModel:
+                conservative: bool = True, executor=None,
+                memo: dict | None = None) -> SceneModel:
     """Decide, per obstacle body, what to build and why; build it.
 
     Parameters
@@ -712,6 +928,20 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         scene's float input (:mod:`cspace.margin`): errors are then false collisions within
         ``error_bound``, never false free. False: the exact C-obstacles of the snapped
         input, whose error is two-sided (for measuring, not for planning).
+    executor : concurrent.futures.Executor, optional
+        Build the (body, robot part) pairs there: a ``ProcessPoolExecutor``, a Dask
+        ``Client(...).get_executor()`` (:func:`cspace.scale.executor_for`), any Executor.
+        Modelling (steps 1-5), cache look-ups and writes stay in this process: cache hits
+        are never submitted; misses go out as :func:`build_pair_batch` tasks (picklable
+        arrays and grid objects in, the arrays the cache stores out), and this process
+        makes the C-obstacles from those arrays as it makes them from a cache hit, so the
+        answers are those of the local build. ``progress`` is called as tasks complete;
+        an error in a task (or a lost worker) becomes that body's error, as locally.
+        None (default): build here, one pair after the other.
+    memo : dict, optional
+        Shared by calls on scenes with the same obstacle bodies (orientation slices,
+        :func:`cspace.scale.build_slices`): steps 1-3 of a body and step 5's classification
+        depend only on the body and the grid, and are made once per grid.
 
     Returns
     -------
@@ -755,14 +985,23 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
             bodies.append(_far_body(sb.name, n_far, box))
             continue
         sb = kept[sb.name]
-        ints, F, counts = weld_dedupe(sb, grid)
-        split = split_parts(ints, F) if len(F) else []
+        welded = None if memo is None else memo.get(
+            ("weld", id(sb), grid.exponent, grid.bits, tuple(int(x) for x in grid.origin)))
+        if welded is None:  # steps 1-3 depend only on the body and the grid
+            ints, F, counts = weld_dedupe(sb, grid)
+            split = split_parts(ints, F) if len(F) else []
+            if memo is not None:  # the body is kept in the value: its id stays its own
+                memo[("weld", id(sb), grid.exponent, grid.bits,
+                      tuple(int(x) for x in grid.origin))] = (sb, ints, F, counts, split)
+        else:
+            _, ints, F, counts, split = welded
+        counts = dict(counts)
         counts["parts"] = len(split)
         sources[sb.name] = counts
         for k, faces in enumerate(split):
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
             bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
-                                    len(parts) == 1 and parts[0].kind == "convex"))
+                                    len(parts) == 1 and parts[0].kind == "convex", memo))
         if sb.name in far:
             bodies.append(_far_body(sb.name, *far[sb.name]))
         if not split and sb.name not in far:
@@ -779,8 +1018,10 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         store = COCache(None if cache is True else cache)
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
-        c_snapped = rgrid.to_float(c_ints)
-        for i, (b, part) in enumerate(todo):
+        ctx = _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store)
+        if executor is not None:
+            _build_with(executor, todo, parts, ctx, progress)
+        for i, (b, part) in enumerate(todo if executor is None else ()):
             construction = pair_construction(b.kind, part.kind)
 
             def sub(f, stage=None, i=i, b=b, part=part):
@@ -793,38 +1034,19 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
             pair = PairModel(part.name, construction)
             b.pairs.append(pair)
             try:
-                convex = part.kind == "convex"
-                if store is None:
-                    key = None
-                elif convex:  # the grown robot names the growth
-                    key = _key(b, margin.grow(part.operand), c_ints, grid)
-                else:
-                    key = _pair_key(construction, b, part, c_ints, grid, margin)
-                arrays = store.load(key) if store is not None else None
-                pair.cache = "hit" if arrays is not None else ("off" if store is None else "miss")
-                if convex and arrays is not None:
-                    pair.cos = [_from_arrays(arrays, b, part.operand, c_snapped, grid, margin)]
-                elif convex:
-                    pair.cos = [_build(b, part.operand, c, grid, margin, sub)]
+                key, arrays = _lookup(ctx, construction, b, part, pair)
+                if part.kind == "convex" and arrays is None:
+                    pair.cos = [_build(b, part.operand, c, grid, margin, sub,
+                                       _grown(ctx.grown, margin, part))]
                     arrays = _to_arrays(pair.cos[0]) if store is not None else None
                 else:
                     if arrays is None:
                         arrays = _build_pair_arrays(construction, b, part, c_ints, grid,
                                                     bounds_g, margin, sub)
-                    pair.cos = _pair_cos(construction, arrays, b, part, c_ints, grid, bounds_g)
-                    pair.detail = _pair_detail(construction, arrays)
-                    for co in pair.cos:  # one margin for the pair's union
-                        co.margin = _margin_from(arrays, margin)
-                if store is not None and pair.cache == "miss":
-                    try:
-                        store.store(key, arrays)
-                    except OSError as exc:  # an unwritable cache must not fail the build
-                        warnings.warn(f"C-obstacle cache: cannot write {store.path(key)}: "
-                                      f"{exc}", UserWarning, stacklevel=2)
+                    _assemble(ctx, construction, b, part, pair, arrays)
+                _store(ctx, key, pair, arrays)
             except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
-                error = f"{type(exc).__name__}: {exc}"
-                b.error = error if len(parts) == 1 else f"{b.error}; {part.name}: {error}".lstrip("; ")
-                pair.cache = "off" if store is None else "miss"
+                _failed(ctx, b, part, pair, parts, f"{type(exc).__name__}: {exc}")
             pair.seconds = time.perf_counter() - t
             b.seconds += pair.seconds
             b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"

@@ -1182,7 +1182,7 @@ class CSpace:
 
     @classmethod
     def from_scene(cls, scene, *, grid: Grid | None = None, cache=None,
-                   progress=None, robot_hull: bool = False) -> "CSpace":
+                   progress=None, robot_hull: bool = False, executor=None) -> "CSpace":
         """The C-obstacles a scene needs, built: :func:`cspace.model.model_scene` decides per
         body (split, deduplicated; convex, solid, surface or dropped) and builds each.
 
@@ -1197,6 +1197,9 @@ class CSpace:
             ``progress(fraction, message)``, see :func:`cspace.model.model_scene`.
         robot_hull : bool, default False
             Use the robot's convex hull instead of its exact parts (see ``model_scene``).
+        executor : concurrent.futures.Executor, optional
+            Build the C-obstacles there (a process pool, a Dask cluster:
+            :func:`cspace.scale.executor_for`); same answers as the local build.
 
         Raises
         ------
@@ -1206,7 +1209,7 @@ class CSpace:
         from .model import model_scene
 
         return model_scene(scene, grid=grid, cache=cache, progress=progress,
-                           robot_hull=robot_hull).cspace()
+                           robot_hull=robot_hull, executor=executor).cspace()
 
     def __len__(self) -> int:
         return len(self.obstacles)
