@@ -17,7 +17,12 @@
   ``--scheduler tcp://host:8786`` on a Dask cluster (:func:`cspace.scale.executor_for`).
 - ``cspace plan SCENE`` — the same modelling, then :func:`cspace.ompl_plugin.plan`: an OMPL
   planner with the exact validity checker and motion validator; the path is re-proved
-  exactly and written out. ``--explain`` prints the model first.
+  exactly and written out. ``--explain`` prints the model first. ``--slices N`` (turns about
+  one axis) or ``--orientations N`` (free flying) let the robot turn, every translation and
+  turn in place certified (:func:`cspace.ompl_plugin.plan_turning`); a scene whose goal
+  orientation differs from the start's is planned that way by default (36 slices;
+  ``--no-turns`` keeps the start's). ``--workers`` / ``--scheduler`` build through an
+  executor, as for ``build``.
 - ``cspace view SCENE`` — :func:`cspace.viz.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``.
 """
@@ -203,12 +208,22 @@ class _Progress:
             self.width = 0
 
 
-def _model(args: argparse.Namespace):
-    """Load the scene and model it (build its C-obstacles, through the cache unless --no-cache)."""
+def _executor(args: argparse.Namespace):
+    """The executor ``--scheduler`` / ``--workers`` name (None: build here)."""
+    if getattr(args, "scheduler", None) or getattr(args, "workers", None):
+        from .scale import executor_for
+
+        return executor_for(args.scheduler, args.workers)
+    return None
+
+
+def _model(args: argparse.Namespace, scene=None):
+    """Load the scene (unless given) and model it (build its C-obstacles, through the cache
+    unless --no-cache)."""
     from .model import model_scene
     from .scene import load_scene
 
-    scene = load_scene(args.scene)
+    scene = load_scene(args.scene) if scene is None else scene
     cache = None if args.no_cache else (args.cache_dir or True)
     if args.robot_hull:
         print(f"cspace: note: robot {scene.robot.name!r} is replaced by its convex hull "
@@ -217,10 +232,7 @@ def _model(args: argparse.Namespace):
     progress = _Progress(args.quiet, args.progress)
     executor = None
     try:
-        if getattr(args, "scheduler", None) or getattr(args, "workers", None):
-            from .scale import executor_for
-
-            executor = executor_for(args.scheduler, args.workers)
+        executor = _executor(args)
         return model_scene(scene, cache=cache, progress=progress, robot_hull=args.robot_hull,
                            executor=executor)
     finally:
@@ -275,9 +287,18 @@ def _plan(args: argparse.Namespace) -> int:
     path_out = _out(args.output, ("txt", "csv", "npy", "path"), "-o")
     result_out = _out(args.result, ("json",), "--result")
     html_out = _out(args.html, ("html",), "--html")
+    from .scene import load_scene
+
+    scene = load_scene(args.scene)
+    turn = not np.allclose(scene.goal_rotation, scene.start_rotation, rtol=0.0, atol=1e-12)
+    if turn and args.slices is None and args.orientations is None and not args.no_turns:
+        args.slices = DEFAULT_SLICES
+        print(f"cspace: note: the goal's orientation differs from the start's: planning with "
+              f"{DEFAULT_SLICES} orientation slices (--slices N to choose, --no-turns to keep "
+              "the start's orientation)", file=sys.stderr)
     if args.slices is not None or args.orientations is not None:
-        return _plan_turning(args, path_out, result_out, html_out)
-    m = _model(args)
+        return _plan_turning(args, scene, path_out, result_out, html_out)
+    m = _model(args, scene)
     if args.explain:
         print(m.explain())
     scene = m.scene
@@ -377,26 +398,33 @@ def _write_path(path_out, positions, orientations) -> None:
         write_atomic(path_out, lambda p: p.write_text(text))
 
 
-def _plan_turning(args: argparse.Namespace, path_out, result_out, html_out) -> int:
+# Orientation slices when a scene's goal turns the robot and none are asked for.
+DEFAULT_SLICES = 36
+
+
+def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_out) -> int:
     """``cspace plan --slices N``: translations and certified turns over orientation slices."""
     import numpy as np
 
     from .errors import InvalidArgumentError
     from .ompl_plugin import default_slices, plan_turning
-    from .scene import load_scene
     from .turning import Orientations
 
     if args.slices is not None and args.orientations is not None:
         raise InvalidArgumentError("--slices and --orientations are alternatives: give one")
-    scene = load_scene(args.scene)
     cache = None if args.no_cache else (args.cache_dir or True)
     if args.slices is not None:
         slices = default_slices(scene, args.slices)
     else:
         rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
         slices = Orientations.uniform(args.orientations, goal_rotation=rel)
-    r = plan_turning(scene, slices, planner=args.planner, time=args.time, seed=args.seed,
-                     cache=cache, robot_hull=args.robot_hull)
+    executor = _executor(args)
+    try:
+        r = plan_turning(scene, slices, planner=args.planner, time=args.time, seed=args.seed,
+                         cache=cache, robot_hull=args.robot_hull, executor=executor)
+    finally:
+        if executor is not None:
+            executor.shutdown(wait=False, cancel_futures=True)
     status = "solved" if r.solved else f"NOT solved ({r.status})"
     turns = int((np.diff(r.slices) != 0).sum()) if len(r.slices) else 0
     print(f"{scene.name}: {args.planner} with {len(slices)} orientations {status} in "
@@ -487,6 +515,16 @@ def _count(text: str) -> int:
     if n < 0:
         raise argparse.ArgumentTypeError(f"expected a number >= 0, got {n}")
     return n
+
+
+def _executor_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--workers", type=_positive_int, default=None, metavar="N",
+                   help="build in N processes here (default: this process); with "
+                        "--scheduler local, the local Dask cluster's worker processes")
+    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                   help="build on a Dask cluster: its scheduler's address (tcp://host:8786), "
+                        "or 'local' for a Dask LocalCluster started here; the cache folder is "
+                        "the shared store (needs dask[distributed])")
 
 
 def _slices(text: str) -> int:
@@ -605,13 +643,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="write the C-obstacles' meshes to an .npz file")
     _model_options(p)
-    p.add_argument("--workers", type=_positive_int, default=None, metavar="N",
-                   help="build in N processes here (default: this process); with "
-                        "--scheduler local, the local Dask cluster's worker processes")
-    p.add_argument("--scheduler", metavar="ADDRESS", default=None,
-                   help="build on a Dask cluster: its scheduler's address (tcp://host:8786), "
-                        "or 'local' for a Dask LocalCluster started here; the cache folder is "
-                        "the shared store (needs dask[distributed])")
+    _executor_options(p)
     p.set_defaults(func=_build)
     p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles", **_help(
         "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html"))
@@ -632,6 +664,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="let a free-flying robot turn: plan over the 24 axis-aligned "
                         "orientations, N near-uniform ones of SO(3) and the goal's, each "
                         "linked to its nearest, every motion certified (0: the 24 alone)")
+    p.add_argument("--no-turns", action="store_true",
+                   help="keep the start's orientation even when the goal's differs (by "
+                        f"default such a scene is planned with {DEFAULT_SLICES} slices)")
+    _executor_options(p)
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
     p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),
                    help="valid-state sampler of PRM-like planners: 'narrow' draws half its "

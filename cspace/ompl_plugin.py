@@ -670,7 +670,7 @@ def default_slices(scene, n: int):
 def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTConnect",
                  time: float = 1.0, seed: int | None = None, simplify: bool = True,
                  bounds=None, optimize: bool = False, planner_range: float | None = None,
-                 cache=None, robot_hull: bool = False) -> PlanResult:
+                 cache=None, robot_hull: bool = False, executor=None) -> PlanResult:
     """Plan translations and turns in place over orientation slices, every motion certified.
 
     A state is a position and an orientation of the set: for :class:`~cspace.turning.Slices`
@@ -688,7 +688,11 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
 
     Parameters are those of :func:`plan` (the start and goal orientations are the scene's);
     ``slices`` is a :class:`~cspace.turning.Slices`, an
-    :class:`~cspace.turning.Orientations`, or a count (:func:`default_slices`).
+    :class:`~cspace.turning.Orientations`, or a count (:func:`default_slices`). With an
+    ``executor`` (a process pool, a Dask cluster's: :func:`cspace.scale.executor_for`) every
+    orientation's C-space is built through it before planning
+    (:meth:`~cspace.turning.TurningCSpace.prebuild`), not counted in the planning time;
+    turns stay lazy.
     """
     from .turning import Orientations, Slices, TurningCSpace
 
@@ -707,6 +711,8 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
     b = _bounds(scene.bounds if bounds is None else bounds)
     tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull)
     tcs.bounds = b
+    if executor is not None:
+        tcs.prebuild(executor)
     q0 = np.array(scene.start if start is None else start, dtype=np.float64)
     q1 = np.array(scene.goal if goal is None else goal, dtype=np.float64)
     for what, q, k in (("start", q0, 0), ("goal", q1, slices.goal)):

@@ -396,6 +396,19 @@ class TurningCSpace:
                                                      self.robot_hull)
         return cs
 
+    def prebuild(self, executor=None, ks=None, progress=None) -> None:
+        """Build slices ``ks`` (default all) at once, through ``executor`` (any
+        ``concurrent.futures.Executor``: a process pool, a Dask cluster's;
+        :func:`cspace.scale.build_slices`) instead of lazily, one at a time."""
+        from .scale import build_slices
+
+        todo = [k for k in (range(len(self.slices)) if ks is None else ks)
+                if int(k) % len(self.slices) not in self.built_slices]
+        if todo:
+            self.built_slices.update(build_slices(self.scene, self.slices, executor, ks=todo,
+                                                  cache=self.cache, robot_hull=self.robot_hull,
+                                                  progress=progress))
+
     def _robot_parts(self) -> list[np.ndarray]:
         """The vertices of each connected part of the robot (by shared vertex indices)."""
         if self._parts is None:

@@ -298,3 +298,22 @@ def test_a_free_flying_rod_tilts_through_a_hole():
     bad, n = pose_path_collisions(scene, r.path, Rotation.from_quat(r.orientations).as_matrix(),
                                   per_metre=1e3, per_degree=1e3)
     assert bad == 0 and n > 10**5
+
+
+def test_cli_turns_by_default_when_the_goal_does(tmp_path):
+    """A scene whose goal orientation differs from the start's is planned with slices unless
+    --no-turns says otherwise; orientations can be prebuilt through a process pool."""
+    scene = tmp_path / "turn.toml"
+    text = (SCENES / "piano.toml").read_text()
+    scene.write_text(text.replace("[planning]\n", "[planning]\ngoal_orientation = [0, 0, 90]\n"))
+    base = [sys.executable, "-m", "cspace", "plan", str(scene), "--seed", "1", "--time", "10",
+            "--no-cache", "-q"]
+    out = subprocess.run(base + ["-o", str(tmp_path / "p.path"), "--workers", "2"],
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stdout + out.stderr
+    assert "planning with 36 orientation slices" in out.stderr
+    rows = np.loadtxt(tmp_path / "p.path")
+    assert np.allclose(Rotation.from_quat(rows[-1, 3:]).as_euler("xyz", degrees=True), [0, 0, 90])
+    fixed = subprocess.run(base + ["--no-turns", "--time", "1"], capture_output=True, text=True,
+                           timeout=300)
+    assert fixed.returncode == 1 and "36 orientation slices" not in fixed.stderr
