@@ -507,16 +507,6 @@ def _view(args: argparse.Namespace) -> int:
     return 0
 
 
-def _count(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if n < 0:
-        raise argparse.ArgumentTypeError(f"expected a number >= 0, got {n}")
-    return n
-
-
 def _executor_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=_positive_int, default=None, metavar="N",
                    help="build in N processes here (default: this process); with "
@@ -525,16 +515,6 @@ def _executor_options(p: argparse.ArgumentParser) -> None:
                    help="build on a Dask cluster: its scheduler's address (tcp://host:8786), "
                         "or 'local' for a Dask LocalCluster started here; the cache folder is "
                         "the shared store (needs dask[distributed])")
-
-
-def _slices(text: str) -> int:
-    try:
-        n = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number of slices, got {text!r}") from None
-    if n < 2:
-        raise argparse.ArgumentTypeError(f"need at least 2 slices, got {n}")
-    return n
 
 
 def _model_options(p: argparse.ArgumentParser) -> None:
@@ -581,6 +561,8 @@ def _number(kind, test, what):
 
 
 _positive_int = _number(int, lambda v: v >= 1, "a whole number >= 1")
+_count = _number(int, lambda v: v >= 0, "a whole number >= 0")
+_slices = _number(int, lambda v: v >= 2, "a whole number of slices >= 2")
 _seed = _number(int, lambda v: 0 <= v < 2**31, "a seed (a whole number from 0 to 2**31 - 1)")
 _positive = _number(float, lambda v: 0 < v < float("inf"), "a positive number")
 _non_negative = _number(float, lambda v: 0 <= v < float("inf"), "a number >= 0")

@@ -223,17 +223,22 @@ def __getattr__(name: str):
 # exact path verification
 
 
+def _box_bounds(ob, lo, hi):
+    """OMPL ``RealVectorBounds`` of the box ``[lo, hi]`` (one entry per axis)."""
+    rb = ob.RealVectorBounds(len(lo))
+    for k, (a, b) in enumerate(zip(lo, hi)):
+        rb.setLow(k, float(a))
+        rb.setHigh(k, float(b))
+    return rb
+
+
 def state_space(bounds):
     """An OMPL ``RealVectorStateSpace(3)`` of translations bounded by ``(2, 3)`` ``bounds``
     (scene units): the space the checker and motion validator work on."""
     ob = _ompl()[0]
     b = _bounds(bounds)
     space = ob.RealVectorStateSpace(3)
-    rb = ob.RealVectorBounds(3)
-    for k in range(3):
-        rb.setLow(k, float(b[0, k]))
-        rb.setHigh(k, float(b[1, k]))
-    space.setBounds(rb)
+    space.setBounds(_box_bounds(ob, b[0], b[1]))
     return space
 
 
@@ -654,7 +659,9 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
 
 def default_slices(scene, n: int):
     """``n`` equal orientation steps about the axis of the scene's goal rotation relative to
-    its start (z when they are equal), plus the goal's angle (:meth:`Slices.about`)."""
+    its start, plus the goal's angle (:meth:`Slices.about`); about z when the goal turns the
+    robot by at most 1e-12 rad (float noise of the scene's matrices: the goal's orientation
+    is then the start's, to that tolerance, which decides no collision)."""
     from scipy.spatial.transform import Rotation
 
     from .turning import Slices
@@ -785,13 +792,7 @@ def _yaw_space(scene, slices, b: np.ndarray, q0: np.ndarray, q1: np.ndarray):
     reach = float(np.linalg.norm(scene.robot.vertices - scene.reference_point, axis=1).max())
     w = max(reach, 1e-9 * float(np.ptp(b, axis=0).max())) * 2 * np.pi / n
     space = ob.RealVectorStateSpace(4)
-    rb = ob.RealVectorBounds(4)
-    for k in range(3):
-        rb.setLow(k, float(b[0, k]))
-        rb.setHigh(k, float(b[1, k]))
-    rb.setLow(3, -0.5 * w)
-    rb.setHigh(3, (n - 0.5) * w)
-    space.setBounds(rb)
+    space.setBounds(_box_bounds(ob, [*b[0], -0.5 * w], [*b[1], (n - 0.5) * w]))
 
     def position(state) -> tuple:
         return (state[0], state[1], state[2])
@@ -809,11 +810,7 @@ def _flying_space(scene, orientations, b: np.ndarray, q0: np.ndarray, q1: np.nda
 
     ob = _ompl()[0]
     space = ob.SE3StateSpace()
-    rb = ob.RealVectorBounds(3)
-    for k in range(3):
-        rb.setLow(k, float(b[0, k]))
-        rb.setHigh(k, float(b[1, k]))
-    space.setBounds(rb)
+    space.setBounds(_box_bounds(ob, b[0], b[1]))
 
     def filler(q, k):
         rv = Rotation.from_matrix(orientations.rotation(k)).as_rotvec()
@@ -913,10 +910,7 @@ def plan_sampled(scene, *, space: str = "SE3", planner: str = "RRTConnect", time
     z0 = float(scene.start[2])
     if space == "SE3":
         sp = ob.SE3StateSpace()
-        rb = ob.RealVectorBounds(3)
-        for k in range(3):
-            rb.setLow(k, float(b[0, k]))
-            rb.setHigh(k, float(b[1, k]))
+        rb = _box_bounds(ob, b[0], b[1])
     else:
         if scene.start[2] != scene.goal[2]:
             raise InvalidArgumentError("SE2 keeps z: the start and goal must share it")
@@ -924,10 +918,7 @@ def plan_sampled(scene, *, space: str = "SE3", planner: str = "RRTConnect", time
         if abs(rv[0]) > 1e-12 or abs(rv[1]) > 1e-12:
             raise InvalidArgumentError("SE2 turns about z: the goal rotation is not a turn about z")
         sp = ob.SE2StateSpace()
-        rb = ob.RealVectorBounds(2)
-        for k in range(2):
-            rb.setLow(k, float(b[0, k]))
-            rb.setHigh(k, float(b[1, k]))
+        rb = _box_bounds(ob, b[0, :2], b[1, :2])
     sp.setBounds(rb)
 
     def pose(state) -> tuple[np.ndarray, np.ndarray]:

@@ -94,8 +94,14 @@ class Slices:
         steps = 2 * math.pi * np.arange(int(n)) / int(n)
         near = np.abs(steps - g)
         near = np.minimum(near, 2 * math.pi - near)
-        if near.min() <= 1e-12:  # the goal is a step (up to the rounding of 2 pi k / n)
-            return cls(axis, steps, int(np.argmin(near)))
+        k = int(np.argmin(near))
+        if k and near[k] <= 1e-12:
+            # the goal is a step up to the rounding of 2 pi k / n: that slice takes the
+            # goal's own angle (no tolerance leaks into the goal orientation)
+            steps[k] = g
+            return cls(axis, steps, k)
+        if near[k] == 0.0:  # the start's angle: the goal is the start
+            return cls(axis, steps, 0)
         angles = np.sort(np.append(steps, g))
         return cls(axis, angles, int(np.searchsorted(angles, g)))
 
