@@ -26,3 +26,10 @@ def shared_data() -> Path:
     if not SHARED_DATA.is_dir():
         pytest.skip(f"shared data folder not found at {SHARED_DATA}")
     return SHARED_DATA
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """Tests marked ``last`` run after all others: a Dask client leaves a thread in this
+    process (so cspace no longer forks its workers) and spawned pools leave a resource
+    tracker child, which the fork tests would otherwise see."""
+    items.sort(key=lambda item: item.get_closest_marker("last") is not None)

@@ -23,6 +23,10 @@ from cspace.cli import main as cli
 from cspace.errors import BuildError, InvalidArgumentError, MissingDependencyError
 from cspace.model import model_scene
 from cspace.scale import build_slices, executor_for
+
+# A Dask client leaves a thread in this process and spawned pools a resource tracker: after
+# every other test (conftest), so that the fork tests see neither.
+pytestmark = pytest.mark.last
 from cspace.scene import Body, Scene
 from cspace.turning import Slices, TurningCSpace
 from zoo import l_shape  # tests/ is on sys.path (rootdir conftest)
