@@ -147,7 +147,8 @@ def test_the_piano_needs_turns(piano):
     assert not plan(piano, time=0.5, seed=1).solved
 
 
-@pytest.mark.parametrize("seed", [1, 2, 3])
+@pytest.mark.parametrize("seed", [1, pytest.param(2, marks=pytest.mark.slow),
+                                  pytest.param(3, marks=pytest.mark.slow)])
 def test_planned_turns_pass_fcl_along_every_motion(piano, seed):
     r = plan(piano, slices=8, time=10.0, seed=seed)
     assert r.solved and r.valid
