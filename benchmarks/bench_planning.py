@@ -45,6 +45,7 @@ from cspace.model import model_scene
 from cspace.ompl_plugin import _classes, narrow_passage_samples, plan
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))  # zoo: the shared test scenes
 SHARED = ROOT.parent / "shared" / "data"
 QUICK = "--quick" in sys.argv
 TURNING_ONLY = "--turning" in sys.argv
@@ -209,40 +210,18 @@ def planning_rows(name, scene, cs):
 
 def turning_problems() -> dict:
     """Problems that need the robot to turn: ``name -> (scene, orientation set, OMPL.app
-    space)``."""
-    import dataclasses
-
-    import trimesh
+    space)`` (the scenes of ``tests/test_turning.py``, from ``tests/zoo.py``)."""
+    from zoo import rod_and_holed_wall, thin_walled
 
     from cspace.ompl_plugin import default_slices
-    from cspace.scene import Body, Scene
     from cspace.turning import Orientations
 
     piano = load(ROOT / "scenes" / "piano.toml")
-    thin = []
-    for b in piano.obstacles:
-        V = np.array(b.vertices)
-        V[:, 1] = np.sign(V[:, 1]) * 0.0025
-        thin.append(Body(b.name, V, b.faces, b.source))
-    thin = dataclasses.replace(piano, obstacles=tuple(thin), name="piano, 5 mm wall")
-
-    def box(lo, hi, name):
-        m = trimesh.creation.box(bounds=[lo, hi])
-        return Body(name, m.vertices, m.faces, "box")
-
-    h, t = 0.25, 0.05
-    walls = (box([-3, -t, -3], [-h, t, 3], "left"), box([h, -t, -3], [3, t, 3], "right"),
-             box([-h, -t, -3], [h, t, -h], "below"), box([-h, -t, h], [h, t, 3], "above"))
-    rod = trimesh.creation.box(extents=[0.1, 0.1, 1.0])
-    rod_scene = Scene(name="rod through a hole", path=None, obstacles=walls,
-                      robot=Body("rod", rod.vertices, rod.faces, "box"),
-                      reference_point=np.zeros(3),
-                      bounds=np.array([[-1.2, -1.2, -1.2], [1.2, 1.2, 1.2]]),
-                      start=np.array([0.0, -0.9, 0.0]), goal=np.array([0.0, 0.9, 0.0]))
+    thin = thin_walled(piano, 0.005)
     return {
         "piano": (piano, default_slices(piano, 8), "SE2"),
         "piano, 5 mm wall": (thin, default_slices(thin, 8), "SE2"),
-        "rod through a hole": (rod_scene, Orientations.uniform(0, degree=6), "SE3"),
+        "rod through a hole": (rod_and_holed_wall(), Orientations.uniform(0, degree=6), "SE3"),
     }
 
 

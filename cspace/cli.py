@@ -290,7 +290,7 @@ def _plan(args: argparse.Namespace) -> int:
     from .scene import load_scene
 
     scene = load_scene(args.scene)
-    turn = not np.allclose(scene.goal_rotation, scene.start_rotation, rtol=0.0, atol=1e-12)
+    turn = not np.array_equal(scene.goal_rotation, scene.start_rotation)
     if turn and args.slices is None and args.orientations is None and not args.no_turns:
         args.slices = DEFAULT_SLICES
         print(f"cspace: note: the goal's orientation differs from the start's: planning with "

@@ -659,17 +659,18 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
 
 def default_slices(scene, n: int):
     """``n`` equal orientation steps about the axis of the scene's goal rotation relative to
-    its start, plus the goal's angle (:meth:`Slices.about`); about z when the goal turns the
-    robot by at most 1e-12 rad (float noise of the scene's matrices: the goal's orientation
-    is then the start's, to that tolerance, which decides no collision)."""
+    its start, plus the goal's angle (:meth:`Slices.about`); about z when the two rotations
+    are the same matrix."""
     from scipy.spatial.transform import Rotation
 
     from .turning import Slices
 
+    if np.array_equal(scene.goal_rotation, scene.start_rotation):
+        return Slices.about(n)
     rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
     rv = Rotation.from_matrix(rel).as_rotvec()
     angle = float(np.linalg.norm(rv))
-    if angle <= 1e-12:
+    if angle == 0.0:  # a float product of distinct matrices can still round to the identity
         return Slices.about(n)
     return Slices.about(n, axis=rv / angle, goal_angle=angle)
 

@@ -25,6 +25,7 @@ from cspace.ompl_plugin import default_slices, plan, plan_sampled
 from cspace.scene import Body
 from cspace.transform import axis_angle
 from cspace.turning import Slices, TurningCSpace, swept_points
+from zoo import rod_and_holed_wall, thin_walled
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -32,16 +33,6 @@ SCENES = Path(__file__).resolve().parents[1] / "scenes"
 @pytest.fixture(scope="module")
 def piano():
     return load_scene(SCENES / "piano.toml")
-
-
-def _thin(scene, thickness: float):
-    """The piano scene with its wall ``thickness`` thick (same doorway)."""
-    bodies = []
-    for b in scene.obstacles:
-        V = np.array(b.vertices)
-        V[:, 1] = np.sign(V[:, 1]) * thickness / 2
-        bodies.append(Body(b.name, V, b.faces, b.source))
-    return dataclasses.replace(scene, obstacles=tuple(bodies), name=f"piano, wall {thickness}")
 
 
 def _relative(scene, quaternions) -> np.ndarray:
@@ -177,7 +168,7 @@ def test_ompl_discrete_validation_clips_a_thin_wall_where_certified_turns_do_not
     discrete motion validation (states every 1% of the space's extent) returns paths that
     clip it (the piano's corners sweep through the doorway's edges between checked states);
     planning with certified turns returns one FCL finds free along every motion."""
-    thin = _thin(piano, 0.005)
+    thin = thin_walled(piano, 0.005)
     seen = []
     for seed in range(1, 9):  # until one clips: OMPL's runs depend on the process's call order
         r = plan_sampled(thin, space="SE3", time=2.0, seed=seed)
@@ -241,27 +232,6 @@ def test_cfg_goal_orientation_is_reached(tmp_path):
 # ----------------------------------------------------------------------------- free flying
 
 
-def _rod_and_holed_wall():
-    """A rod 1.0 long, upright, in front of a wall with a 0.5 x 0.5 hole: it passes only
-    tilted along the hole's axis (a turn about x, not about z)."""
-    import trimesh
-
-    from cspace.scene import Scene
-
-    def box(lo, hi, name):
-        b = trimesh.creation.box(bounds=[lo, hi])
-        return Body(name, b.vertices, b.faces, "box")
-
-    h, t = 0.25, 0.05
-    walls = (box([-3, -t, -3], [-h, t, 3], "left"), box([h, -t, -3], [3, t, 3], "right"),
-             box([-h, -t, -3], [h, t, -h], "below"), box([-h, -t, h], [h, t, 3], "above"))
-    rod = trimesh.creation.box(extents=[0.1, 0.1, 1.0])
-    return Scene(name="rod", path=None, obstacles=walls,
-                 robot=Body("rod", rod.vertices, rod.faces, "box"), reference_point=np.zeros(3),
-                 bounds=np.array([[-1.2, -1.2, -1.2], [1.2, 1.2, 1.2]]),
-                 start=np.array([0.0, -0.9, 0.0]), goal=np.array([0.0, 0.9, 0.0]))
-
-
 def test_orientations_are_linked_near_uniformly():
     from cspace.turning import Orientations
 
@@ -290,7 +260,7 @@ def test_orientations_are_linked_near_uniformly():
 def test_a_free_flying_rod_tilts_through_a_hole():
     from cspace.turning import Orientations
 
-    scene = _rod_and_holed_wall()
+    scene = rod_and_holed_wall()
     assert not plan(scene, slices=8, time=1.0, seed=1).solved  # turns about z do not help
     r = plan(scene, slices=Orientations.uniform(0, degree=6), time=20.0, seed=1)
     assert r.solved and r.valid

@@ -824,3 +824,43 @@ SPECIAL_CASES = {
     "opposite_conjoint": opposite_conjoint,
     "torus_icosphere": torus_icosphere,
 }
+
+
+# --------------------------------------------------------------------------------------
+# scenes where the robot must turn (tests/test_turning.py, benchmarks/bench_planning.py)
+
+
+def thin_walled(scene, thickness: float):
+    """``scene`` (the piano's: walls across y = 0) with its walls ``thickness`` thick."""
+    import dataclasses
+
+    from cspace.scene import Body
+
+    bodies = []
+    for b in scene.obstacles:
+        V = np.array(b.vertices)
+        V[:, 1] = np.sign(V[:, 1]) * thickness / 2
+        bodies.append(Body(b.name, V, b.faces, b.source))
+    return dataclasses.replace(scene, obstacles=tuple(bodies),
+                               name=f"{scene.name}, {thickness * 1000:g} mm wall")
+
+
+def rod_and_holed_wall():
+    """A rod 1.0 long, upright, in front of a wall with a 0.5 x 0.5 hole: it passes only
+    tilted along the hole's axis (a turn about x, not about z)."""
+    import trimesh
+
+    from cspace.scene import Body, Scene
+
+    def box(lo, hi, name):
+        m = trimesh.creation.box(bounds=[lo, hi])
+        return Body(name, m.vertices, m.faces, "box")
+
+    h, t = 0.25, 0.05
+    walls = (box([-3, -t, -3], [-h, t, 3], "left"), box([h, -t, -3], [3, t, 3], "right"),
+             box([-h, -t, -3], [h, t, -h], "below"), box([-h, -t, h], [h, t, 3], "above"))
+    rod = trimesh.creation.box(extents=[0.1, 0.1, 1.0])
+    return Scene(name="rod through a hole", path=None, obstacles=walls,
+                 robot=Body("rod", rod.vertices, rod.faces, "box"), reference_point=np.zeros(3),
+                 bounds=np.array([[-1.2, -1.2, -1.2], [1.2, 1.2, 1.2]]),
+                 start=np.array([0.0, -0.9, 0.0]), goal=np.array([0.0, 0.9, 0.0]))
