@@ -16,6 +16,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCRIPT = ROOT / "benchmarks" / "bench_scale.py"
 
 
+@pytest.mark.slow  # 15 s: make test-slow (the default run stays under 10 minutes)
 def test_quick_report_is_written(tmp_path):
     pytest.importorskip("distributed")
     out = tmp_path / "scale.md"

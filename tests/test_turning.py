@@ -257,6 +257,7 @@ def test_orientations_are_linked_near_uniformly():
         O.step(0, next(j for j in range(len(O)) if j not in O.links[0] and j != 0))
 
 
+@pytest.mark.slow  # 8 s: make test-slow (the default run stays under 10 minutes)
 def test_a_free_flying_rod_tilts_through_a_hole():
     from cspace.turning import Orientations
 
