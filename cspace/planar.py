@@ -24,7 +24,7 @@ import weakref
 from collections import deque
 from dataclasses import dataclass, field
 from fractions import Fraction
-from functools import cmp_to_key
+from functools import cached_property, cmp_to_key
 from math import gcd
 from numbers import Integral, Rational, Real
 
@@ -220,6 +220,8 @@ def _hpoint(p) -> tuple[int, int, int]:
 
 
 def _hnorm(X: int, Y: int, W: int) -> tuple[int, int, int]:
+    if W == 1:
+        return (X, Y, 1)
     if W < 0:
         X, Y, W = -X, -Y, -W
     g = gcd(gcd(X, Y), W)
@@ -316,15 +318,19 @@ class Face:
     outer: list
     holes: list = field(default_factory=list)
     isolated: list = field(default_factory=list)
-    _area: object = field(default=None, repr=False)  # a Fraction, or the cycles' (num, den) parts
+    _area: object = field(default=None, repr=False)  # a Fraction, made on first use
+    _cycles: list = field(default_factory=list, repr=False)  # ids of its boundary cycles
     _sample: tuple = field(default=None, repr=False)
     _owner: object = field(default=None, repr=False, compare=False)  # weakref to the arrangement
 
     @property
     def area(self):
-        # summed on first use: the parts are exact (num, den) pairs, area = sum num / (2 den)
-        if isinstance(self._area, list):
-            self._area = sum((Fraction(n, 2 * d) for n, d in self._area), Fraction(0))
+        if self._area is None and self._cycles:
+            arr = self._owner()
+            if arr is None:
+                raise ReferenceError("the face's arrangement is gone: read areas while it lives")
+            n, d = arr._face_area2(self)
+            self._area = Fraction(n, 2 * d)
         return self._area
 
     @property
@@ -379,20 +385,20 @@ def _arrangement_core(segs: list, labels: list) -> tuple:
     pairs, one label each): the pure-Python reference of
     :func:`cspace._kernels.planar.arrangement_core`, which returns the same.
 
-    Returns ``(order, L, S, vertex_labels, edges, edge_labels, out, nxt, cycles, cyc_of, areas,
-    comp)``:
+    Returns ``(order, vertex_labels, edges, edge_labels, origin, out, nxt, cycles, cyc_of,
+    signs, comp)``:
 
     - ``order``: the distinct points, homogeneous, sorted lexicographically (x, then y);
-    - ``L``: their common denominator (0 when over :data:`_MAX_SCALE_BITS` bits) and ``S``
-      the points scaled by it (integer pairs), else their :func:`_float_key`;
     - ``vertex_labels``: labels of the zero-length segments, by vertex;
     - ``edges``: ``(u, v)``, ``u < v``, sorted; ``edge_labels``: the label set of each;
+    - ``origin``: the origin vertex of each half-edge;
     - ``out``: each vertex's outgoing half-edges, counter-clockwise from angle 0 (half-edge
       ``2k`` is edge k from u to v, ``2k + 1`` back); ``nxt``: the successor of each
       half-edge along its face (the clockwise neighbour of its twin);
     - ``cycles``: the face cycles (half-edge lists, each from its smallest half-edge, in
       order of it), ``cyc_of``: each half-edge's cycle;
-    - ``areas``: each cycle's signed area ``(num, den)``, area ``num / (2 den)``, ``den > 0``;
+    - ``signs``: the sign of each cycle's signed area (:func:`_harea`; the exact areas are
+      made only where asked for, :meth:`Arrangement2D._cycle_area`);
     - ``comp``: per vertex, the smallest vertex of its connected component.
     """
     H = segs
@@ -460,20 +466,8 @@ def _arrangement_core(segs: list, labels: list) -> tuple:
                 on[i].add(x)
     for i in proper:
         vertex_set.update(on[i])
-    # One common denominator L: scaled integer points compare and orient exactly like
-    # the rational ones (a similarity), without Fractions.
-    L = 1
-    for h in vertex_set:
-        if L % h[2]:
-            L = L * h[2] // gcd(L, h[2])
-            if L.bit_length() > _MAX_SCALE_BITS:
-                break
-    if L.bit_length() > _MAX_SCALE_BITS:
-        # many unrelated denominators: exact Fractions are cheaper than one huge scale
-        L = 0
-        scaled = {h: _float_key(h) for h in vertex_set}
-    else:
-        scaled = {h: (h[0] * (L // h[2]), h[1] * (L // h[2])) for h in vertex_set}
+    _, S = _scaled(list(vertex_set))
+    scaled = dict(zip(vertex_set, S))
     pieces = {}
     for i in proper:
         ax = axis[i]
@@ -483,7 +477,6 @@ def _arrangement_core(segs: list, labels: list) -> tuple:
             pieces.setdefault(key, set()).add(labels[i])
 
     order = sorted(vertex_set, key=scaled.__getitem__)
-    S = [scaled[h] for h in order]
     index = {h: n for n, h in enumerate(order)}
     vertex_labels = {index[x]: s for x, s in point_label.items()}
     keyed = sorted(((index[a], index[b]) if index[a] < index[b] else (index[b], index[a]), lab)
@@ -525,7 +518,10 @@ def _arrangement_core(segs: list, labels: list) -> tuple:
             c.append(g)
             g = nxt[g]
         cycles.append(c)
-    areas = [_harea(order, origin, c) for c in cycles]
+    signs = []
+    for c in cycles:
+        num = _harea(order, origin, c)[0]
+        signs.append((num > 0) - (num < 0))
 
     # components: union-find over edges, the smaller root kept (so each root is its
     # component's smallest vertex)
@@ -542,7 +538,22 @@ def _arrangement_core(segs: list, labels: list) -> tuple:
         if ru != rv:
             parent[max(ru, rv)] = min(ru, rv)
     comp = [find(a) for a in range(len(order))]
-    return order, L, S, vertex_labels, E, edge_labels, out, nxt, cycles, cyc_of, areas, comp
+    return order, vertex_labels, E, edge_labels, origin, out, nxt, cycles, cyc_of, signs, comp
+
+
+def _scaled(points: list) -> tuple[int, list]:
+    """The points (canonical homogeneous triples) on one integer scale: their common
+    denominator ``L`` and the scaled integer pairs, which compare and orient exactly like the
+    rational points (a similarity) without Fractions; over :data:`_MAX_SCALE_BITS` bits
+    (many unrelated denominators, where Fractions are cheaper than one huge scale), ``L = 0``
+    and their :func:`_float_key`."""
+    L = 1
+    for h in points:
+        if L % h[2]:
+            L = L * h[2] // gcd(L, h[2])
+            if L.bit_length() > _MAX_SCALE_BITS:
+                return 0, [_float_key(h) for h in points]
+    return L, [(h[0] * (L // h[2]), h[1] * (L // h[2])) for h in points]
 
 
 def _harea(H: list, origin: list, cycle: list) -> tuple[int, int]:
@@ -579,6 +590,10 @@ class Arrangement2D:
         A hashable label per segment (default: the segment's index). Every edge records the set
         of labels of the input segments covering it; zero-length segments record theirs in
         :attr:`vertex_labels`.
+    canonical : bool
+        The endpoints are already canonical homogeneous triples of Python ints ``(x, y, w)``
+        (``w > 0``, ``gcd(x, y, w) == 1``): taken as they are, without checking (callers
+        inside cspace that made them so).
 
     Attributes
     ----------
@@ -619,8 +634,9 @@ class Arrangement2D:
     half-edges: fine for tens of segments, not meant for thousands.
     """
 
-    def __init__(self, segments, labels=None):
-        segs = [(_hpoint(p), _hpoint(q)) for p, q in segments]
+    def __init__(self, segments, labels=None, *, canonical: bool = False):
+        segs = (list(segments) if canonical
+                else [(_hpoint(p), _hpoint(q)) for p, q in segments])
         if labels is None:
             labels = list(range(len(segs)))
         else:
@@ -634,75 +650,126 @@ class Arrangement2D:
     # ---------------------------------------------------------------- construction
 
     def _build(self, segs, labels):
-        (self._H, self._L, self._S, self.vertex_labels, E, self.edge_labels, out, nxt, cycles,
-         cyc_of, areas, comp) = _compiled.arrangement_core(segs, labels)
+        (self._H, self.vertex_labels, E, self.edge_labels, origin, out, nxt, cycles, cyc_of,
+         signs, comp) = _compiled.arrangement_core(segs, labels)
         self._vertices = None
-        self._index = {h: n for n, h in enumerate(self._H)}
-        self.edges = np.array(E, dtype=np.int64).reshape(-1, 2)
-        V = self._S  # scaled integer points (same order and orientations)
+        self._E = E
         nh = 2 * len(E)
-        self.half_edge_origin = origin = [E[h >> 1][h & 1] for h in range(nh)]
+        self.half_edge_origin = origin
         self._out = out
         self.next_half_edge = nxt
         self._cycles = cycles
+        self._comp = comp
         self.components = sum(1 for a, c in enumerate(comp) if a == c)
-
-        positive = [c for c in range(len(cycles)) if areas[c][0] > 0]
-        # by area; Python's int division is correctly rounded, so the floats keep the order
-        # and the exact ratios decide their ties
-        self._positive = sorted(positive, key=lambda c: (areas[c][0] / areas[c][1],
-                                                         _Ratio(*areas[c])))
+        self._areas: dict = {}  # cycle -> exact (num, den), made when asked for
         self._bbox, self._hpoly = {}, {}  # per positive cycle, made when first asked for
+
+        positive = [c for c in range(len(cycles)) if signs[c] > 0]
+        self._positive_cycles = positive
         face_of_cycle = {c: n for n, c in enumerate(positive)}
-        self.faces = [Face(outer=cycles[c], _area=[areas[c]]) for c in positive]
-        self.unbounded = Face(outer=[])
-
-        comp_of_cycle = [comp[origin[c[0]]] for c in cycles]
-
-        def host(v, component):
-            p, hp = V[v], self._H[v]
-            # The innermost positive cycle of another component strictly containing p (smallest
-            # area first). p is a lexicographically smallest vertex of its component ``comp``:
-            # no cycle of its own component strictly contains it, and cycles of other components
-            # do not pass through it.
-            for c in self._positive:
-                if comp_of_cycle[c] == component:
-                    continue
-                b = self._cycle_box(c)
-                if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
-                    continue
-                if _hwinding(self._cycle_hpoints(c), hp) != 0:
-                    return face_of_cycle[c]
-            return -1
-
         self._face_of_cycle = face_of_cycle
+        self.faces = [Face(outer=cycles[c], _cycles=[c]) for c in positive]
+        self.unbounded = Face(outer=[])
+        # Every non-positive cycle (a component's outer boundary) is a hole of the face that
+        # holds its component; with one component (and no isolated vertex) that is the
+        # unbounded face, with no search.
+        several = self.components > 1
         cycle_face = [0] * len(cycles)
         for c in range(len(cycles)):
             if c in face_of_cycle:
                 cycle_face[c] = face_of_cycle[c]
                 continue
-            f = host(min(origin[h] for h in cycles[c]), comp_of_cycle[c])
+            f = self._host(min(origin[h] for h in cycles[c])) if several else -1
             cycle_face[c] = f
             face = self.faces[f] if f >= 0 else self.unbounded
             face.holes.append(cycles[c])
             if f >= 0:
-                face._area.append(areas[c])
-        for v in range(len(V)):
+                face._cycles.append(c)
+        for v in range(len(out)):
             if not out[v]:
-                f = host(v, comp[v])
+                f = self._host(v)
                 (self.faces[f] if f >= 0 else self.unbounded).isolated.append(v)
         self.half_edge_face = [cycle_face[cyc_of[h]] for h in range(nh)]
-        self.edge_faces = np.array(
-            [(self.half_edge_face[2 * k], self.half_edge_face[2 * k + 1]) for k in range(len(E))],
-            dtype=np.int64,
-        ).reshape(-1, 2)
+        owner = weakref.ref(self)  # no reference cycle: freed without the collector
         for f in self.faces:
-            f._owner = weakref.ref(self)  # no reference cycle: freed without the collector
-        if V:
-            h0 = self._H[0]
-            self.unbounded.sample = (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))
-        else:
-            self.unbounded.sample = (Fraction(0), Fraction(0))
+            f._owner = owner
+        self.unbounded._owner = owner
+
+    def _host(self, v: int) -> int:
+        """The face holding vertex ``v``, a lexicographically smallest vertex of its
+        component: the innermost positive cycle of another component strictly containing it
+        (smallest area first), -1 if none. No cycle of its own component strictly contains
+        it, and cycles of other components do not pass through it."""
+        component = self._comp[v]
+        p, hp = self._S[v], self._H[v]
+        comp_of_cycle = self._comp_of_cycle
+        for c in self._positive:
+            if comp_of_cycle[c] == component:
+                continue
+            b = self._cycle_box(c)
+            if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
+                continue
+            if _hwinding(self._cycle_hpoints(c), hp) != 0:
+                return self._face_of_cycle[c]
+        return -1
+
+    @cached_property
+    def _comp_of_cycle(self) -> list:
+        return [self._comp[self.half_edge_origin[c[0]]] for c in self._cycles]
+
+    @cached_property
+    def _positive(self) -> list:
+        """The positive cycles by area; Python's int division is correctly rounded, so the
+        floats keep the order and the exact ratios decide their ties."""
+        def key(c):
+            a = self._cycle_area(c)
+            return a[0] / a[1], _Ratio(*a)
+
+        return sorted(self._positive_cycles, key=key)
+
+    def _cycle_area(self, c: int) -> tuple[int, int]:
+        """Exact signed area of cycle ``c``: ``(num, den)``, area ``num / (2 den)``, ``den > 0``."""
+        a = self._areas.get(c)
+        if a is None:
+            a = self._areas[c] = _harea(self._H, self.half_edge_origin, self._cycles[c])
+        return a
+
+    def _face_area2(self, face: Face) -> tuple[int, int]:
+        """Twice the exact area of a bounded face: ``(num, den)``, ``den > 0`` (the sum of its
+        cycles' signed areas; holes count negatively)."""
+        num, den = 0, 1
+        for c in face._cycles:
+            n, d = self._cycle_area(c)
+            num, den = num * d + n * den, den * d
+        return num, den
+
+    @cached_property
+    def _scale(self) -> tuple[int, list]:
+        return _scaled(self._H)
+
+    @property
+    def _L(self) -> int:
+        """The points' common denominator, 0 when they are kept as float keys (:func:`_scaled`)."""
+        return self._scale[0]
+
+    @property
+    def _S(self) -> list:
+        """The points scaled by :attr:`_L` (integer pairs), or their float keys."""
+        return self._scale[1]
+
+    @cached_property
+    def _index(self) -> dict:
+        return {h: n for n, h in enumerate(self._H)}
+
+    @cached_property
+    def edges(self) -> np.ndarray:
+        return np.array(self._E, dtype=np.int64).reshape(-1, 2)
+
+    @cached_property
+    def edge_faces(self) -> np.ndarray:
+        hf = self.half_edge_face
+        return np.array([(hf[2 * k], hf[2 * k + 1]) for k in range(len(self._E))],
+                        dtype=np.int64).reshape(-1, 2)
 
     @property
     def vertices(self) -> list:
@@ -740,6 +807,11 @@ class Arrangement2D:
         ``y = (y0 + y1) / 2`` some gap between consecutive crossings lies in the face: the first
         gap with non-zero winding of the outer cycle.
         """
+        if face is self.unbounded:  # left of the smallest point
+            if not self._H:
+                return (Fraction(0), Fraction(0))
+            h0 = self._H[0]
+            return (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))
         V, origin = self.vertices, self.half_edge_origin
         ids = {origin[h] for h in face.outer}
         ids.update(origin[h] for c in face.holes for h in c)
@@ -992,7 +1064,7 @@ def pushed_inside(poly, turn: int, X: int, Y: int, W: int) -> bool:
     return all(_pushed_side(poly[k], poly[(k + 1) % n], X, Y, W) == turn for k in range(n))
 
 
-def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
+def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: bool = False) -> Coverage:
     """Net and unsigned coverage of the faces of the arrangement of ``segments`` by convex
     oriented polygons, read at one point per face.
 
@@ -1010,7 +1082,7 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
         vertices each, integer coordinates.
     weights : sequence of int
         Integer weight per polygon.
-    segments, labels
+    segments, labels, canonical
         As for :class:`Arrangement2D`.
 
     Returns
@@ -1024,7 +1096,7 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
     weights = [int(w) for w in weights]
     if len(weights) != len(polys):
         raise ValueError("weights must have one entry per polygon")
-    arr = Arrangement2D(segments, labels)
+    arr = Arrangement2D(segments, labels, canonical=canonical)
     turn, boxes, area2 = [], [], 0
     for i, poly in enumerate(polys):
         n = len(poly)
@@ -1036,7 +1108,7 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
     box = np.array(boxes, dtype=np.float64).reshape(-1, 4) if len(polys) > _FEW_POLYGONS else None
     nf = len(arr.faces)
     coverage, support = [0] * nf, [0] * nf
-    integral = 0
+    num, den = 0, 1  # twice the integral of the coverage: num / den
     for f, face in enumerate(arr.faces):
         X, Y, w = arr._inner_point(f)
         xf, yf = X / w, Y / w
@@ -1052,9 +1124,11 @@ def sampled_coverage(polygons, weights, segments, labels=None) -> Coverage:
                 c += weights[i] * turn[i]
                 s += abs(weights[i])
         coverage[f], support[f] = c, s
-        if c:
-            integral += c * face.area
-    if 2 * integral != area2:
+        if c:  # integral += c * face.area, as twice the areas over a growing denominator
+            n, d = arr._face_area2(face)
+            g = gcd(den, d)
+            num, den = num * (d // g) + c * n * (den // g), den * (d // g)
+    if num != area2 * den:
         raise ValueError("the coverage is not constant on the faces: the segments miss a place "
                          "where it changes")
     return Coverage(arr, coverage, support)

@@ -698,7 +698,7 @@ class _PlaneJobs:
         tl = self.members[p]
         polys = [[(c[a], c[b], 1) for c in self.corners[t]] for t in tl]
         cut3 = self.cuts.segments[p]
-        segs = [(project_homogeneous(x, ax), project_homogeneous(y, ax)) for x, y in cut3]
+        segs = [(_hnorm(*project_homogeneous(x, ax)), _hnorm(*project_homogeneous(y, ax))) for x, y in cut3]
         # The net coverage changes only where another plane's sheet meets this one
         # (closedness of the superset): along the cuts and the edges shared by label with
         # other planes' triangles. Where the net coverage is 0, the sheets of one orientation
@@ -714,13 +714,13 @@ class _PlaneJobs:
         if one:
             # One convex facet whose whole boundary is in the arrangement: every bounded face
             # lies in it (nothing is drawn outside), so each is covered once, by the facet.
-            arr = Arrangement2D(seg2, lab2)
+            arr = Arrangement2D(seg2, lab2, canonical=True)
             c = self.weight[tl[0]] * self.sign[tl[0]] * self.sigma[p]
             cov = Coverage(arr, [c] * len(arr.faces), [abs(c)] * len(arr.faces))
         else:
             weights = [self.weight[t] for t in tl]
             try:
-                cov = sampled_coverage(polys, weights, seg2, lab2)
+                cov = sampled_coverage(polys, weights, seg2, lab2, canonical=True)
             except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
                 cov = polygon_coverage(polys, weights, segs)
             arr = cov.arrangement
@@ -728,8 +728,8 @@ class _PlaneJobs:
         # the 3D points of the inputs are known; only crossings made in the plane are lifted
         known = {(c[a], c[b], 1): (c[0], c[1], c[2], 1) for t in tl for c in self.corners[t]}
         for (x, y), (px, py) in zip(cut3, segs):
-            known[_hnorm(*px)] = x
-            known[_hnorm(*py)] = y
+            known[px] = x
+            known[py] = y
         lifted = [known.get(h) or _lift(h, key, ax) for h in arr._H]
         origin = arr.half_edge_origin
         faces = []

@@ -131,8 +131,8 @@ def test_rounding_check_filter_is_identical(name):
 # --------------------------------------------------------------------------------------------
 # per-plane arrangements (cspace._kernels.planar)
 
-_CORE_FIELDS = ("order", "L", "S", "vertex_labels", "edges", "edge_labels", "out", "nxt",
-                "cycles", "cyc_of", "areas", "comp")
+_CORE_FIELDS = ("order", "vertex_labels", "edges", "edge_labels", "origin", "out", "nxt",
+                "cycles", "cyc_of", "signs", "comp")
 
 
 def _same_core(segs: list, labels: list | None = None) -> tuple:
@@ -211,13 +211,23 @@ def test_arrangement_core_is_identical_near_ties():
         w = 2**60 + k * 1009
         segs.append(((0, 0, 1), (w + k, 1, w)))  # nearly the same direction, distinct
         segs.append(((1, 0, 1), (0, 1, 1)))
-    core = _same_core(segs)
-    assert core[1] == 0  # L: no common scale
+    _same_core(segs)
+    assert planar.Arrangement2D(segs)._L == 0  # no common scale
     _same_core([((0, 0, 1), (7, 3, 1)), ((0, 3, 1), (7, 0, 1)), ((14, 6, 2), (21, 9, 3))])
 
 
-def test_arrangement_scale_limit_is_the_references():
-    assert compiled_planar.MAX_SCALE_BITS == planar._MAX_SCALE_BITS
+@pytest.mark.parametrize("big", [2**30, 2**52, 2**62, 2**200])
+def test_area_signs_of_slivers_are_the_references(big):
+    """Triangles of area 1/2 (and 0) with corners near ``big``: the float sum of the cycle
+    cannot see the area, so the filter must leave the sign to the exact sum (a filter that
+    decides on the rounded sum gives 0 or the wrong sign here)."""
+    for k in range(1, 6):
+        a, b = (big, big + k), (2 * big + 1, 2 * big + 2 * k + 1)
+        slim = [((0, 0, 1), (*a, 1)), ((*a, 1), (*b, 1)), ((*b, 1), (0, 0, 1))]
+        flat = [((0, 0, 1), (*a, 1)), ((*a, 1), (2 * a[0], 2 * a[1], 1))]
+        for segs in (slim, flat, [(q, p) for p, q in slim]):
+            signs = _same_core(segs)[9]
+            assert sorted(signs) == ([-1, 1] if len(segs) == 3 else [0])
 
 
 def test_import_compiles_nothing_and_loads_no_graph_library():

@@ -27,10 +27,6 @@ from libc.stdlib cimport free, malloc, realloc
 
 from math import gcd
 
-# Largest common denominator (in bits) that puts the points on one integer scale: as
-# cspace.planar._MAX_SCALE_BITS (a test checks they agree).
-MAX_SCALE_BITS = 1024
-
 cdef double _U = 2.0 ** -53
 cdef double _FILTER = 8.0 * 2.0 ** -53
 cdef double _TINY = 2.0 ** -400
@@ -239,6 +235,38 @@ cdef tuple _harea(list H, list origin, list cycle):
     return num, den
 
 
+cdef int _area_sign(_Points P, Py_ssize_t* ids, list H, Py_ssize_t* origin_c, list origin,
+                    list cycle) except -2:
+    """Sign of the signed area of a cycle (``sign(cspace.planar._harea(...)[0])``).
+
+    Float filter on the points' rounded coordinates: twice the area is the sum over the
+    cycle's half-edges of ``t = xa yb - ya xb``. With inputs within a relative ``u`` of the
+    exact coordinates (exact for 64-bit integer points), each product is within ``3u + O(u^2)``
+    of the exact one, each computed ``t`` within ``(4u + O(u^2)) m`` (``m = |xa yb| + |ya xb|``),
+    and the sum of the ``n`` terms adds ``(n - 1) u`` of the sum of their magnitudes: the
+    computed sum is within ``(n + 3) u (1 + O(u)) M`` of the exact one, ``M`` the sum of the
+    ``m``. The filter decides when ``|sum| > 2 (n + 4) u M`` (the factor 2 covers the rounding
+    of ``M`` itself); products of coordinates within ``[2**-400, 2**400]`` neither overflow
+    nor leave the normal range. Else the exact sum of Python integers decides."""
+    cdef Py_ssize_t n = len(cycle), k, h, a, b
+    cdef double s = 0.0, mag = 0.0, p, q
+    for k in range(n):
+        h = <Py_ssize_t> cycle[k]
+        a = ids[origin_c[h]]
+        b = ids[origin_c[h ^ 1]]
+        if P.kind[a] == EXACT_ONLY or P.kind[b] == EXACT_ONLY:
+            break
+        p = P.x[a] * P.y[b]
+        q = P.y[a] * P.x[b]
+        s += p - q
+        mag += fabs(p) + fabs(q)
+    else:
+        if fabs(s) > 2.0 * (n + 4) * _U * mag:
+            return 1 if s > 0 else -1
+    num = _harea(H, origin, cycle)[0]
+    return (num > 0) - (num < 0)
+
+
 cdef inline Py_ssize_t _find(Py_ssize_t* parent, Py_ssize_t a) noexcept:
     while parent[a] != a:
         parent[a] = parent[parent[a]]
@@ -402,22 +430,6 @@ def arrangement_core(list segs, list labels):
             rank[ids[k]] = k
         order = [P.h[ids[k]] for k in range(nv)]
 
-        # one common denominator L, as the reference
-        L = 1
-        for hh in order:
-            w = hh[2]
-            if L % w:
-                L = L * w // gcd(L, w)
-                if L.bit_length() > MAX_SCALE_BITS:
-                    break
-        if L.bit_length() > MAX_SCALE_BITS:
-            from cspace.planar import _float_key  # loaded by now: it imported this module
-
-            L = 0
-            S = [_float_key(hh) for hh in order]
-        else:
-            S = [(hh[0] * (L // hh[2]), hh[1] * (L // hh[2])) for hh in order]
-
         # pieces: consecutive points along each segment
         pieces = {}
         for i in proper:
@@ -505,7 +517,7 @@ def arrangement_core(list segs, list labels):
             cycles.append(c)
         cyc_of = [cyc_c[h] for h in range(nh)]
         origin = [origin_c[h] for h in range(nh)]
-        areas = [_harea(order, origin, c) for c in cycles]
+        signs = [_area_sign(P, ids, order, origin_c, origin, c) for c in cycles]
 
         # components: union-find, the smaller root kept (each root is its component's smallest
         # vertex)
@@ -520,7 +532,7 @@ def arrangement_core(list segs, list labels):
                 else:
                     parent[r] = s
         comp = [_find(parent, v) for v in range(nv)]
-        return order, L, S, vertex_labels, E, edge_labels, out, nxt, cycles, cyc_of, areas, comp
+        return order, vertex_labels, E, edge_labels, origin, out, nxt, cycles, cyc_of, signs, comp
     finally:
         free(sp)
         free(axis)
