@@ -714,6 +714,15 @@ class Arrangement2D:
         return -1
 
     @cached_property
+    def _cluttered(self) -> set:
+        """Faces holding an isolated vertex or a bridge (an edge with this face on both
+        sides: dangling edges, trees, edges joining a hole to a boundary)."""
+        hf = self.half_edge_face
+        out = {hf[h] for h in range(0, len(hf), 2) if hf[h] == hf[h + 1]}
+        out.update(f for f, face in enumerate(self.faces) if face.isolated)
+        return out
+
+    @cached_property
     def _comp_of_cycle(self) -> list:
         return [self._comp[self.half_edge_origin[c[0]]] for c in self._cycles]
 
@@ -1479,11 +1488,7 @@ def face_triangles(arr: Arrangement2D, f: int) -> list:
 def plain_interior(arr: Arrangement2D, f: int) -> bool:
     """No dangling edge, bridge or isolated vertex lies in face ``f``: then nothing of the
     arrangement meets the open triangles of :func:`face_triangles`."""
-    face = arr.faces[f]
-    if face.isolated:
-        return False
-    hf = arr.half_edge_face
-    return all(hf[h] != hf[h ^ 1] for cyc in (face.outer, *face.holes) for h in cyc)
+    return f not in arr._cluttered
 
 
 def strict_inner_point(arr: Arrangement2D, f: int) -> tuple[int, int, int]:

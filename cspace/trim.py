@@ -830,53 +830,70 @@ def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tup
 
 def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: int = 1) -> tuple[_Complex, int]:
     vid: dict = {}
-    eid: dict = {}
     face_plane, face_cov, face_tris, face_rings, face_src, face_point = [], [], [], [], [], []
-    inc_face, inc_edge, inc_sign = [], [], []
+    ring_u, ring_v, ring_f = [], [], []  # every boundary half-edge: from, to, sub-facet
     jobs = _PlaneJobs(ints, planes, cuts)
     n_planes = len(planes.keys)
     todo = [p for p in range(n_planes) if not jobs.trivial(p)]
     done, used = _run_arrangements(jobs, todo, workers, report)
-
-    def add(p: int, cov: int, g: list, rings, tris, src: int, point: tuple) -> None:
-        fid = len(face_plane)
-        face_plane.append(p)
-        face_cov.append(cov)
-        rings = [[g[v] for v in ring] for ring in rings]
-        if tris is None:
-            face_tris.append(None)
-            face_rings.append(rings)
-        else:
-            face_tris.append([(g[x], g[y], g[z]) for x, y, z in tris])
-            face_rings.append(None)
-        face_src.append(src)
-        face_point.append(point)
-        for ring in rings:
-            for gu, gv in zip(ring, ring[1:] + ring[:1]):
-                inc_face.append(fid)
-                inc_edge.append(eid.setdefault((gu, gv) if gu < gv else (gv, gu), len(eid)))
-                inc_sign.append(1 if gu < gv else -1)
-
+    members, sign, sigma, corners = jobs.members, jobs.sign, jobs.sigma, jobs.corners
+    weight, facet = jobs.weight, jobs.facet
     for p in range(n_planes):
-        if p not in done:
-            for t in jobs.members[p]:
-                ccw = jobs.sign[t] * jobs.sigma[p]
-                cs = jobs.corners[t] if ccw > 0 else jobs.corners[t][::-1]
-                g = [vid.setdefault((*c, 1), len(vid)) for c in cs]
-                add(p, ccw * jobs.weight[t], g, ((0, 1, 2),), ((0, 1, 2),), jobs.facet[t], None)
+        if p not in done:  # uncut triangles: each its own sub-facet, counter-clockwise
+            for t in members[p]:
+                ccw = sign[t] * sigma[p]
+                c0, c1, c2 = corners[t] if ccw > 0 else corners[t][::-1]
+                g0 = vid.setdefault((*c0, 1), len(vid))
+                g1 = vid.setdefault((*c1, 1), len(vid))
+                g2 = vid.setdefault((*c2, 1), len(vid))
+                fid = len(face_plane)
+                face_plane.append(p)
+                face_cov.append(ccw * weight[t])
+                face_tris.append([(g0, g1, g2)])
+                face_rings.append(None)
+                face_src.append(facet[t])
+                face_point.append(None)
+                ring_u += (g0, g1, g2)
+                ring_v += (g1, g2, g0)
+                ring_f += (fid, fid, fid)
             continue
         lifted, faces = done.pop(p)
         g = [vid.setdefault(x, len(vid)) for x in lifted]
         for cov, rings, tris, src, point in faces:
-            add(p, cov, g, rings, tris, src, point)
+            fid = len(face_plane)
+            face_plane.append(p)
+            face_cov.append(cov)
+            rings = [[g[v] for v in ring] for ring in rings]
+            if tris is None:
+                face_tris.append(None)
+                face_rings.append(rings)
+            else:
+                face_tris.append([(g[x], g[y], g[z]) for x, y, z in tris])
+                face_rings.append(None)
+            face_src.append(src)
+            face_point.append(point)
+            for ring in rings:
+                ring_u += ring
+                ring_v += ring[1:]
+                ring_v.append(ring[0])
+                ring_f += [fid] * len(ring)
+    # Edges are numbered in order of first appearance along the rings, as (u, v), u < v.
+    u = np.array(ring_u, dtype=np.int64)
+    v = np.array(ring_v, dtype=np.int64)
+    lo, hi = np.minimum(u, v), np.maximum(u, v)
+    _, first, inverse = np.unique(lo * max(len(vid), 1) + hi, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # first appearances are distinct
+    rank = np.empty(len(order), dtype=np.int64)
+    rank[order] = np.arange(len(order))
+    firsts = first[order]
     return _Complex(
         points=list(vid),
-        edges=np.array(list(eid), dtype=np.int64).reshape(-1, 2),
+        edges=np.stack([lo[firsts], hi[firsts]], axis=1).reshape(-1, 2),
         face_plane=np.array(face_plane, dtype=np.int64),
         face_cov=np.array(face_cov, dtype=np.int64),
-        inc_face=np.array(inc_face, dtype=np.int64),
-        inc_edge=np.array(inc_edge, dtype=np.int64),
-        inc_sign=np.array(inc_sign, dtype=np.int8),
+        inc_face=np.array(ring_f, dtype=np.int64),
+        inc_edge=rank[inverse.reshape(-1)],
+        inc_sign=np.where(u < v, 1, -1).astype(np.int8),
         face_tris=face_tris,
         face_rings=face_rings,
         plane_axis=jobs.axis,
