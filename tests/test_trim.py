@@ -467,3 +467,39 @@ def test_separate_bodies_are_not_holes():
         assert S.n_holes == 0 and len(np.unique(S.shell)) == k
         assert abs(S.volume - k * 1.5**3) < 1e-12
     assert minkowski_sum(hollow_box(), 0.4 * cube, workers=1).n_holes == 1
+
+
+@pytest.mark.parametrize("scale", [1, 2**40 + 1, 3**60])
+def test_volume_sign_filter_is_the_exact_sign(scale):
+    """The float-filtered volume sign of a shell (holes are told from bodies by it) is the
+    sign of the exact sum: closed boxes both ways, and surfaces of zero volume (a flat
+    double-sided square; a box with one corner moved by 1 / scale of a unit along a face),
+    where the filter cannot decide and the exact sum must."""
+    from cspace import trim
+
+    cube = np.array([[0, 0, 0], [2, 0, 0], [2, 3, 0], [0, 3, 0],
+                     [0, 0, 5], [2, 0, 5], [2, 3, 5], [0, 3, 5]])
+    faces = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+                      [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
+    pts = [(int(x) * scale, int(y) * scale, int(z) * scale, scale + 2) for x, y, z in cube]
+    assert trim._volume_sign(pts, faces) == 1 == np.sign(trim._six_volume(pts, faces))
+    assert trim._volume_sign(pts, faces[:, ::-1]) == -1
+    flat = np.array([[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]])
+    assert trim._volume_sign(pts, flat) == 0
+    # the top corner moved by 1 / scale inwards along the top face: still positive volume,
+    # a difference far below the filter's bound for large scales
+    moved = list(pts)
+    x, y, z, w = moved[6]
+    moved[6] = (x * scale - 1, y * scale, z * scale, w * scale)
+    assert trim._volume_sign(moved, faces) == np.sign(trim._six_volume(moved, faces)) == 1
+    assert trim._volume_sign(moved, faces[:, ::-1]) == -1
+    # two copies of the box, one of them turned inside out: zero volume, exact path
+    twice = np.vstack([faces, faces[:, ::-1]])
+    assert trim._volume_sign(pts, twice) == 0
+    # a unit tetrahedron 2**35 grid units from the origin: its triple products are about
+    # 2**105 and cancel to 1 (six times its volume); the float sum is noise of about 2**52
+    o = 2**35 * scale
+    tet = [(o, o, o, 1), (o + 1, o, o, 1), (o, o + 1, o, 1), (o, o, o + 1, 1)]
+    tf = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    assert trim._six_volume(tet, tf) == 1
+    assert trim._volume_sign(tet, tf) == 1 and trim._volume_sign(tet, tf[:, ::-1]) == -1
