@@ -224,7 +224,7 @@ def _hnorm(X: int, Y: int, W: int) -> tuple[int, int, int]:
         return (X, Y, 1)
     if W < 0:
         X, Y, W = -X, -Y, -W
-    g = gcd(gcd(X, Y), W)
+    g = gcd(X, Y, W)
     return (X // g, Y // g, W // g)
 
 
@@ -1276,7 +1276,7 @@ def _ear_ok(poly, i) -> bool:
 
 
 def _straight_runs(ring: list, H: list, runs: dict, uses: dict) -> tuple[list, bool]:
-    """Drop the vertices where a cycle goes straight on (collinear, same direction) and which
+    """(Reference of ``cspace._kernels.planar.straight_runs``.) Drop the vertices where a cycle goes straight on (collinear, same direction) and which
     no other cycle or other visit uses (``uses[v] == 1``); record each dropped run in
     ``runs[(a, b)]`` under the directed edge ``a -> b`` of the corners around it. Returns the
     corners (``[]`` if fewer than three are left) and whether every corner turns strictly
@@ -1301,7 +1301,7 @@ def _straight_runs(ring: list, H: list, runs: dict, uses: dict) -> tuple[list, b
 
 
 def _clip_simple(P: list, ids: list):
-    """Ear clipping of a simple counter-clockwise polygon (distinct vertices): an ear is a
+    """(Reference of ``cspace._kernels.planar.clip_simple``.) Ear clipping of a simple counter-clockwise polygon (distinct vertices): an ear is a
     convex corner whose closed triangle holds no other non-convex vertex (a vertex inside a
     simple polygon's ear triangle implies a reflex one inside). Returns the triangles, or None
     when it stalls (degenerate input: the caller falls back to the general test)."""
@@ -1422,7 +1422,7 @@ def triangulate_rings(H, rings: list) -> list:
         for v in ring:
             uses[v] = uses.get(v, 0) + 1
     runs: dict = {}
-    rings = [_straight_runs(ring, H, runs, uses) for ring in rings]
+    rings = [_compiled.straight_runs(ring, H, runs, uses) for ring in rings]
     (poly, convex), holes = rings[0], [h for h, _ in rings[1:] if h]
     if not poly:
         return []
@@ -1458,7 +1458,7 @@ def triangulate_rings(H, rings: list) -> list:
             # strictly convex corners: a fan (the straight runs go back in below)
             tris = [(ids[0], ids[k], ids[k + 1]) for k in range(1, len(P) - 1)]
         else:
-            tris = _clip_simple(P, ids)
+            tris = _compiled.clip_simple(P, ids)
     if tris is None:
         tris = _clip_general(P, ids)
     return _split_runs(tris, runs)

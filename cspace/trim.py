@@ -634,7 +634,7 @@ def _lift(H, key, ax: int) -> tuple:
     W = w * n[ax]
     if W < 0:
         P, W = [-c for c in P], -W
-    g = gcd(gcd(P[0], P[1]), gcd(P[2], W))
+    g = gcd(P[0], P[1], P[2], W)
     return (P[0] // g, P[1] // g, P[2] // g, W // g)
 
 
@@ -1113,7 +1113,7 @@ def _anchor(cx: _Complex, planes: _Planes, S: Superset, B: ConvexPolytope) -> in
     u = tuple(int(c) for c in B.normals[0])
     pts = S.ints.astype(object)
     h = max((pts[:, 0] * u[0] + pts[:, 1] * u[1] + pts[:, 2] * u[2]).tolist())
-    g = gcd(gcd(u[0], u[1]), gcd(u[2], h))
+    g = gcd(u[0], u[1], u[2], h)
     n, d = tuple(c // g for c in u), h // g
     if next(c for c in n if c != 0) < 0:
         n, d = tuple(-c for c in n), -d
@@ -1328,7 +1328,7 @@ def _face_point(cx: _Complex, f: int) -> tuple:
     bc, ac, ab = wb * wc, wa * wc, wa * wb
     s = (xa * bc + xb * ac + xc * ab, ya * bc + yb * ac + yc * ab, za * bc + zb * ac + zc * ab,
          3 * wa * bc)
-    h = gcd(gcd(s[0], s[1]), gcd(s[2], s[3]))
+    h = gcd(s[0], s[1], s[2], s[3])
     return (s[0] // h, s[1] // h, s[2] // h, s[3] // h)
 
 

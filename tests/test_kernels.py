@@ -161,7 +161,10 @@ def _captured_arrangements(monkeypatch, cases) -> list:
             seen.append((list(segs), list(labels)))
             return real(segs, labels)
 
-    monkeypatch.setattr(planar, "_compiled", Spy)
+        def __getattr__(self, name):  # the other kernels as they are
+            return getattr(compiled_planar, name)
+
+    monkeypatch.setattr(planar, "_compiled", Spy())
     for (v, f), b in cases:
         grid = Grid.for_points(v, b)
         trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
@@ -245,3 +248,76 @@ def test_import_compiles_nothing_and_loads_no_graph_library():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0, out.stderr
+
+
+# --------------------------------------------------------------------------------------------
+# triangulation steps (cspace._kernels.planar.straight_runs / clip_simple)
+
+
+def _same_triangulation_steps(H: list, rings: list) -> None:
+    """Both kernels against their references on one face: identical corners, runs,
+    convexity and ear-clipping triangles (or both None)."""
+    uses: dict = {}
+    for ring in rings:
+        for v in ring:
+            uses[v] = uses.get(v, 0) + 1
+    for ring in rings:
+        r1, r2 = {}, {}
+        a = planar._straight_runs(ring, H, r1, uses)
+        b = compiled_planar.straight_runs(ring, H, r2, uses)
+        assert a == b and r1 == r2
+        if a[0] and len(set(a[0])) == len(a[0]):
+            P = [H[v] for v in a[0]]
+            assert planar._clip_simple(P, a[0]) == compiled_planar.clip_simple(P, a[0])
+
+
+def test_triangulation_steps_are_identical_on_minkowski_sums(monkeypatch):
+    """Every face triangulated in three sums (convex and non-convex faces, straight runs,
+    crossing points with large denominators)."""
+    from zoo import icosphere_points
+
+    seen = []
+    real = planar.triangulate_rings
+
+    def spy(H, rings):
+        seen.append((H, [list(r) for r in rings]))
+        return real(H, rings)
+
+    monkeypatch.setattr(planar, "triangulate_rings", spy)
+    ico = icosphere_points(1, radius=0.3)
+    for (v, f), b in [(star(), ico), (comb(3, 2), ico), (torus(sections=12, ring=8), ico)]:
+        from cspace.convex import ConvexPolytope
+        from cspace.exact import Grid
+        from cspace.mesh import ClosedMesh
+
+        grid = Grid.for_points(v, b)
+        trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                           ConvexPolytope.from_points(b, grid=grid), workers=1)
+    monkeypatch.undo()
+    assert len(seen) > 100
+    for H, rings in seen:
+        _same_triangulation_steps(H, rings)
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_triangulation_steps_are_identical_on_degenerate_polygons(seed):
+    """Random star-shaped polygons with collinear runs, repeated visits, spikes and reflex
+    corners, on a small lattice, then scaled far beyond 2**30 or given huge weights (the
+    filters cannot decide: Python integers do) and moved by a few units at 2**60 (slivers)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(5, 14))
+    ang = np.sort(rng.uniform(0, 2 * np.pi, n))
+    rad = rng.integers(1, 5, n)
+    pts = [(int(round(r * np.cos(t) * 2)), int(round(r * np.sin(t) * 2))) for r, t in zip(rad, ang)]
+    ring = []
+    for k, p in enumerate(pts):  # insert midpoints (straight runs) on even edges
+        ring.append(p)
+        q = pts[(k + 1) % n]
+        if k % 2 == 0 and (p[0] + q[0]) % 2 == 0 and (p[1] + q[1]) % 2 == 0:
+            ring.append(((p[0] + q[0]) // 2, (p[1] + q[1]) // 2))
+    uniq = list(dict.fromkeys(ring))
+    for scale, w, shift in ((1, 1, 0), (2**40 + 3, 1, 0), (7, 2**61 + 1, 0), (1, 1, 2**60)):
+        H = [planar._hnorm(x * scale + shift * w, y * scale + shift * w, w) for x, y in uniq]
+        ids = [uniq.index(p) for p in ring]
+        _same_triangulation_steps(H, [ids])
+        _same_triangulation_steps(H, [ids[::-1]])

@@ -207,7 +207,7 @@ cdef tuple _hnorm(tuple h):
     X, Y, W = h
     if W < 0:
         X, Y, W = -X, -Y, -W
-    g = gcd(gcd(X, Y), W)
+    g = gcd(X, Y, W)
     return (X // g, Y // g, W // g)
 
 
@@ -545,3 +545,150 @@ def arrangement_core(list segs, list labels):
         free(nxt_c)
         free(cyc_c)
         free(parent)
+
+
+# --------------------------------------------------------------------------------------------
+# triangulation of a face (cspace.planar.triangulate_rings): its predicate-heavy steps
+
+
+cdef int _dot_sign(_Points P, Py_ssize_t a, Py_ssize_t v, Py_ssize_t b) except -2:
+    """Sign of ``(v - a) . (b - v)``: ``sign(_dot(_hdir(a, v), _hdir(v, b)))`` of
+    :mod:`cspace.planar` (the homogeneous vectors are these scaled by positive weights).
+    Decided as :meth:`_Points.orient`: 64-bit integers, else the float filter ``|d| > 8u (s t
+    + s' t')`` with ``s = |vx| + |ax|``, ``t = |bx| + |vx|``, ``s' = |vy| + |ay|``, ``t' = |by|
+    + |vy|`` (the same error analysis: two products of rounded differences, one addition),
+    else Python integers."""
+    cdef long long ix, iy, jx, jy, d
+    cdef double det, bound
+    if a == v or v == b:
+        return 0
+    cdef char ka = P.kind[a], kv = P.kind[v], kb = P.kind[b]
+    if ka == SMALL_INT and kv == SMALL_INT and kb == SMALL_INT:
+        # |differences| < 2**31, products < 2**62, their sum < 2**63: no overflow
+        ix = P.ix[v] - P.ix[a]
+        iy = P.iy[v] - P.iy[a]
+        jx = P.ix[b] - P.ix[v]
+        jy = P.iy[b] - P.iy[v]
+        d = ix * jx + iy * jy
+        return (d > 0) - (d < 0)
+    if ka != EXACT_ONLY and kv != EXACT_ONLY and kb != EXACT_ONLY:
+        det = (P.x[v] - P.x[a]) * (P.x[b] - P.x[v]) + (P.y[v] - P.y[a]) * (P.y[b] - P.y[v])
+        bound = _FILTER * ((fabs(P.x[v]) + fabs(P.x[a])) * (fabs(P.x[b]) + fabs(P.x[v]))
+                           + (fabs(P.y[v]) + fabs(P.y[a])) * (fabs(P.y[b]) + fabs(P.y[v])))
+        if det > bound:
+            return 1
+        if det < -bound:
+            return -1
+    pa = <tuple> P.h[a]
+    pv = <tuple> P.h[v]
+    pb = <tuple> P.h[b]
+    ux, uy = pv[0] * pa[2] - pa[0] * pv[2], pv[1] * pa[2] - pa[1] * pv[2]
+    wx, wy = pb[0] * pv[2] - pv[0] * pb[2], pb[1] * pv[2] - pv[1] * pb[2]
+    e = ux * wx + uy * wy
+    return (e > 0) - (e < 0)
+
+
+def straight_runs(list ring, H, dict runs, dict uses):
+    """``cspace.planar._straight_runs`` (identical outputs; the same exact signs through
+    filters)."""
+    cdef Py_ssize_t n = len(ring), k, m = 0, x, y, j
+    cdef _Points P = _Points(n + 1)
+    cdef Py_ssize_t* pid = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t* keep = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+    cdef int o
+    cdef bint convex = True
+    if not (pid and keep):
+        free(pid)
+        free(keep)
+        raise MemoryError()
+    try:
+        for k in range(n):
+            pid[k] = P.add(<tuple> H[<Py_ssize_t> ring[k]])
+        for k in range(n):
+            x = k - 1 if k > 0 else n - 1
+            y = k + 1 if k + 1 < n else 0
+            o = P.orient(pid[x], pid[k], pid[y])
+            if uses[ring[k]] > 1 or o != 0 or _dot_sign(P, pid[x], pid[k], pid[y]) <= 0:
+                keep[m] = k
+                m += 1
+                convex = convex and o > 0
+        if m < 3:
+            return [], False
+        for j in range(m):
+            x = keep[j]
+            y = keep[j + 1] if j + 1 < m else keep[0]
+            between = [ring[k % n] for k in range(x + 1, y if y > x else y + n)]
+            if between:
+                runs[(ring[x], ring[y])] = between
+        return [ring[keep[j]] for j in range(m)], convex
+    finally:
+        free(pid)
+        free(keep)
+
+
+cdef inline bint _in_closed_triangle(_Points P, Py_ssize_t p, Py_ssize_t a, Py_ssize_t b,
+                                     Py_ssize_t c) except -1:
+    return P.orient(a, b, p) >= 0 and P.orient(b, c, p) >= 0 and P.orient(c, a, p) >= 0
+
+
+def clip_simple(list Ps, list ids):
+    """``cspace.planar._clip_simple`` (identical outputs): ear clipping of a simple
+    counter-clockwise polygon, None when it stalls."""
+    cdef Py_ssize_t n = len(Ps), k, p, q, r, j, left, stall
+    cdef _Points P = _Points(n + 1)
+    cdef Py_ssize_t* pid = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t* prv = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+    cdef Py_ssize_t* nxt = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+    cdef char* conv = <char*> malloc((n + 1) * sizeof(char))
+    cdef char* reflex = <char*> malloc((n + 1) * sizeof(char))  # the reference's set
+    cdef bint ear
+    if not (pid and prv and nxt and conv and reflex):
+        free(pid)
+        free(prv)
+        free(nxt)
+        free(conv)
+        free(reflex)
+        raise MemoryError()
+    try:
+        for k in range(n):
+            pid[k] = P.add(<tuple> Ps[k])
+            prv[k] = k - 1 if k > 0 else n - 1
+            nxt[k] = k + 1 if k + 1 < n else 0
+        for k in range(n):
+            conv[k] = P.orient(pid[prv[k]], pid[k], pid[nxt[k]]) > 0
+            reflex[k] = not conv[k]
+        tris = []
+        k, left, stall = 0, n, 0
+        while left > 3:
+            p, q = prv[k], nxt[k]
+            ear = conv[k]
+            if ear:
+                for r in range(n):
+                    if (reflex[r] and r != p and r != q
+                            and _in_closed_triangle(P, pid[r], pid[p], pid[k], pid[q])):
+                        ear = False
+                        break
+            if ear:
+                tris.append((ids[p], ids[k], ids[q]))
+                nxt[p] = q
+                prv[q] = p
+                reflex[k] = False
+                left -= 1
+                for j in (p, q):
+                    conv[j] = P.orient(pid[prv[j]], pid[j], pid[nxt[j]]) > 0
+                    reflex[j] = not conv[j]
+                k, stall = p, 0
+            else:
+                k, stall = nxt[k], stall + 1
+                if stall > left:
+                    return None
+        p, q = prv[k], nxt[k]
+        if P.orient(pid[p], pid[k], pid[q]) > 0:
+            tris.append((ids[p], ids[k], ids[q]))
+        return tris
+    finally:
+        free(pid)
+        free(prv)
+        free(nxt)
+        free(conv)
+        free(reflex)
