@@ -20,7 +20,7 @@ if sys.platform == "win32":
 else:
     FLAGS = ["-O3", "-ffp-contract=off"] + ([] if PORTABLE else ["-march=native"])
 
-KERNELS = ["meshquery", "planar", "trim"]  # cspace/_kernels/<name>.pyx accelerates cspace/<name>.py
+KERNELS = ["arrangement", "meshquery", "planar", "trim"]  # cspace/_kernels/<name>.pyx accelerates cspace/<name>.py
 
 setup(
     ext_modules=cythonize(

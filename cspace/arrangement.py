@@ -7,7 +7,7 @@ two labels are equal exactly when their positions are (measured on supersets, de
 section 7; the caller must ensure it), so a shared label is a shared point, never recomputed.
 
 - :func:`candidate_pairs` (step 4): all pairs of triangles whose closed integer bounding
-  boxes meet, by a vectorised sweep along one axis.
+  boxes meet, by a sweep along one axis.
 - :func:`intersect_pairs` (step 5): the exact class of each pair's intersection
   ``X = T_i ∩ T_j`` (closed triangles, possibly of zero area) and, for non-coplanar
   contacts, the endpoints of ``X`` as *symbolic* points: a vertex label, or an edge of one
@@ -15,7 +15,9 @@ section 7; the caller must ensure it), so a shared label is a shared point, neve
 - :func:`endpoint_coordinates`: canonical exact homogeneous coordinates of those points.
 
 Every decision is the exact sign of an integer polynomial, from :mod:`cspace.exact` or from
-Python integers; no tolerance is used anywhere.
+Python integers in the numpy references, in 64/128-bit integers in the compiled kernel
+(:mod:`cspace._kernels.arrangement`, which the public functions use); no tolerance is used
+anywhere.
 
 Method (non-coplanar pairs, after Möller 1997 and Guigue & Devillers 2003). With ``N_i``
 the integer normal of triangle ``i`` and ``s`` the exact signs of each triangle's vertices
@@ -41,7 +43,13 @@ from math import gcd
 import numpy as np
 
 from . import exact
+from ._kernels import load
 from .errors import ExactnessError, GridRangeError
+
+# The box sweep, the pair classification and the endpoint coordinates run compiled
+# (cspace._kernels.arrangement); their numpy references are BoxSweep._pairs_reference,
+# _intersect_pairs_reference and _endpoint_coordinates_reference, which they match exactly.
+_compiled = load("arrangement")
 
 __all__ = [
     "TRITRI_CLASSES",
@@ -200,8 +208,8 @@ def candidate_pairs(ints, faces, *, chunk: int = _CHUNK) -> np.ndarray:
 
     Sweep: triangles are sorted by their box minimum along the axis that yields the fewest
     one-axis overlaps; each triangle's partners after it in that order form a contiguous run
-    (found by ``searchsorted`` of its box maximum). The runs are expanded in chunks and
-    filtered by the two other axes.
+    (found by ``searchsorted`` of its box maximum). The runs are scanned and filtered by
+    the two other axes (compiled: :func:`cspace._kernels.arrangement.sweep_pairs`).
 
     Parameters
     ----------
@@ -210,8 +218,9 @@ def candidate_pairs(ints, faces, *, chunk: int = _CHUNK) -> np.ndarray:
     faces : (t, 3) int64
         Triangles as vertex labels.
     chunk : int, default 2**21
-        Largest number of one-axis overlaps expanded at once (memory is about
-        ``64 * chunk`` bytes).
+        The numpy reference sweep's bound on the one-axis overlaps expanded at once
+        (:meth:`BoxSweep._pairs_reference`); the compiled sweep holds only its output
+        (at most 48 bytes per pair while it collects and sorts them), so it does not use it.
 
     Returns
     -------
@@ -260,18 +269,34 @@ class BoxSweep:
         # Position of the first partner of each row, minus where its run starts in the chunk.
         self.shift = np.arange(1, t + 1, dtype=np.int64) - (self.cum - self.count)
 
+    def _rows(self, share: int, shares: int) -> tuple[int, int]:
+        """The sweep rows ``[start, end)`` of share ``share`` of ``shares``."""
+        def row(k: int) -> int:  # first sweep row of share k
+            return int(np.searchsorted(self.cum, k * self.overlaps // shares, side="right"))
+
+        return (0 if share == 0 else row(share)), (self.t if share == shares - 1 else row(share + 1))
+
     def pairs(self, share: int = 0, shares: int = 1, *, chunk: int = _CHUNK) -> np.ndarray:
         """The intersecting pairs found from share ``share`` of ``shares`` (consecutive
         sweep rows holding about ``overlaps / shares`` one-axis overlaps each): sorted rows
-        ``(i, j)``, ``i < j``; the shares together give every pair once."""
+        ``(i, j)``, ``i < j``, int64 ``(k, 2)``; the shares together give every pair once.
+
+        Compiled (:func:`cspace._kernels.arrangement.sweep_pairs`, the same pairs as
+        :meth:`_pairs_reference`); it holds only its output, so ``chunk`` (the reference's
+        memory bound) is not used."""
         if self.overlaps == 0:
             return np.zeros((0, 2), dtype=np.int64)
-        t, count, cum, shift, itype = self.t, self.count, self.cum, self.shift, self.itype
-        def row(k: int) -> int:  # first sweep row of share k
-            return int(np.searchsorted(cum, k * self.overlaps // shares, side="right"))
+        start, end = self._rows(share, shares)
+        (lo1, lo2), (hi1, hi2) = self.los, self.his
+        return _compiled.sweep_pairs(start, end, self.t, self.order, self.cum, lo1, hi1, lo2, hi2)
 
-        start = 0 if share == 0 else row(share)
-        end = t if share == shares - 1 else row(share + 1)
+    def _pairs_reference(self, share: int = 0, shares: int = 1, *, chunk: int = _CHUNK) -> np.ndarray:
+        """:meth:`pairs` in numpy (the reference): the one-axis overlaps are expanded in
+        chunks of at most ``chunk`` rows and filtered by the two other axes."""
+        if self.overlaps == 0:
+            return np.zeros((0, 2), dtype=np.int64)
+        count, cum, shift, itype = self.count, self.cum, self.shift, self.itype
+        start, end = self._rows(share, shares)
         out = []
         while start < end:
             base = int(cum[start - 1]) if start else 0
@@ -446,9 +471,10 @@ def intersect_pairs(ints, faces, pairs) -> TriTriResult:
       and corner cones with ``orient2d``, or integer comparisons along a common line (see
       :func:`_segment_triangle_coplanar`, :func:`_segment_segment`).
 
-    Cost: every step is vectorised over the pairs (numpy, with the exact fallbacks of
-    :mod:`cspace.exact` on the rows its float filter cannot decide); about 1 µs per
-    candidate pair on generic supersets.
+    Cost: compiled (:func:`cspace._kernels.arrangement.intersect_pairs`), pair by pair, every
+    predicate evaluated exactly in 64- or 128-bit integers (the bounds are in that module's
+    docstring); about 0.1 µs per candidate pair on generic supersets. Its numpy reference,
+    :func:`_intersect_pairs_reference`, gives identical results.
 
     Examples
     --------
@@ -464,6 +490,21 @@ def intersect_pairs(ints, faces, pairs) -> TriTriResult:
     >>> exact_points[0].tolist(), approx[0].tolist()
     ([(0, 3, 0, 4), (1, 1, 0, 1)], [[0.0, 0.75, 0.0], [1.0, 1.0, 0.0]])
     """
+    ints, faces = _check_soup(ints, faces)
+    pairs = _check_pairs(pairs, len(faces))
+    cls, kind, u, v, plane = _compiled.intersect_pairs(
+        np.ascontiguousarray(ints), np.ascontiguousarray(faces), np.ascontiguousarray(pairs),
+        _STATUS, _ENDS,
+    )
+    if (cls < 0).any():  # every branch assigns a class; this is a certificate
+        raise ExactnessError(f"{int((cls < 0).sum())} triangle pairs were left unclassified")
+    return TriTriResult(pairs=pairs, cls=cls, kind=kind, u=u, v=v, plane=plane)
+
+
+def _intersect_pairs_reference(ints, faces, pairs) -> TriTriResult:
+    """:func:`intersect_pairs` in numpy, vectorised over the pairs (the reference of the
+    compiled kernel, which must return identical arrays): predicates from
+    :mod:`cspace.exact` (float filter, then Python integers)."""
     ints, faces = _check_soup(ints, faces)
     pairs = _check_pairs(pairs, len(faces))
     k = len(pairs)
@@ -933,8 +974,25 @@ def endpoint_coordinates(ints, faces, result: TriTriResult):
     Notes
     -----
     An edge ``(u, v)`` crossing the plane of triangle ``t`` with ``s_x = N_t · (x - t_0)``
-    is the point ``(s_u v - s_v u) / (s_u - s_v)``.
+    is the point ``(s_u v - s_v u) / (s_u - s_v)``. Compiled
+    (:func:`cspace._kernels.arrangement.endpoint_coordinates`, in 128-bit integers); the
+    reference is :func:`_endpoint_coordinates_reference`.
     """
+    ints, faces = _check_soup(ints, faces)
+    c = np.ascontiguousarray
+    kind, u, v, plane = (c(result.kind, dtype=np.int8), c(result.u, dtype=np.int64),
+                         c(result.v, dtype=np.int64), c(result.plane, dtype=np.int64))
+    # The kernel trusts its indices: check them as the reference's numpy indexing would.
+    isv, ise = kind == VERTEX, kind == EDGE_PLANE
+    for idx, sel, n in ((u, isv | ise, len(ints)), (v, ise, len(ints)), (plane, ise, len(faces))):
+        if sel.any() and not (0 <= idx[sel].min() and idx[sel].max() < n):
+            raise IndexError(f"an endpoint refers to an index outside [0, {n})")
+    return _compiled.endpoint_coordinates(c(ints), c(faces), kind, u, v, plane)
+
+
+def _endpoint_coordinates_reference(ints, faces, result: TriTriResult):
+    """:func:`endpoint_coordinates` in numpy and Python integers (the reference of the
+    compiled kernel: equal tuples, bit-identical floats)."""
     ints, faces = _check_soup(ints, faces)
     k = len(result)
     ex = np.full((k, 2), None, dtype=object)
