@@ -385,16 +385,17 @@ def _arrangement_core(segs: list, labels: list) -> tuple:
     pairs, one label each): the pure-Python reference of
     :func:`cspace._kernels.planar.arrangement_core`, which returns the same.
 
-    Returns ``(order, vertex_labels, edges, edge_labels, origin, out, nxt, cycles, cyc_of,
+    Returns ``(order, vertex_labels, edges, edge_labels, origin, isolated, nxt, cycles, cyc_of,
     signs, comp)``:
 
     - ``order``: the distinct points, homogeneous, sorted lexicographically (x, then y);
     - ``vertex_labels``: labels of the zero-length segments, by vertex;
     - ``edges``: ``(u, v)``, ``u < v``, sorted; ``edge_labels``: the label set of each;
     - ``origin``: the origin vertex of each half-edge;
-    - ``out``: each vertex's outgoing half-edges, counter-clockwise from angle 0 (half-edge
-      ``2k`` is edge k from u to v, ``2k + 1`` back); ``nxt``: the successor of each
-      half-edge along its face (the clockwise neighbour of its twin);
+    - ``isolated``: the vertices on no edge (half-edge ``2k`` is edge k from u to v,
+      ``2k + 1`` back); ``nxt``: the successor of each half-edge along its face (the
+      clockwise neighbour of its twin, the outgoing half-edges of a vertex being ordered
+      counter-clockwise from angle 0);
     - ``cycles``: the face cycles (half-edge lists, each from its smallest half-edge, in
       order of it), ``cyc_of``: each half-edge's cycle;
     - ``signs``: the sign of each cycle's signed area (:func:`_harea`; the exact areas are
@@ -538,7 +539,8 @@ def _arrangement_core(segs: list, labels: list) -> tuple:
         if ru != rv:
             parent[max(ru, rv)] = min(ru, rv)
     comp = [find(a) for a in range(len(order))]
-    return order, vertex_labels, E, edge_labels, origin, out, nxt, cycles, cyc_of, signs, comp
+    isolated = [v for v in range(len(order)) if not out[v]]
+    return order, vertex_labels, E, edge_labels, origin, isolated, nxt, cycles, cyc_of, signs, comp
 
 
 def _scaled(points: list) -> tuple[int, list]:
@@ -650,13 +652,12 @@ class Arrangement2D:
     # ---------------------------------------------------------------- construction
 
     def _build(self, segs, labels):
-        (self._H, self.vertex_labels, E, self.edge_labels, origin, out, nxt, cycles, cyc_of,
+        (self._H, self.vertex_labels, E, self.edge_labels, origin, isolated, nxt, cycles, cyc_of,
          signs, comp) = _compiled.arrangement_core(segs, labels)
         self._vertices = None
         self._E = E
         nh = 2 * len(E)
         self.half_edge_origin = origin
-        self._out = out
         self.next_half_edge = nxt
         self._cycles = cycles
         self._comp = comp
@@ -685,10 +686,9 @@ class Arrangement2D:
             face.holes.append(cycles[c])
             if f >= 0:
                 face._cycles.append(c)
-        for v in range(len(out)):
-            if not out[v]:
-                f = self._host(v)
-                (self.faces[f] if f >= 0 else self.unbounded).isolated.append(v)
+        for v in isolated:
+            f = self._host(v)
+            (self.faces[f] if f >= 0 else self.unbounded).isolated.append(v)
         self.half_edge_face = [cycle_face[cyc_of[h]] for h in range(nh)]
         owner = weakref.ref(self)  # no reference cycle: freed without the collector
         for f in self.faces:

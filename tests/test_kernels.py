@@ -131,7 +131,7 @@ def test_rounding_check_filter_is_identical(name):
 # --------------------------------------------------------------------------------------------
 # per-plane arrangements (cspace._kernels.planar)
 
-_CORE_FIELDS = ("order", "vertex_labels", "edges", "edge_labels", "origin", "out", "nxt",
+_CORE_FIELDS = ("order", "vertex_labels", "edges", "edge_labels", "origin", "isolated", "nxt",
                 "cycles", "cyc_of", "signs", "comp")
 
 

@@ -23,7 +23,7 @@ overflows. Comparisons of one coordinate use the rounded values alone when they 
 """
 
 from libc.math cimport fabs
-from libc.stdlib cimport free, malloc, realloc
+from libc.stdlib cimport calloc, free, malloc, qsort, realloc
 
 from math import gcd
 
@@ -313,15 +313,58 @@ cdef int _merge_sort_lex(_Points P, Py_ssize_t* a, Py_ssize_t* tmp, Py_ssize_t n
     return 0
 
 
+cdef struct _Vec:
+    Py_ssize_t* a
+    Py_ssize_t n, cap
+
+
+cdef int _push(_Vec* v, Py_ssize_t x) except -1:
+    cdef Py_ssize_t cap
+    cdef void* p
+    if v.n == v.cap:
+        cap = 2 * v.cap if v.cap else 16
+        p = realloc(v.a, cap * sizeof(Py_ssize_t))
+        if not p:
+            raise MemoryError()
+        v.a = <Py_ssize_t*> p
+        v.cap = cap
+    v.a[v.n] = x
+    v.n += 1
+    return 0
+
+
+cdef struct _Piece:
+    Py_ssize_t lo, hi, seg
+
+
+cdef int _piece_cmp(const void* pa, const void* pb) noexcept nogil:
+    cdef const _Piece* a = <const _Piece*> pa
+    cdef const _Piece* b = <const _Piece*> pb
+    if a.lo != b.lo:
+        return -1 if a.lo < b.lo else 1
+    if a.hi != b.hi:
+        return -1 if a.hi < b.hi else 1
+    return (a.seg > b.seg) - (a.seg < b.seg)
+
+
 def arrangement_core(list segs, list labels):
     """The exact combinatorics of the arrangement of ``segs``: see
-    ``cspace.planar._arrangement_core`` (identical outputs)."""
-    cdef Py_ssize_t n = len(segs), i, j, k, m, nv, nh, a, b, r, s, x, ax, t, v, g, h
+    ``cspace.planar._arrangement_core`` (identical outputs). The points live in a
+    :class:`_Points` table; which points lie on which segment, the pieces between them and
+    the half-edge structure are C arrays, turned into Python lists only for the result."""
+    cdef Py_ssize_t n = len(segs), i, j, k, m, nv, nh, ne, a, b, r, s, x, ax, t, v, g, h
+    cdef Py_ssize_t lo, hi, npc, ninc
     cdef int o1, o2, o3, o4
     cdef _Points P = _Points(2 * n + 8)
     cdef Py_ssize_t* sp = <Py_ssize_t*> malloc((2 * n + 1) * sizeof(Py_ssize_t))
     cdef char* axis = <char*> malloc((n + 1) * sizeof(char))
     cdef double* box = <double*> malloc((4 * n + 1) * sizeof(double))
+    cdef Py_ssize_t* prop = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+    cdef _Vec inc_s, inc_p  # incidences: point inc_p[k] lies on segment inc_s[k]
+    cdef Py_ssize_t* start = NULL
+    cdef Py_ssize_t* onp = NULL
+    cdef char* mark = NULL
+    cdef _Piece* pieces = NULL
     cdef Py_ssize_t* ids = NULL
     cdef Py_ssize_t* tmp = NULL
     cdef Py_ssize_t* rank = NULL
@@ -330,20 +373,22 @@ def arrangement_core(list segs, list labels):
     cdef Py_ssize_t* nxt_c = NULL
     cdef Py_ssize_t* cyc_c = NULL
     cdef Py_ssize_t* parent = NULL
-    if not (sp and axis and box):
-        free(sp)
-        free(axis)
-        free(box)
-        raise MemoryError()
+    cdef Py_ssize_t* ostart = NULL
+    cdef Py_ssize_t* oh = NULL
+    inc_s.a = inc_p.a = NULL
+    inc_s.n = inc_p.n = inc_s.cap = inc_p.cap = 0
     try:
-        proper = []
+        if not (sp and axis and box and prop):
+            raise MemoryError()
+        m = 0
         points_only = []
         for i in range(n):
             p, q = segs[i]
             sp[2 * i] = P.add(p)
             sp[2 * i + 1] = P.add(q)
             if sp[2 * i] != sp[2 * i + 1]:
-                proper.append(i)
+                prop[m] = i
+                m += 1
                 axis[i] = 0 if P.cmp(sp[2 * i], sp[2 * i + 1], 0) != 0 else 1
                 a, b = sp[2 * i], sp[2 * i + 1]
                 # closed boxes of the rounded coordinates: rounding is monotone, so boxes of
@@ -352,15 +397,17 @@ def arrangement_core(list segs, list labels):
                 box[4 * i + 1] = P.x[b] if P.x[a] < P.x[b] else P.x[a]
                 box[4 * i + 2] = P.y[a] if P.y[a] < P.y[b] else P.y[b]
                 box[4 * i + 3] = P.y[b] if P.y[a] < P.y[b] else P.y[a]
+                _push(&inc_s, i)
+                _push(&inc_p, a)
+                _push(&inc_s, i)
+                _push(&inc_p, b)
             else:
                 points_only.append(i)
-        on = {i: {sp[2 * i], sp[2 * i + 1]} for i in proper}
         lines = {}
-        m = len(proper)
         for a in range(m):
-            i = proper[a]
+            i = prop[a]
             for b in range(a + 1, m):
-                j = proper[b]
+                j = prop[b]
                 if (box[4 * i + 1] < box[4 * j] or box[4 * j + 1] < box[4 * i]
                         or box[4 * i + 3] < box[4 * j + 2] or box[4 * j + 3] < box[4 * i + 2]):
                     continue
@@ -369,10 +416,12 @@ def arrangement_core(list segs, list labels):
                 if o1 == 0 and o2 == 0:  # collinear: overlap or touch
                     for x in (sp[2 * j], sp[2 * j + 1]):
                         if P.between(sp[2 * i], sp[2 * i + 1], x, axis[i]):
-                            on[i].add(x)
+                            _push(&inc_s, i)
+                            _push(&inc_p, x)
                     for x in (sp[2 * i], sp[2 * i + 1]):
                         if P.between(sp[2 * j], sp[2 * j + 1], x, axis[j]):
-                            on[j].add(x)
+                            _push(&inc_s, j)
+                            _push(&inc_p, x)
                     continue
                 if o1 * o2 > 0:
                     continue
@@ -396,109 +445,156 @@ def arrangement_core(list segs, list labels):
                     if lj is None:
                         lj = lines[j] = _hcross3(P.h[sp[2 * j]], P.h[sp[2 * j + 1]])
                     x = P.add(_hnorm(_hcross3(li, lj)))
-                on[i].add(x)
-                on[j].add(x)
-        vertex_set = set()
+                _push(&inc_s, i)
+                _push(&inc_p, x)
+                _push(&inc_s, j)
+                _push(&inc_p, x)
+        mark = <char*> calloc(P.n + 1, sizeof(char))
+        if not mark:
+            raise MemoryError()
         point_label = {}
         for k in points_only:
             x = sp[2 * k]
-            vertex_set.add(x)
+            mark[x] = 1
             point_label.setdefault(x, set()).add(labels[k])
-            for i in proper:
+            for a in range(m):
+                i = prop[a]
                 if (P.x[x] < box[4 * i] or box[4 * i + 1] < P.x[x]
                         or P.y[x] < box[4 * i + 2] or box[4 * i + 3] < P.y[x]):
                     continue
                 if (P.orient(sp[2 * i], sp[2 * i + 1], x) == 0
                         and P.between(sp[2 * i], sp[2 * i + 1], x, axis[i])):
-                    on[i].add(x)
-        for i in proper:
-            vertex_set.update(on[i])
+                    _push(&inc_s, i)
+                    _push(&inc_p, x)
+        ninc = inc_s.n
+        for k in range(ninc):
+            mark[inc_p.a[k]] = 1
 
         # the points sorted lexicographically
-        nv = len(vertex_set)
+        nv = 0
+        for x in range(P.n):
+            nv += mark[x]
         ids = <Py_ssize_t*> malloc((nv + 1) * sizeof(Py_ssize_t))
-        tmp = <Py_ssize_t*> malloc((nv + 1) * sizeof(Py_ssize_t))
+        tmp = <Py_ssize_t*> malloc((max(nv, ninc) + 1) * sizeof(Py_ssize_t))
         rank = <Py_ssize_t*> malloc((P.n + 1) * sizeof(Py_ssize_t))
         if not (ids and tmp and rank):
             raise MemoryError()
         k = 0
-        for x in vertex_set:
-            ids[k] = x
-            k += 1
+        for x in range(P.n):
+            if mark[x]:
+                ids[k] = x
+                k += 1
         _merge_sort_lex(P, ids, tmp, nv)
         for k in range(nv):
             rank[ids[k]] = k
         order = [P.h[ids[k]] for k in range(nv)]
 
-        # pieces: consecutive points along each segment
-        pieces = {}
-        for i in proper:
-            pts = on[i]
-            k = 0
-            for x in pts:
-                tmp[k] = x
-                k += 1
+        # the points on each segment (counting sort of the incidences by segment)
+        start = <Py_ssize_t*> calloc(n + 2, sizeof(Py_ssize_t))
+        onp = <Py_ssize_t*> malloc((ninc + 1) * sizeof(Py_ssize_t))
+        pieces = <_Piece*> malloc((ninc + 1) * sizeof(_Piece))
+        if not (start and onp and pieces):
+            raise MemoryError()
+        for k in range(ninc):
+            start[inc_s.a[k] + 1] += 1
+        for i in range(n):
+            start[i + 1] += start[i]
+        for k in range(ninc):  # start[i] runs ahead while filling, then is shifted back
+            i = inc_s.a[k]
+            onp[start[i]] = inc_p.a[k]
+            start[i] += 1
+        for i in range(n, 0, -1):
+            start[i] = start[i - 1]
+        start[0] = 0
+        # pieces: consecutive distinct points along each segment
+        npc = 0
+        for a in range(m):
+            i = prop[a]
+            lo, hi = start[i], start[i + 1]
             ax = axis[i]
-            for a in range(1, k):  # insertion sort along the segment's axis (few points)
-                x = tmp[a]
-                b = a - 1
-                while b >= 0 and P.cmp(tmp[b], x, ax) > 0:
-                    tmp[b + 1] = tmp[b]
-                    b -= 1
-                tmp[b + 1] = x
-            lab = labels[i]
-            for a in range(k - 1):
-                r, s = rank[tmp[a]], rank[tmp[a + 1]]
-                key = (r, s) if r < s else (s, r)
-                got = pieces.get(key)
-                if got is None:
-                    pieces[key] = {lab}
-                else:
-                    got.add(lab)
-        keyed = sorted(pieces.items())
-        E = [kk for kk, _ in keyed]
-        edge_labels = [lab for _, lab in keyed]
+            for r in range(lo + 1, hi):  # insertion sort along the segment's axis (few points)
+                x = onp[r]
+                s = r - 1
+                while s >= lo and P.cmp(onp[s], x, ax) > 0:
+                    onp[s + 1] = onp[s]
+                    s -= 1
+                onp[s + 1] = x
+            t = -1  # the previous distinct point (a point may be recorded more than once)
+            for r in range(lo, hi):
+                x = onp[r]
+                if x == t:
+                    continue
+                if t >= 0:
+                    g, h = rank[t], rank[x]
+                    pieces[npc].lo = g if g < h else h
+                    pieces[npc].hi = h if g < h else g
+                    pieces[npc].seg = i
+                    npc += 1
+                t = x
+        qsort(pieces, npc, sizeof(_Piece), _piece_cmp)
+        E = []
+        edge_labels = []
+        k = 0
+        while k < npc:
+            lo, hi = pieces[k].lo, pieces[k].hi
+            labs = {labels[pieces[k].seg]}
+            k += 1
+            while k < npc and pieces[k].lo == lo and pieces[k].hi == hi:
+                labs.add(labels[pieces[k].seg])
+                k += 1
+            E.append((lo, hi))
+            edge_labels.append(labs)
         vertex_labels = {rank[x]: lab for x, lab in point_label.items()}
 
         # half-edges: 2k is edge k from u to v, 2k + 1 back
-        nh = 2 * len(E)
+        ne = len(E)
+        nh = 2 * ne
         origin_c = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
         pos = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
         nxt_c = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
         cyc_c = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
+        oh = <Py_ssize_t*> malloc((nh + 1) * sizeof(Py_ssize_t))
         parent = <Py_ssize_t*> malloc((nv + 1) * sizeof(Py_ssize_t))
-        if not (origin_c and pos and nxt_c and cyc_c and parent):
+        ostart = <Py_ssize_t*> calloc(nv + 2, sizeof(Py_ssize_t))
+        if not (origin_c and pos and nxt_c and cyc_c and oh and parent and ostart):
             raise MemoryError()
-        for k in range(len(E)):
-            r, s = E[k]
-            origin_c[2 * k] = r
-            origin_c[2 * k + 1] = s
-        out = [[] for _ in range(nv)]
+        for k in range(ne):
+            lo, hi = E[k]
+            origin_c[2 * k] = lo
+            origin_c[2 * k + 1] = hi
+        # each vertex's outgoing half-edges (in increasing order, then sorted by angle)
         for h in range(nh):
-            out[origin_c[h]].append(h)
+            ostart[origin_c[h] + 1] += 1
         for v in range(nv):
-            hs = out[v]
-            m = len(hs)
-            if m > 2:  # two half-edges have one cyclic order
-                o = ids[v]
-                for a in range(m):
-                    tmp[a] = hs[a]
-                for a in range(1, m):
-                    g = tmp[a]
+            ostart[v + 1] += ostart[v]
+        for h in range(nh):
+            v = origin_c[h]
+            oh[ostart[v]] = h
+            ostart[v] += 1
+        for v in range(nv, 0, -1):
+            ostart[v] = ostart[v - 1]
+        ostart[0] = 0
+        isolated = []
+        for v in range(nv):
+            lo, hi = ostart[v], ostart[v + 1]
+            if hi == lo:
+                isolated.append(v)
+            if hi - lo > 2:  # two half-edges have one cyclic order
+                x = ids[v]
+                for a in range(lo + 1, hi):
+                    g = oh[a]
                     b = a - 1
-                    while b >= 0 and P.angle(o, ids[origin_c[tmp[b] ^ 1]], ids[origin_c[g ^ 1]]) > 0:
-                        tmp[b + 1] = tmp[b]
+                    while b >= lo and P.angle(x, ids[origin_c[oh[b] ^ 1]], ids[origin_c[g ^ 1]]) > 0:
+                        oh[b + 1] = oh[b]
                         b -= 1
-                    tmp[b + 1] = g
-                for a in range(m):
-                    hs[a] = tmp[a]
-            for a in range(m):
-                pos[<Py_ssize_t> hs[a]] = a
+                    oh[b + 1] = g
+            for a in range(lo, hi):
+                pos[oh[a]] = a
         for h in range(nh):
             t = h ^ 1
-            hs = out[origin_c[t]]
-            # the clockwise neighbour of the twin (indices are not wrapped in this module)
-            nxt_c[h] = hs[pos[t] - 1 if pos[t] > 0 else len(hs) - 1]
+            v = origin_c[t]
+            # the clockwise neighbour of the twin
+            nxt_c[h] = oh[pos[t] - 1 if pos[t] > ostart[v] else ostart[v + 1] - 1]
         nxt = [nxt_c[h] for h in range(nh)]
 
         for h in range(nh):
@@ -523,7 +619,7 @@ def arrangement_core(list segs, list labels):
         # vertex)
         for v in range(nv):
             parent[v] = v
-        for k in range(len(E)):
+        for k in range(ne):
             r = _find(parent, origin_c[2 * k])
             s = _find(parent, origin_c[2 * k + 1])
             if r != s:
@@ -532,11 +628,18 @@ def arrangement_core(list segs, list labels):
                 else:
                     parent[r] = s
         comp = [_find(parent, v) for v in range(nv)]
-        return order, vertex_labels, E, edge_labels, origin, out, nxt, cycles, cyc_of, signs, comp
+        return order, vertex_labels, E, edge_labels, origin, isolated, nxt, cycles, cyc_of, signs, comp
     finally:
         free(sp)
         free(axis)
         free(box)
+        free(prop)
+        free(inc_s.a)
+        free(inc_p.a)
+        free(start)
+        free(onp)
+        free(mark)
+        free(pieces)
         free(ids)
         free(tmp)
         free(rank)
@@ -544,7 +647,9 @@ def arrangement_core(list segs, list labels):
         free(pos)
         free(nxt_c)
         free(cyc_c)
+        free(oh)
         free(parent)
+        free(ostart)
 
 
 # --------------------------------------------------------------------------------------------
