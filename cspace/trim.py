@@ -1159,10 +1159,9 @@ def _winding(cx: _Complex, sh: _Shells, anchor: int) -> np.ndarray:
 
 
 _UNKNOWN = np.iinfo(np.int64).min
-# From this many box pairs on, the rounding check's float filters run compiled.
-_COMPILED_FROM = 150_000
-# From this many box pairs on (numpy filters), the rounding check runs in several processes.
-_PARALLEL_CHECK = 20_000
+# From this many pairs left by the float filters on, the rounding check's exact test runs in
+# several processes (about 30 us a pair in Python against some 10-20 ms to fork and collect).
+_PARALLEL_CHECK = 2_000
 # Float filter for orientations of float64 points (Shewchuk's bound is below 8 eps).
 _ORIENT_FILTER = 16 * float(np.finfo(np.float64).eps) / 2
 # Float filter of a dot product of float64 rows: the three products and two sums are off by
@@ -1479,6 +1478,17 @@ def _to_float(points: list, grid: Grid) -> np.ndarray:
     return np.ldexp(V.reshape(-1, 3), grid.exponent)
 
 
+def _to_float_compiled(points: list, grid: Grid) -> np.ndarray:
+    """:func:`_to_float` compiled (:mod:`cspace._kernels.trim`): identical output. The rows
+    it leaves (integers beyond 2**53) come from :func:`_to_float`."""
+    points = points if isinstance(points, list) else list(points)
+    V, left = _compiled.to_float(points, tuple(grid.origin), int(grid.exponent))
+    rows = np.flatnonzero(left)
+    if len(rows):
+        V[rows] = _to_float([points[i] for i in rows.tolist()], grid)
+    return V
+
+
 def _nonmanifold(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.ndarray]:
     """Edges used by more than two triangles, and vertices whose triangles form more than one
     fan (joined across edges used by exactly two triangles)."""
@@ -1489,31 +1499,39 @@ def _nonmanifold(faces: np.ndarray, n_vertices: int) -> tuple[np.ndarray, np.nda
     v = faces[:, [1, 2, 0]].reshape(-1)
     lo, hi = np.minimum(u, v), np.maximum(u, v)
     key = lo * n_vertices + hi
-    uniq, inv, cnt = np.unique(key, return_inverse=True, return_counts=True)
-    inv = inv.reshape(-1)
+    # One sort groups the half-edges by edge: runs of equal keys, from start, cnt long.
+    order = np.argsort(key, kind="stable")
+    sk = key[order]
+    new = np.empty(len(sk), dtype=bool)
+    new[0], new[1:] = True, sk[1:] != sk[:-1]
+    start = np.flatnonzero(new)
+    uniq, cnt = sk[start], np.diff(np.append(start, len(sk)))
     bad_edges = np.stack([uniq[cnt > 2] // n_vertices, uniq[cnt > 2] % n_vertices], axis=1)
     # Corner 3 t + i sits at faces[t, i]; half-edge 3 t + i runs from corner 3 t + i to the
     # next corner of t. Two half-edges of a manifold edge join their corners at equal vertices.
     h = np.arange(3 * m)
     cu, cv = h, 3 * (h // 3) + (h % 3 + 1) % 3
-    order = np.argsort(inv, kind="stable")
-    a, b = order[0::2], order[1::2]
-    ok = (cnt[inv[a]] == 2) & (inv[a] == inv[b])
-    a, b = a[ok], b[ok]
+    # The two half-edges of each edge of exactly two triangles: the first two of its run
+    # (pairing the sorted half-edges two by two instead lost the pairs after a run of odd
+    # length, e.g. an edge of three triangles).
+    two = start[cnt == 2]
+    a, b = order[two], order[two + 1]
     same = u[a] == u[b]
     src = np.concatenate([cu[a], cv[a]])
     dst = np.concatenate([np.where(same, cu[b], cv[b]), np.where(same, cv[b], cu[b])])
-    _, comp = component_labels(3 * m, src, dst)
-    vert = faces.reshape(-1)
-    pairs = np.unique(np.stack([vert, comp], axis=1), axis=0)
-    fans = np.bincount(pairs[:, 0], minlength=n_vertices)
+    n_fans, comp = component_labels(3 * m, src, dst)
+    # Every join above is between corners at one vertex: each fan (component) lies at one
+    # vertex, so counting fans per vertex needs no search for distinct (vertex, fan) pairs.
+    fan_vertex = np.empty(n_fans, dtype=np.int64)
+    fan_vertex[comp] = u
+    fans = np.bincount(fan_vertex, minlength=n_vertices)
     return bad_edges.astype(np.int64), np.nonzero(fans > 1)[0].astype(np.int64)
 
 
 def _result(out: _Output, S: Superset, stats: dict, workers: int = 1) -> SumPolyhedron:
     t = time.perf_counter()
     grid = S.grid
-    V = _to_float(out.points, grid)
+    V = _to_float_compiled(out.points, grid)
     nm_edges, nm_vertices = _nonmanifold(out.faces, len(V))
     crossings, stats["rounding_processes"], moved = _rounding_check(out, V, grid, workers)
     # Correct rounding moves a coordinate by at most half its ulp: per axis, over moved points.
@@ -1547,8 +1565,8 @@ def _result(out: _Output, S: Superset, stats: dict, workers: int = 1) -> SumPoly
 def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
                     workers: int = 1) -> tuple[np.ndarray, int, np.ndarray]:
     """Triangle pairs that meet improperly after rounding to float64, the number of
-    processes that tested them (several from ``_PARALLEL_CHECK`` box pairs on, numpy filter
-    path only), and which vertices rounding moved.
+    processes that tested them exactly (several from ``_PARALLEL_CHECK`` pairs left by the
+    float filters on), and which vertices rounding moved.
 
     In the exact result two triangles meet only in shared vertices and edges. Rounding moves
     a vertex by at most half an ulp per coordinate; only pairs with a moved vertex can change,
@@ -1559,22 +1577,41 @@ def _rounding_check(out: _Output, V: np.ndarray, grid: Grid,
     T = out.faces
     if not len(T):
         return np.zeros((0, 2), np.int64), 1, np.zeros(len(V), dtype=bool)
+    moved = _moved_compiled(out.points, V, grid)
+    if not moved.any():
+        return np.zeros((0, 2), np.int64), 1, moved
+    return (*_improper_pairs(V, T, grid, moved, workers), moved)
+
+
+def _moved(points: list, V: np.ndarray, grid: Grid) -> np.ndarray:
+    """Which float64 rows ``V[i]`` differ from their exact homogeneous grid points
+    ``points[i]``, i.e. ``V[i] != (P[:3] / P[3] + origin) * 2**exponent``: ``(n,)`` bool,
+    decided on Python integers."""
     e = grid.exponent
     up, down = (1 << e, 1) if e >= 0 else (1, 1 << -e)
-
     origin = grid.origin
 
-    def moved_point(P, v) -> bool:  # v != (P[:3] / P[3] + origin) * 2**e, on integers
+    def moved_point(P, v) -> bool:
         for k in range(3):
             num, den = v[k].as_integer_ratio()
             if num * P[3] * down != (P[k] + origin[k] * P[3]) * up * den:
                 return True
         return False
 
-    moved = np.array([moved_point(P, v) for P, v in zip(out.points, V.tolist())], dtype=bool)
-    if not moved.any():
-        return np.zeros((0, 2), np.int64), 1, moved
-    return (*_improper_pairs(V, T, grid, moved, workers), moved)
+    return np.array([moved_point(P, v) for P, v in zip(points, V.tolist())], dtype=bool).reshape(-1)
+
+
+def _moved_compiled(points: list, V: np.ndarray, grid: Grid) -> np.ndarray:
+    """:func:`_moved` compiled (:mod:`cspace._kernels.trim`, int64/__int128 integers):
+    identical output. The points it leaves (integers beyond 2**62) go to :func:`_moved`."""
+    V = np.ascontiguousarray(V, dtype=np.float64)
+    points = points if isinstance(points, list) else list(points)
+    state = _compiled.moved_points(points, tuple(grid.origin), int(grid.exponent), V)
+    moved = state == 1
+    left = np.flatnonzero(state == 2)
+    if len(left):
+        moved[left] = _moved([points[i] for i in left.tolist()], V[left], grid)
+    return moved
 
 
 def self_intersections(mesh) -> np.ndarray:
@@ -1600,30 +1637,46 @@ def _improper_pairs(V: np.ndarray, T: np.ndarray, grid: Grid, moved: np.ndarray,
                     workers: int = 1) -> tuple[np.ndarray, int]:
     """Pairs of triangles ``T`` over float64 vertices ``V`` (with a vertex in ``moved``) that
     meet improperly, decided exactly; and the number of processes used."""
+    pairs = box_pairs(*_triangle_boxes_compiled(V, T, grid.exponent))
+    # The compiled float filter (some 40 ns a pair, 20x numpy's): few pairs are left.
+    pairs = pairs[_undecided_pairs_compiled(V, T, pairs, moved)]
+    if not len(pairs):
+        return np.zeros((0, 2), np.int64), 1
+    # Exact integers of only the vertices of the pairs left, on triangles renumbered to
+    # them: their common scale is another power of two than all vertices', and _improper's
+    # predicates (orientations, dominant axis, coordinate comparisons) are homogeneous, so
+    # a positive scale changes none of its answers.
+    ids = np.unique(T[pairs].reshape(-1))
+    Vi, Tl = _common_integers(V[ids]), np.searchsorted(ids, T[pairs]).tolist()
+
+    def check(ks: range) -> list:
+        return [k for k in ks if _improper(Vi, Tl[k][0], Tl[k][1])]
+
+    ranges = [range(len(pairs))]
+    if workers > 1 and len(pairs) >= _PARALLEL_CHECK and can_fork():
+        cuts = np.linspace(0, len(pairs), 2 * workers + 1).astype(int)
+        ranges = [range(a, b) for a, b in zip(cuts[:-1], cuts[1:])]
+    done = dict(forked_map(check, ranges, workers if len(ranges) > 1 else 1))
+    bad = [k for r in range(len(ranges)) for k in done[r]]  # in pair order
+    return pairs[np.array(bad, dtype=np.int64)].reshape(-1, 2), min(len(ranges), workers)
+
+
+def _triangle_boxes(V: np.ndarray, T: np.ndarray, exponent: int) -> tuple[np.ndarray, np.ndarray]:
+    """``(lo, hi)``, ``(t, 3)`` int64: the boxes of triangles ``T`` over float64 rows ``V``
+    in grid units (step ``2**exponent``), rounded outwards: they contain the float boxes."""
     P = V[T]
-    # integer boxes in grid units, rounded outwards: they contain the float boxes
-    lo = np.floor(np.ldexp(P.min(axis=1), -grid.exponent)).astype(np.int64)
-    hi = np.ceil(np.ldexp(P.max(axis=1), -grid.exponent)).astype(np.int64)
-    pairs = box_pairs(lo, hi)
-    # Many pairs: the compiled filter, fast enough to stay in this process; fewer: numpy's,
-    # forked over workers from _PARALLEL_CHECK pairs on.
-    compiled = len(pairs) >= _COMPILED_FROM
-    undecided = _undecided_pairs_compiled if compiled else _undecided_pairs_np
-    Vc, Tc = np.ascontiguousarray(V), np.ascontiguousarray(T)
-    Vi, Tl = _common_integers(V), T.tolist()
+    lo = np.floor(np.ldexp(P.min(axis=1), -exponent)).astype(np.int64)
+    hi = np.ceil(np.ldexp(P.max(axis=1), -exponent)).astype(np.int64)
+    return lo.reshape(-1, 3), hi.reshape(-1, 3)
 
-    def check(ps: np.ndarray) -> list:
-        ps = ps[undecided(Vc, Tc, ps, moved)]
-        return [(i, j) for i, j in ps.tolist() if _improper(Vi, Tl[i], Tl[j])]
 
-    if workers > 1 and not compiled and len(pairs) >= _PARALLEL_CHECK and can_fork():
-        parts = np.array_split(pairs, 2 * workers)
-        done = dict(forked_map(check, parts, workers))
-        bad = [b for k in range(len(parts)) for b in done[k]]  # in pair order
-        used = workers
-    else:
-        bad, used = check(pairs), 1
-    return np.array(bad, dtype=np.int64).reshape(-1, 2), used
+def _triangle_boxes_compiled(V: np.ndarray, T: np.ndarray, exponent: int) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`_triangle_boxes` compiled (:mod:`cspace._kernels.trim`): identical output (the
+    reference's when a coordinate is not finite or a box end not below 2**62)."""
+    lo, hi, ok = _compiled.triangle_boxes(np.ascontiguousarray(V, np.float64),
+                                          np.ascontiguousarray(T, np.int64).reshape(-1, 3),
+                                          int(exponent))
+    return (lo, hi) if ok else _triangle_boxes(V, T, exponent)
 
 
 def _separated(V: np.ndarray, T: np.ndarray, i: np.ndarray, j: np.ndarray) -> np.ndarray:

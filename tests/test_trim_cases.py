@@ -215,9 +215,9 @@ def test_forked_arrangements_give_the_same_sum(monkeypatch):
 
 
 def test_rounding_check_in_two_processes_matches_one(monkeypatch):
-    """The rounding check splits its box pairs between processes on large outputs; the
-    pairs it reports are those of one process, in the same order. (Here every box pair with
-    a moved vertex is left by the filters and reported, so the lists are long.)"""
+    """The rounding check splits the pairs its filter leaves between processes when they
+    are many; the pairs it reports are those of one process, in the same order. (Here every
+    box pair with a moved vertex is left by the filter and reported, so the lists are long.)"""
     from zoo import icosphere_points, star
 
     import cspace.trim as T
@@ -232,7 +232,7 @@ def test_rounding_check_in_two_processes_matches_one(monkeypatch):
     monkeypatch.setattr(T, "_rounding_check", capture)
     minkowski_sum(star(), icosphere_points(2, radius=0.3), workers=1)
     monkeypatch.setattr(T, "_improper", lambda V, s, t: True)
-    monkeypatch.setattr(T, "_undecided_pairs_np",
+    monkeypatch.setattr(T, "_undecided_pairs_compiled",
                         lambda V, F, ps, moved: moved[F[ps]].any(axis=(1, 2)))
     one, n1, _ = real(*seen["args"], 1)
     two, n2, _ = real(*seen["args"], 2)

@@ -1,16 +1,23 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
-"""Compiled kernel of :mod:`cspace.trim`: the rounding check's float filters over triangle
-pairs (which pairs are left to the exact test).
+"""Compiled kernels of :mod:`cspace.trim`'s rounding check: the float filters over
+triangle pairs (which pairs are left to the exact test, :func:`undecided_pairs`), the
+float64 coordinates of the exact output points (:func:`to_float`), which of them rounding
+moved (:func:`moved_points`) and the triangles' integer boxes (:func:`triangle_boxes`).
 
-Line for line the pure-Python reference ``cspace.trim._undecided_pairs`` and its helpers,
-the same float operations in the same order (compiled without FMA contraction): identical
-outputs. A filter that cannot decide returns "not separated", so a pair is only ever passed
-on to the exact test, never dropped on a guess.
+:func:`undecided_pairs` is line for line the pure-Python reference
+``cspace.trim._undecided_pairs`` and its helpers, the same float operations in the same
+order (compiled without FMA contraction): identical outputs. A filter that cannot decide
+returns "not separated", so a pair is only ever passed on to the exact test, never dropped
+on a guess. The other three compute what their references compute (the same correctly
+rounded operations, or exact integer tests in int64 / __int128 with the bounds stated at
+each) and leave what they cannot take to the reference: identical outputs
+(``tests/test_kernels_rounding.py``).
 """
 
 import numpy as np
 
-from libc.math cimport INFINITY, fabs
+from cpython.long cimport PyLong_AsLongLongAndOverflow, PyLong_AsUnsignedLongLongMask
+from libc.math cimport INFINITY, ceil, fabs, floor, frexp, isfinite, ldexp
 
 cdef double _ORIENT_FILTER = 16 * 2.0 ** -52 / 2  # as cspace.trim (eps = 2**-52)
 cdef double _DOT_FILTER = 8 * 2.0 ** -52 / 2
@@ -208,3 +215,252 @@ def undecided_pairs(const double[:, ::1] V, const long long[:, ::1] T,
                     lone = False
             out[r] = not (lone and _axes_apart(V, ti, tj))
     return out_arr
+
+
+# --------------------------------------------------------------------------------------------
+# which vertices rounding to float64 moved (reference: cspace.trim._moved)
+
+cdef extern from *:
+    """
+    typedef unsigned __int128 cs_trim_u128;
+    typedef __int128 cs_trim_i128;
+    """
+    # Cython sees them as 64-bit types; they are only ever used in C arithmetic here.
+    ctypedef unsigned long long u128 "cs_trim_u128"
+    ctypedef long long i128 "cs_trim_i128"
+    int __builtin_ctzll(unsigned long long) nogil
+
+# Per-point answers of moved_points: decided kept, decided moved, left to the reference.
+cdef enum:
+    KEPT = 0
+    MOVED = 1
+    UNDECIDED = 2
+
+# The fast path takes |num| < 2**62 and 0 < w < 2**62 (int64 with room for the checks).
+cdef long long _LIMIT = 1LL << 62
+
+
+cdef int _read_ints(object P, Py_ssize_t size, long long* p, unsigned long long* pm):
+    """Read a tuple of ``size`` Python ints into ``p`` (int64) and ``pm`` (each modulo
+    2**64): -1 if ``P`` is not such a tuple (the caller leaves it to the reference), 1 if
+    every int fits int64 (then ``p`` holds them), 0 if not (``p`` then holds garbage)."""
+    cdef int ov, fits = 1
+    cdef Py_ssize_t k
+    if type(P) is not tuple or len(<tuple>P) != size:
+        return -1
+    for k in range(size):
+        c = (<tuple>P)[k]
+        if type(c) is not int:
+            return -1
+        p[k] = PyLong_AsLongLongAndOverflow(c, &ov)
+        if ov:
+            fits = 0
+            pm[k] = PyLong_AsUnsignedLongLongMask(c)  # c modulo 2**64
+        else:
+            pm[k] = <unsigned long long>p[k]
+    return fits
+
+
+cdef inline bint _differs(double x, long long num, long long w, int e) noexcept nogil:
+    """``x != num / w * 2**e`` exactly, for a finite ``x``, ``|num| < 2**62``, ``0 < w < 2**62``.
+
+    With ``|x| = m 2**(ex - 53)`` (``m < 2**53`` an integer, from frexp: exact) the two are
+    equal iff the signs agree and ``a 2**s == b`` for ``a = m w < 2**115`` (unsigned
+    __int128), ``b = |num| < 2**62`` and ``s = ex - 53 - e``: for ``s >= 0`` iff ``b``'s low
+    ``s`` bits are zero and ``b >> s == a`` (``s >= 62``: ``a 2**s >= 2**62 > b``); for
+    ``s < 0`` iff ``a``'s low ``-s`` bits are zero and ``a >> -s == b`` (``-s >= 115``:
+    ``0 < a 2**s < 1`` is no integer). Integer operations only: nothing rounds."""
+    cdef int ex, s
+    cdef double f
+    cdef unsigned long long m, b
+    cdef u128 a
+    if x == 0:
+        return num != 0
+    if num == 0 or (x < 0) != (num < 0):
+        return True
+    f = frexp(fabs(x), &ex)  # |x| = f 2**ex, 1/2 <= f < 1, f with at most 53 bits
+    m = <unsigned long long>ldexp(f, 53)
+    b = <unsigned long long>(-num if num < 0 else num)
+    a = (<u128>m) * (<u128>w)
+    s = ex - 53 - e
+    if s >= 0:
+        if s >= 62:
+            return True
+        return (b & ((1ULL << s) - 1)) != 0 or (<u128>(b >> s)) != a
+    s = -s
+    if s >= 115:
+        return True
+    return (a & (((<u128>1) << s) - 1)) != 0 or (a >> s) != (<u128>b)
+
+
+cdef inline bint _differs_mod(double x, unsigned long long num, unsigned long long w,
+                              int e) noexcept nogil:
+    """A sure ``x != num / w * 2**e`` (``num``, ``w``: the integers modulo 2**64, any size),
+    for a finite ``x`` and ``w > 0``; False: undecided.
+
+    With ``x = m 2**k`` (``m`` odd, ``|m| < 2**53``) and ``d = k - e`` equality means the
+    integer identity ``num == m w 2**d`` (``d >= 0``) or ``num 2**-d == m w`` (``d < 0``);
+    it then holds modulo 2**64 too, so sides that differ there (unsigned 64-bit arithmetic
+    wraps modulo 2**64, exactly) prove the point moved."""
+    cdef int ex, d, tz
+    cdef double f
+    cdef long long mi
+    cdef unsigned long long m, lhs, rhs
+    if x == 0:
+        return num != 0
+    f = frexp(x, &ex)  # x = f 2**ex, 1/2 <= |f| < 1
+    mi = <long long>ldexp(f, 53)  # exact integer, |mi| < 2**53, nonzero
+    tz = __builtin_ctzll(<unsigned long long>mi)
+    mi = mi >> tz  # odd (arithmetic shift of the exact integer: exact)
+    d = ex - 53 + tz - e
+    m = <unsigned long long>mi  # modulo 2**64
+    if d >= 0:
+        lhs = num
+        rhs = 0 if d >= 64 else (m * w) << d
+    else:
+        lhs = 0 if d <= -64 else num << (-d)
+        rhs = m * w
+    return lhs != rhs
+
+
+def moved_points(list points, tuple origin, int e, const double[:, ::1] V):
+    """Per homogeneous grid point ``P = points[i]`` (a tuple of 4 Python ints) whether its
+    float64 row ``V[i]`` differs from ``(P[:3] / P[3] + origin) * 2**e`` (see the reference
+    ``cspace.trim._moved``): int8, 0 kept, 1 moved, 2 left to the reference.
+
+    Integers within int64: ``num = P[k] + origin[k] P[3]`` in __int128 (``< 2**127``), then
+    :func:`_differs` decides both ways when ``|num| < 2**62`` and ``0 < P[3] < 2**62``.
+    Larger integers (``P[3] > 0``): :func:`_differs_mod` on them modulo 2**64 proves most
+    moved points moved; the rest (and a non-int, ``P[3] <= 0``, a non-finite row) are left."""
+    cdef Py_ssize_t n = len(points), i
+    state_arr = np.zeros(n, dtype=np.int8)
+    cdef signed char[::1] state = state_arr
+    cdef long long o[3]
+    cdef long long p[4]
+    cdef unsigned long long om[3]
+    cdef unsigned long long pm[4]
+    cdef i128 num
+    cdef int k, read
+    cdef double x
+    if n and (not -2000 < e < 2000 or _read_ints(origin, 3, o, om) != 1):
+        state_arr[:] = UNDECIDED
+        return state_arr
+    for i in range(n):
+        P = points[i]
+        read = _read_ints(P, 4, p, pm)
+        if read < 0:
+            state[i] = UNDECIDED
+            continue
+        if read == 0:
+            state[i] = UNDECIDED
+            if (<tuple>P)[3] > 0:
+                for k in range(3):
+                    if not isfinite(V[i, k]):
+                        break
+                    if _differs_mod(V[i, k], pm[k] + om[k] * pm[3], pm[3], e):
+                        state[i] = MOVED
+                        break
+            continue
+        if p[3] <= 0 or p[3] >= _LIMIT:
+            state[i] = UNDECIDED
+            continue
+        for k in range(3):
+            num = (<i128>p[k]) + (<i128>o[k]) * (<i128>p[3])
+            x = V[i, k]
+            if num >= <i128>_LIMIT or num <= -<i128>_LIMIT or not isfinite(x):
+                state[i] = UNDECIDED
+                break
+            if _differs(x, <long long>num, p[3], e):
+                state[i] = MOVED
+                break
+    return state_arr
+
+
+# --------------------------------------------------------------------------------------------
+# float64 coordinates of the exact points (reference: cspace.trim._to_float)
+
+# Integers up to 2**53 are exact doubles.
+cdef long long _EXACT = 1LL << 53
+
+
+def to_float(list points, tuple origin, int e):
+    """``(V, left)``: per homogeneous grid point ``P = points[i]`` (a tuple of 4 Python
+    ints) the correctly rounded float64 ``(P[:3] + origin P[3]) / P[3]``, times ``2**e``
+    (ldexp), as the reference ``cspace.trim._to_float`` computes it; ``left`` (bool) marks
+    the rows this leaves to the reference (zeros here: not a tuple of 4 Python ints).
+
+    Rows with ``|P[k] + origin[k] P[3]| <= 2**53`` (formed in __int128) and
+    ``0 < P[3] <= 2**53``: both are exact doubles, so one IEEE division is the correctly
+    rounded quotient, as Python's ``int / int`` (which does just that for such operands).
+    Other rows: the reference's expression on Python ints (exact sum, correctly rounded
+    ``int / int``; ``P[3] == 0`` raises ZeroDivisionError as there)."""
+    cdef Py_ssize_t n = len(points), i
+    V_arr = np.zeros((n, 3), dtype=np.float64)
+    left_arr = np.zeros(n, dtype=np.bool_)
+    cdef double[:, ::1] V = V_arr
+    cdef unsigned char[::1] left = left_arr.view(np.uint8)
+    cdef long long o[3]
+    cdef long long p[4]
+    cdef unsigned long long om[3]
+    cdef unsigned long long pm[4]
+    cdef i128 num[3]
+    cdef int k, read
+    cdef bint fits
+    if n and (not -2000 < e < 2000 or _read_ints(origin, 3, o, om) != 1):
+        left_arr[:] = True
+        return V_arr, left_arr
+    for i in range(n):
+        P = points[i]
+        read = _read_ints(P, 4, p, pm)
+        if read < 0:
+            left[i] = 1
+            continue
+        fits = read == 1 and 0 < p[3] <= _EXACT
+        if fits:
+            for k in range(3):
+                num[k] = (<i128>p[k]) + (<i128>o[k]) * (<i128>p[3])
+                if num[k] > <i128>_EXACT or num[k] < -<i128>_EXACT:
+                    fits = False
+        if fits:
+            for k in range(3):
+                V[i, k] = ldexp((<double>(<long long>num[k])) / (<double>p[3]), e)
+        else:  # the reference's own Python int arithmetic and correctly rounded int / int
+            w = (<tuple>P)[3]
+            for k in range(3):
+                V[i, k] = ldexp(<double>(((<tuple>P)[k] + origin[k] * w) / w), e)
+    return V_arr, left_arr
+
+
+def triangle_boxes(const double[:, ::1] V, const long long[:, ::1] T, int e):
+    """``(lo, hi, ok)``: per triangle of ``T`` over float64 rows ``V`` the box
+    ``floor(min * 2**-e)``, ``ceil(max * 2**-e)`` per axis (``(t, 3)`` int64), as the
+    reference ``cspace.trim._triangle_boxes`` computes it: the same min/max, ldexp,
+    floor/ceil, then the cast. ``ok`` is False on a coordinate that is not finite or a box
+    end not below 2**62 in magnitude (the cast would not be exact): the reference decides."""
+    cdef Py_ssize_t t = T.shape[0], i
+    lo_arr = np.zeros((t, 3), dtype=np.int64)
+    hi_arr = np.zeros((t, 3), dtype=np.int64)
+    cdef long long[:, ::1] lo = lo_arr
+    cdef long long[:, ::1] hi = hi_arr
+    cdef int k
+    cdef double a, b, c, x, y, limit = 2.0 ** 62
+    cdef bint ok = True
+    with nogil:
+        for i in range(t):
+            for k in range(3):
+                a = V[T[i, 0], k]
+                b = V[T[i, 1], k]
+                c = V[T[i, 2], k]
+                if not (isfinite(a) and isfinite(b) and isfinite(c)):  # numpy's NaN rule
+                    ok = False
+                    break
+                x = floor(ldexp(_min(_min(a, b), c), -e))
+                y = ceil(ldexp(_max(_max(a, b), c), -e))
+                if not (fabs(x) < limit and fabs(y) < limit):
+                    ok = False
+                    break
+                lo[i, k] = <long long>x
+                hi[i, k] = <long long>y
+            if not ok:
+                break
+    return lo_arr, hi_arr, ok
