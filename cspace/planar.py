@@ -1345,6 +1345,8 @@ def _clip_simple(P: list, ids: list):
 
 
 def _clip_general(P: list, ids: list) -> list:
+    """(Reference of ``cspace._kernels.planar.clip_general``.) Ear clipping of any polygon
+    (vertices may repeat, as after bridging holes), with the general ear test."""
     tris = []
     P, ids = list(P), list(ids)
     while len(P) > 3:
@@ -1460,7 +1462,7 @@ def triangulate_rings(H, rings: list) -> list:
         else:
             tris = _compiled.clip_simple(P, ids)
     if tris is None:
-        tris = _clip_general(P, ids)
+        tris = _compiled.clip_general(P, ids)
     return _split_runs(tris, runs)
 
 

@@ -321,3 +321,43 @@ def test_triangulation_steps_are_identical_on_degenerate_polygons(seed):
         ids = [uniq.index(p) for p in ring]
         _same_triangulation_steps(H, [ids])
         _same_triangulation_steps(H, [ids[::-1]])
+
+
+def test_general_ear_clipping_is_identical(monkeypatch):
+    """Every polygon the general ear clipping gets in three sums (faces with holes bridged
+    in: repeated vertices) and the degenerate lattice polygons, run by both."""
+    from cspace.convex import ConvexPolytope
+    from cspace.exact import Grid
+    from cspace.mesh import ClosedMesh
+    from zoo import box_points, icosphere_points
+
+    seen = []
+    real = compiled_planar.clip_general
+
+    class Spy:
+        @staticmethod
+        def clip_general(P, ids):
+            seen.append((list(P), list(ids)))
+            return real(P, ids)
+
+        def __getattr__(self, name):
+            return getattr(compiled_planar, name)
+
+    monkeypatch.setattr(planar, "_compiled", Spy())
+    for (v, f), b in [(comb(3, 2), box_points(0.5, 0.5, 0.5)), (comb(4, 3), icosphere_points(1, radius=0.3)),
+                      (star(), icosphere_points(1, radius=0.3))]:
+        grid = Grid.for_points(v, b)
+        trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                           ConvexPolytope.from_points(b, grid=grid), workers=1)
+    monkeypatch.undo()
+    assert any(len(set(ids)) < len(ids) for _, ids in seen)  # holes were bridged in
+    for P, ids in seen:
+        assert compiled_planar.clip_general(P, ids) == planar._clip_general(P, ids)
+    # a square with a square hole, bridged by hand, at huge scales (Python-integer path)
+    for s, w in ((1, 1), (2**40 + 1, 1), (3, 2**61 + 1)):
+        pts = [(0, 0), (8, 0), (8, 8), (0, 8), (2, 2), (2, 6), (6, 6), (6, 2)]
+        H = [planar._hnorm(x * s, y * s, w) for x, y in pts]
+        ring = [0, 1, 2, 3, 0, 4, 5, 6, 7, 4]  # outer, bridge 0 -> 4, hole clockwise, back
+        P = [H[k] for k in ring]
+        assert compiled_planar.clip_general(P, ring) == planar._clip_general(P, ring)
+        assert len(planar._clip_general(P, ring)) == 8

@@ -797,3 +797,76 @@ def clip_simple(list Ps, list ids):
         free(nxt)
         free(conv)
         free(reflex)
+
+
+cdef bint _ear_ok(_Points P, Py_ssize_t* poly, Py_ssize_t n, Py_ssize_t i) except -1:
+    """``cspace.planar._ear_ok`` on point ids (equal points have one id, so the reference's
+    point comparisons are id comparisons). Its cone tests ``_cross(lo, d) > 0`` with
+    directions from ``s`` are ``orient(s, lo, t) > 0`` (the homogeneous directions are the
+    real ones scaled by positive weights)."""
+    cdef Py_ssize_t p = poly[i - 1 if i > 0 else n - 1], v = poly[i], q = poly[i + 1 if i + 1 < n else 0]
+    cdef Py_ssize_t k, a, b, s, t, lo, hi, e0 = i - 1 if i > 0 else n - 1, r
+    if P.orient(p, v, q) <= 0:
+        return False
+    for k in range(n):
+        a = poly[k]
+        b = poly[k + 1 if k + 1 < n else 0]
+        if a != p and a != v and a != q and _in_closed_triangle(P, a, p, v, q):
+            return False
+        if k == e0 or k == i:
+            continue
+        if (P.orient(a, b, p) * P.orient(a, b, q) < 0
+                and P.orient(p, q, a) * P.orient(p, q, b) < 0):
+            return False
+        for r in range(2):
+            s, t = (a, b) if r == 0 else (b, a)
+            # the reference's dict {v: .., p: .., q: ..}: a later equal key replaces an earlier
+            if s == q:
+                lo, hi = p, v
+            elif s == p:
+                lo, hi = v, q
+            elif s == v:
+                lo, hi = q, p
+            else:
+                continue
+            if t != s and P.orient(s, lo, t) > 0 and P.orient(s, t, hi) > 0:
+                return False
+    return True
+
+
+def clip_general(list Ps, list ids):
+    """``cspace.planar._clip_general`` (identical outputs): the general ear clipping of a
+    polygon whose vertices may repeat (holes bridged in)."""
+    cdef Py_ssize_t n = len(Ps), k, i
+    cdef _Points P = _Points(n + 1)
+    cdef Py_ssize_t* poly = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+    cdef bint found
+    if not poly:
+        raise MemoryError()
+    try:
+        for k in range(n):
+            poly[k] = P.add(<tuple> Ps[k])
+        ids = list(ids)
+        tris = []
+        while n > 3:
+            found = False
+            for i in range(n):
+                if _ear_ok(P, poly, n, i):
+                    tris.append((ids[i - 1 if i > 0 else n - 1], ids[i], ids[i + 1 if i + 1 < n else 0]))
+                    for k in range(i, n - 1):
+                        poly[k] = poly[k + 1]
+                    del ids[i]
+                    n -= 1
+                    found = True
+                    break
+            if not found:
+                from cspace.planar import _hturn  # loaded by now: it imported this module
+
+                if _hturn([P.h[poly[k]] for k in range(n)]) == 0:
+                    return tris
+                raise AssertionError("ear clipping found no ear")
+        if n == 3 and P.orient(poly[0], poly[1], poly[2]) > 0:
+            tris.append(tuple(ids))
+        return tris
+    finally:
+        free(poly)
