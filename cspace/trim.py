@@ -802,10 +802,13 @@ class _PlaneJobs:
         raise ExactnessError(f"face {f} of plane {p} is covered by no superset triangle")  # pragma: no cover
 
 
-# Below this much estimated work (sum of _PlaneJobs.cost, about 0.1 ms a unit) the
-# arrangements run in this process: forking and collecting results (some 30-50 ms) would
-# cost more than they save.
-_PARALLEL_FROM = 1500
+# Below this much estimated work (sum of _PlaneJobs.cost, about 10 us a unit with the
+# compiled kernels) the arrangements run in this process: forking and collecting results
+# (some 15-20 ms, and copy-on-write faults adding about a tenth to the work) would cost
+# more than they save. Measured, 2 processes against 1: 3000-7600 units (bunny-128 ⊕
+# ico320, alphaobstacle ⊕ ico320, Centaur-1000 ⊕ box) 0.9-1.0x; 8000-11000 (yoda-658 ⊕
+# box, star ⊕ ico320) 1.15-1.3x.
+_PARALLEL_FROM = 8000
 
 
 def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tuple[dict, int]:

@@ -201,6 +201,7 @@ def test_forked_arrangements_give_the_same_sum(monkeypatch):
     import cspace.trim as T
 
     monkeypatch.setattr(T, "_PARALLEL_OVERLAPS", 0)  # the pairs fork only on huge builds
+    monkeypatch.setattr(T, "_PARALLEL_FROM", 0)  # and the arrangements from more work
     V, F = torus()
     B = icosphere_points(2, radius=0.3)  # 51700 candidate pairs, 2300 arrangements
     one = minkowski_sum((V, F), B, workers=1)
