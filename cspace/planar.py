@@ -700,8 +700,11 @@ class Arrangement2D:
         component: the innermost positive cycle of another component strictly containing it
         (smallest area first), -1 if none. No cycle of its own component strictly contains
         it, and cycles of other components do not pass through it."""
-        component = self._comp[v]
-        p, hp = self._S[v], self._H[v]
+        return self._innermost(self._S[v], self._H[v], self._comp[v])
+
+    def _innermost(self, p, hp, component: int = -1) -> int:
+        """The face of the smallest positive cycle (not of ``component``) strictly around the
+        point ``hp`` (homogeneous; ``p`` its box key, :attr:`_S`'s form), -1 if none."""
         comp_of_cycle = self._comp_of_cycle
         for c in self._positive:
             if comp_of_cycle[c] == component:
@@ -886,13 +889,7 @@ class Arrangement2D:
             return None
         # the form of the stored boxes: scaled integers, or float-then-exact keys
         p = (p[0] * self._L, p[1] * self._L) if self._L else _float_key(_hom(p))
-        for c in self._positive:
-            b = self._cycle_box(c)
-            if not (b[0] < p[0] < b[1] and b[2] < p[1] < b[3]):
-                continue
-            if _hwinding(self._cycle_hpoints(c), x) != 0:
-                return self._face_of_cycle[c]
-        return -1
+        return self._innermost(p, x)
 
     def __repr__(self) -> str:
         return (

@@ -146,25 +146,33 @@ def _same_core(segs: list, labels: list | None = None) -> tuple:
     return a
 
 
+def _spy_kernel(monkeypatch, name: str) -> list:
+    """Make :mod:`cspace.planar` call compiled kernel ``name`` through a recorder: the list
+    it returns fills with the (copied) arguments of every call."""
+    seen = []
+    real = getattr(compiled_planar, name)
+
+    class Spy:
+        def __getattr__(self, attr):  # the other kernels as they are
+            return getattr(compiled_planar, attr)
+
+    def record(*args):
+        seen.append(tuple(list(a) for a in args))
+        return real(*args)
+
+    spy = Spy()
+    setattr(spy, name, record)
+    monkeypatch.setattr(planar, "_compiled", spy)
+    return seen
+
+
 def _captured_arrangements(monkeypatch, cases) -> list:
     """The inputs of every per-plane arrangement of real Minkowski sums."""
     from cspace.convex import ConvexPolytope
     from cspace.exact import Grid
     from cspace.mesh import ClosedMesh
 
-    seen = []
-    real = compiled_planar.arrangement_core
-
-    class Spy:
-        @staticmethod
-        def arrangement_core(segs, labels):
-            seen.append((list(segs), list(labels)))
-            return real(segs, labels)
-
-        def __getattr__(self, name):  # the other kernels as they are
-            return getattr(compiled_planar, name)
-
-    monkeypatch.setattr(planar, "_compiled", Spy())
+    seen = _spy_kernel(monkeypatch, "arrangement_core")
     for (v, f), b in cases:
         grid = Grid.for_points(v, b)
         trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
@@ -331,19 +339,7 @@ def test_general_ear_clipping_is_identical(monkeypatch):
     from cspace.mesh import ClosedMesh
     from zoo import box_points, icosphere_points
 
-    seen = []
-    real = compiled_planar.clip_general
-
-    class Spy:
-        @staticmethod
-        def clip_general(P, ids):
-            seen.append((list(P), list(ids)))
-            return real(P, ids)
-
-        def __getattr__(self, name):
-            return getattr(compiled_planar, name)
-
-    monkeypatch.setattr(planar, "_compiled", Spy())
+    seen = _spy_kernel(monkeypatch, "clip_general")
     for (v, f), b in [(comb(3, 2), box_points(0.5, 0.5, 0.5)), (comb(4, 3), icosphere_points(1, radius=0.3)),
                       (star(), icosphere_points(1, radius=0.3))]:
         grid = Grid.for_points(v, b)
