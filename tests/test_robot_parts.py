@@ -66,7 +66,13 @@ CASES = {
 }
 
 
-@pytest.mark.parametrize("name", list(CASES))
+# The two L pairings (about 25 s together) run in make test-slow: the default run keeps one
+# case of each kind of pairing (solid and open triangle pairs, flat pieces, convex).
+SLOW_CASES = {"L x U (triangle pairs, both solid)", "L x open U (triangle pairs)"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_CASES else n
+                                  for n in CASES])
 def test_pairing_agrees_with_fcl(name):
     obstacle, robot, o_kind, r_kind = CASES[name]
     m = model_scene(_scene(obstacle, robot))
@@ -82,7 +88,8 @@ def test_pairing_agrees_with_fcl(name):
     assert r["max_distance_error"] <= 1e-9 * r["scene_size"]
 
 
-@pytest.mark.parametrize("conservative", [False, True], ids=["exact", "grown"])
+@pytest.mark.parametrize("conservative", [False, pytest.param(True, marks=pytest.mark.slow)],
+                         ids=["exact", "grown"])  # grown (16 s) in make test-slow
 def test_triangle_pairs_equal_their_reference_hulls(conservative):
     # PairObstacle (slabs of each pair, no hull) against the reference construction (one
     # exact hull per pair, queried by the surface-piece engine): the same answers, exactly,
