@@ -401,8 +401,9 @@ class _PairsCO:
         self.n_slabs = 38 if self.grown else 17
         self._gf = self.g.astype(np.float64)
         i, j = self.pairs[:, 0], self.pairs[:, 1]
-        self.lo = grid.to_float(self.S[i].min(axis=1) + self.T[j].min(axis=1) - self.g)
-        self.hi = grid.to_float(self.S[i].max(axis=1) + self.T[j].max(axis=1) + self.g)
+        # S already holds the origin: the boxes are scaled by the vectors' grid, not shifted.
+        self.lo = self.grid.to_float(self.S[i].min(axis=1) + self.T[j].min(axis=1) - self.g)
+        self.hi = self.grid.to_float(self.S[i].max(axis=1) + self.T[j].max(axis=1) + self.g)
         self.cells = _CellGrid(self.lo, self.hi)
         # The two triangle normals' slabs first: most pairs near a query are separated by
         # one of them, and they cost six dot products a pair.
