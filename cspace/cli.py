@@ -162,7 +162,9 @@ def _check(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene)
     cs = CSpace.from_scene(scene, robot_hull=args.robot_hull)
-    r = cross_check(cs, n=args.n, seed=args.seed, band=args.band)
+    # FCL's verdict from the raw scene (every body, its own solid rule), not from the C-space.
+    r = cross_check(cs, n=args.n, seed=args.seed, band=args.band, scene=scene,
+                    robot_hull=args.robot_hull)
     print(f"{scene.name}: {r['n']} translations, {r['n_inside']} in collision (FCL: {r['n_inside_fcl']})")
     print(f"membership disagreements beyond {args.band:g} of the surface: {r['n_disagree']} "
           f"({r['n_in_band']} within the band ignored)")
@@ -312,7 +314,7 @@ def _plan(args: argparse.Namespace) -> int:
     if args.fcl_check and r.solved:
         from .fcl_check import path_collisions
 
-        bad, n = path_collisions(cs, r.path)
+        bad, n = path_collisions(cs, r.path, scene=scene, robot_hull=args.robot_hull)
         fcl = {"colliding_samples": int(len(bad)), "samples": n}
         print(f"FCL re-check: {len(bad)} colliding of {n} samples along the path")
     proved = r.solved and not (fcl and fcl["colliding_samples"])

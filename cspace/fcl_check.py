@@ -20,7 +20,7 @@ import numpy as np
 
 from .errors import ArgumentTypeError, InvalidArgumentError, InvalidMeshError
 
-__all__ = ["FclOracle", "cross_check", "winding_number", "fcl_convex", "co_collider", "path_collisions",
+__all__ = ["SceneOracle", "FclOracle", "cross_check", "winding_number", "fcl_convex", "co_collider", "path_collisions",
            "PoseCollider", "pose_path_collisions"]
 
 
@@ -327,58 +327,13 @@ def _near_surface(co, n: int, rng, scale: float) -> np.ndarray:
     return p + off[:, None] * nrm
 
 
-def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float = 1e-9) -> dict:
-    """Compare membership and distance with FCL on sampled translations.
-
-    Half of the samples are uniform in the bounds (``CSpace.bounds``, or the C-obstacle's
-    bounding box grown by 10%), half near the C-obstacle surfaces (those outside the bounds,
-    where a scene's C-space is not modelled, are drawn again) (random boundary points
-    moved along the facet normal by ``10**U(-12, -1)`` times the scene size, or not at all).
-
-    Parameters
-    ----------
-    cspace_or_obstacle : CSpace or CSpaceObstacle
-        Built with operands (``obstacle``, ``robot``); FCL gets the same snapped operands.
-    n : int
-        Number of translations.
-    seed : int
-    band : float
-        Membership disagreements at points within ``band`` (scene units) of a C-obstacle
-        boundary (our distance) are not counted.
-
-    C-obstacles grown by their margin (outward rounding, :mod:`cspace.margin`) are compared
-    one-sidedly: "ours in collision, FCL free" within the growth (FCL's distance at most the
-    box's half-diagonal) is the stated false collision and is counted in ``n_in_margin``, not
-    as a disagreement; "ours free, FCL in collision" (a false free) always counts.
-
-    Returns
-    -------
-    report : dict
-        ``n``; ``n_inside`` (ours), ``n_inside_fcl``; ``n_disagree`` beyond the band, with
-        ``disagreements`` their ``(j, 3)`` locations and ``disagree_indices``; ``n_in_band``
-        disagreements ignored; ``n_fcl_touching`` points FCL calls collision-free with a
-        negative distance (its "in contact" answer; a disagreement unless in the band);
-        ``n_false_free``: counted disagreements where we say free; ``n_in_margin``;
-        ``max_distance_error`` over points both call outside (FCL distance >= 0; against the
-        interval ``[d - growth, d]`` the grown C-obstacle's distance lies in);
-        ``scene_size``; ``seconds_per_query_ours`` (contains + signed distance) and
-        ``seconds_per_query_fcl`` (collide, plus distance where free); ``ok``.
-    """
-    from .obstacle import CSpace, CSpaceObstacle
-
-    cs = cspace_or_obstacle
-    if isinstance(cs, CSpaceObstacle):
-        b = cs.bounds
-        pad = 0.1 * (b[1] - b[0])
-        cs = CSpace([cs], bounds=np.stack([b[0] - pad, b[1] + pad]))
-    if not isinstance(cs, CSpace):
-        raise ArgumentTypeError(f"expected a CSpace or CSpaceObstacle, got {type(cs).__name__}")
-    rng = np.random.default_rng(seed)
+def _samples(cs, n: int, rng) -> np.ndarray:
+    """Half uniform in the bounds, half near the C-obstacle surfaces (inside the bounds)."""
     lo, hi = cs.bounds
     size = float(np.linalg.norm(hi - lo))
     n_uniform = n - n // 2
     parts = [rng.uniform(lo, hi, (n_uniform, 3))]
-    per = np.array_split(np.arange(n // 2), len(cs.obstacles))
+    per = np.array_split(np.arange(n // 2), max(1, len(cs.obstacles)))
     for o, idx in zip(cs.obstacles, per):
         # A scene's C-space is modelled inside its bounds only (pieces that cannot reach them
         # are never built), so near-surface samples outside the bounds are drawn again.
@@ -393,37 +348,125 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         if len(near) < len(idx):  # a surface nearly all outside the bounds: uniform points
             near = np.vstack([near, rng.uniform(lo, hi, (len(idx) - len(near), 3))])
         parts.append(near[:len(idx)])
-    q = np.vstack(parts)
+    if not cs.obstacles:
+        parts.append(rng.uniform(lo, hi, (n // 2, 3)))
+    return np.vstack(parts)
+
+
+def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float = 1e-9, *,
+                scene=None, robot_hull: bool = False) -> dict:
+    """Compare membership and distance with FCL on sampled translations.
+
+    Half of the samples are uniform in the bounds (``CSpace.bounds``, or the C-obstacle's
+    bounding box grown by 10%), half near the C-obstacle surfaces (those outside the bounds,
+    where a scene's C-space is not modelled, are drawn again) (random boundary points
+    moved along the facet normal by ``10**U(-12, -1)`` times the scene size, or not at all).
+    Where the samples are drawn uses the C-space; the verdict does not:
+
+    - **with a scene** (``scene=``, or a ``scene`` attribute of the C-space): FCL's verdict
+      and distance come from a :class:`SceneOracle` on the scene's raw meshes, every body
+      (also those the model dropped or split), with the oracle's own solid/surface rule;
+    - **without** (a bare :class:`CSpaceObstacle` from ``CSpaceObstacle.build``, or a
+      ``CSpace`` of such): one :class:`FclOracle` per C-obstacle from the operands it keeps,
+      which are the *snapped* ones (``build`` does not keep the raw float input), with the
+      semantics recorded on the C-obstacle. This path shares the C-space's operands; prefer
+      the scene path whenever there is a scene.
+
+    Parameters
+    ----------
+    cspace_or_obstacle : CSpace or CSpaceObstacle
+    n : int
+        Number of translations.
+    seed : int
+    band : float
+        Membership disagreements at points within ``band`` (scene units) of a C-obstacle
+        boundary (our distance) are not counted. FCL's own tolerance is a few ulp of the
+        scene's coordinates (:class:`SceneOracle`).
+    scene : Scene, optional
+        The scene the C-space was built from (``CSpace.from_scene``).
+    robot_hull : bool, default False
+        The C-space was built with ``robot_hull=True``: the oracle's robot is the hull too.
+
+    "Ours in collision, FCL free" within the C-space's stated error bound (FCL's distance at
+    most ``error_bound``, :attr:`CSpaceObstacle.error_bound`: the outward rounding,
+    :mod:`cspace.margin`) is the stated false collision and is counted in ``n_in_margin``, not
+    as a disagreement; "ours free, FCL in collision" (a false free) always counts. Distances
+    are compared where both say free, up to the distance to the outside of the bounds (a
+    scene's C-space models the bounds only: bodies beyond them may be dropped).
+
+    Returns
+    -------
+    report : dict
+        ``n``; ``n_inside`` (ours), ``n_inside_fcl``; ``n_disagree`` beyond the band, with
+        ``disagreements`` their ``(j, 3)`` locations and ``disagree_indices``; ``n_in_band``
+        disagreements ignored; ``n_fcl_touching`` points FCL calls collision-free with a
+        negative distance (its "in contact" answer; a disagreement unless in the band);
+        ``n_false_free``: counted disagreements where we say free; ``n_in_margin``;
+        ``max_distance_error`` over points both call outside; ``scene_size``;
+        ``seconds_per_query_ours`` (contains + signed distance) and ``seconds_per_query_fcl``
+        (collide, plus distance where free); ``ok``; ``oracle`` (``'scene'`` or
+        ``'per C-obstacle'``) and ``error_bound``.
+    """
+    from .obstacle import CSpace, CSpaceObstacle
+
+    cs = cspace_or_obstacle
+    if isinstance(cs, CSpaceObstacle):
+        b = cs.bounds
+        pad = 0.1 * (b[1] - b[0])
+        cs = CSpace([cs], bounds=np.stack([b[0] - pad, b[1] + pad]))
+    if not isinstance(cs, CSpace):
+        raise ArgumentTypeError(f"expected a CSpace or CSpaceObstacle, got {type(cs).__name__}")
+    if scene is None:
+        scene = getattr(cs, "scene", None)
+    rng = np.random.default_rng(seed)
+    lo, hi = cs.bounds
+    size = float(np.linalg.norm(hi - lo))
+    q = _samples(cs, n, rng)
 
     t0 = time.perf_counter()
-    ours_in = cs.contains(q)
-    ours_d = cs.signed_distance(q)
+    ours_in = np.asarray(cs.contains(q), dtype=bool).reshape(-1)
+    ours_d = np.asarray(cs.signed_distance(q), dtype=np.float64).reshape(-1)
     t_ours = time.perf_counter() - t0
 
-    oracles = [_oracle(o) for o in cs.obstacles]
-    t0 = time.perf_counter()
-    fcl_in = np.zeros(len(q), dtype=bool)
-    fcl_d = np.full(len(q), np.inf)
-    for orc in oracles:
-        hit = orc.collides(q)
-        fcl_in |= hit
-        free = np.nonzero(~hit)[0]
+    if scene is not None:
+        oracle = SceneOracle(scene, robot_hull=robot_hull)
+        t0 = time.perf_counter()
+        fcl_in = oracle.collides(q)
+        fcl_d = np.full(len(q), np.inf)
+        free = np.nonzero(~fcl_in)[0]
         if free.size:
-            fcl_d[free] = np.minimum(fcl_d[free], orc.distance(q[free]))
-    t_fcl = time.perf_counter() - t0
+            fcl_d[free] = oracle.distance(q[free])
+        t_fcl = time.perf_counter() - t0
+        bound = max([_error_bound(o) for o in cs.obstacles] + [0.0])
+        # The C-space is modelled inside the bounds only: distances beyond the bounds' outside
+        # are not compared.
+        reach = np.minimum((q - lo).min(axis=1), (hi - q).min(axis=1))
+    else:
+        oracles = [_oracle(o) for o in cs.obstacles]
+        t0 = time.perf_counter()
+        fcl_in = np.zeros(len(q), dtype=bool)
+        fcl_d = np.full(len(q), np.inf)
+        for orc in oracles:
+            hit = orc.collides(q)
+            fcl_in |= hit
+            free = np.nonzero(~hit)[0]
+            if free.size:
+                fcl_d[free] = np.minimum(fcl_d[free], orc.distance(q[free]))
+        t_fcl = time.perf_counter() - t0
+        bound = max([_growth(o) for o in cs.obstacles] + [0.0])
+        reach = np.full(len(q), np.inf)
 
     # FCL can report no collision and yet a negative distance (-1: "in contact") at touching
     # placements; such a point is a disagreement unless it is within the band.
     near = np.abs(ours_d) < band
     fcl_touch = ~fcl_in & (fcl_d < 0)
     differ = (ours_in != fcl_in) | (fcl_touch & ~ours_in)
-    growth = max(_growth(o) for o in cs.obstacles)
-    in_margin = differ & ours_in & ~fcl_in & (fcl_d <= growth + band)
+    in_margin = differ & ours_in & ~fcl_in & (fcl_d <= bound + band)
     in_band = differ & near & ~in_margin
     counted = np.nonzero(differ & ~in_band & ~in_margin)[0]
     both_out = ~ours_in & ~fcl_in & ~fcl_touch
-    d, f = ours_d[both_out], fcl_d[both_out]
-    err = np.maximum(np.maximum(d - f, (f - growth) - d), 0.0)
+    d, f, e = ours_d[both_out], fcl_d[both_out], reach[both_out]
+    err = np.maximum(np.maximum(np.minimum(d, e) - np.minimum(f, e), (f - bound) - d), 0.0)
     return {
         "n": int(len(q)),
         "n_inside": int(ours_in.sum()),
@@ -440,7 +483,15 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         "seconds_per_query_ours": t_ours / len(q),
         "seconds_per_query_fcl": t_fcl / len(q),
         "ok": bool(counted.size == 0),
+        "oracle": "scene" if scene is not None else "per C-obstacle",
+        "error_bound": float(bound),
     }
+
+
+def _error_bound(co) -> float:
+    """A C-obstacle's stated error bound (scene units; 0 without a margin)."""
+    m = getattr(co, "margin", None)
+    return 0.0 if m is None else float(m.error_bound)
 
 
 def _growth(co) -> float:
@@ -480,19 +531,37 @@ def co_collider(co):
     return _oracle(co).collides
 
 
-def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray, int]:
-    """Re-check a piecewise-linear path with FCL, sampled along every segment.
+def _segment_samples(P: np.ndarray, step: float) -> np.ndarray:
+    """Waypoints and points every ``step`` (at most) along each segment, both ends included."""
+    parts = [P[:1]]
+    for a, b in zip(P[:-1], P[1:]):
+        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
+        parts.append(a + (np.arange(1, n + 1)[:, None] / n) * (b - a))
+    return np.vstack(parts)
 
-    Each C-obstacle is checked with its own semantics (:func:`co_collider`).
+
+def path_collisions(cspace, path, step: float | None = None, *, scene=None,
+                    robot_hull: bool = False) -> tuple[np.ndarray, int]:
+    """Re-check a piecewise-linear translation path with FCL, sampled along every segment.
+
+    With a scene (``scene=``, a ``scene`` attribute of ``cspace``, or a :class:`Scene` as
+    ``cspace``) every sample is checked against **every** body of the raw scene by a
+    :class:`SceneOracle` (no C-obstacle box, nothing the model dropped or failed left out).
+    Without one (a ``CSpace`` of bare C-obstacles), every sample is checked against every
+    C-obstacle's operands (:func:`co_collider`; snapped operands, see :func:`cross_check`),
+    again without any box.
 
     Parameters
     ----------
-    cspace : CSpace
-        Built from operands (``CSpaceObstacle.build`` or :func:`cspace.model.model_scene`).
+    cspace : CSpace or Scene
     path : (n, 3) float64
         Reference-point waypoints.
     step : float, optional
-        Sampling step along segments; default ``1e-3`` of the bounds' diagonal.
+        Sampling step along segments (the samples are at most ``step`` apart, waypoints
+        included); default ``1e-3`` of the bounds' diagonal (the scene's bounds with a scene).
+    scene : Scene, optional
+    robot_hull : bool, default False
+        Check the robot's convex hull instead (a C-space built with ``robot_hull=True``).
 
     Returns
     -------
@@ -500,20 +569,26 @@ def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray
         The samples at which FCL finds a collision.
     n_samples : int
     """
+    from .scene import Scene
+
+    if isinstance(cspace, Scene):
+        scene, cspace = cspace, None
+    elif scene is None:
+        scene = getattr(cspace, "scene", None)
     P = np.asarray(path, dtype=np.float64).reshape(-1, 3)
-    lo, hi = cspace.bounds
-    step = step or 1e-3 * float(np.linalg.norm(hi - lo))
-    parts = [P[:1]]
-    for a, b in zip(P[:-1], P[1:]):
-        n = max(1, int(np.ceil(np.linalg.norm(b - a) / step)))
-        parts.append(a + (np.arange(1, n + 1)[:, None] / n) * (b - a))
-    Q = np.vstack(parts)
-    hit = np.zeros(len(Q), dtype=bool)
-    for o in cspace.obstacles:
-        blo, bhi = o.bounds
-        near = np.nonzero(((blo <= Q) & (Q <= bhi)).all(axis=1))[0]  # broad phase: CO box
-        if near.size:
-            hit[near] |= co_collider(o)(Q[near])
+    lo, hi = (scene.bounds if scene is not None else cspace.bounds)
+    step = step or 1e-3 * float(np.linalg.norm(np.asarray(hi) - np.asarray(lo)))
+    if not step > 0:
+        raise InvalidArgumentError(f"step must be positive, got {step}")
+    Q = _segment_samples(P, step)
+    if scene is not None:
+        hit = SceneOracle(scene, robot_hull=robot_hull).collides(Q)
+    else:
+        hit = np.zeros(len(Q), dtype=bool)
+        for o in cspace.obstacles:
+            rest = np.nonzero(~hit)[0]
+            if rest.size:
+                hit[rest] = co_collider(o)(Q[rest])
     return Q[hit], int(len(Q))
 
 
@@ -522,59 +597,20 @@ def path_collisions(cspace, path, step: float | None = None) -> tuple[np.ndarray
 
 
 class PoseCollider:
-    """FCL collision of a scene's robot at arbitrary poses against all its obstacle bodies.
+    """FCL collision of a scene's robot at arbitrary poses against all its obstacle bodies:
+    :meth:`SceneOracle.collides_poses` (see :class:`SceneOracle` for the semantics).
 
     A pose is a rotation ``R`` about the robot's reference point ``c`` and the reference
     point's position ``q``: the robot occupies ``R (v - c) + q`` for its vertices ``v``
-    (robot frame, :attr:`cspace.Scene.robot`). Every body is a BVH; the robot and each closed
-    body are solids: a pose with no surface contact still collides when a vertex of one lies
-    inside the other (generalized winding number > 1/2), so containment is not missed.
+    (robot frame, :attr:`cspace.Scene.robot`).
     """
 
     def __init__(self, scene):
-        fcl = self._fcl = _fcl()
-        c = np.asarray(scene.reference_point, dtype=np.float64)
-        self.robot_vertices = np.ascontiguousarray(scene.robot.vertices - c, dtype=np.float64)
-        self.robot_faces = np.ascontiguousarray(scene.robot.faces, dtype=np.int64)
-        self._robot = fcl.CollisionObject(self._bvh(self.robot_vertices, self.robot_faces),
-                                          fcl.Transform())
-        self.bodies = []
-        for body in scene.obstacles:
-            V = np.ascontiguousarray(body.vertices, dtype=np.float64)
-            F = np.ascontiguousarray(body.faces, dtype=np.int64)
-            self.bodies.append((V, F, body.bounds,
-                                fcl.CollisionObject(self._bvh(V, F), fcl.Transform())))
-        self._reach = float(np.linalg.norm(self.robot_vertices, axis=1).max())
-
-    def _bvh(self, V, F):
-        m = self._fcl.BVHModel()
-        m.beginModel(len(F), len(V))
-        m.addSubModel(V, F)
-        m.endModel()
-        return m
+        self.oracle = SceneOracle(scene)
 
     def collides(self, rotations, translations) -> np.ndarray:
         """``(k,)`` bool for ``(k, 3, 3)`` rotations and ``(k, 3)`` positions."""
-        fcl = self._fcl
-        Rs = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
-        Q = np.asarray(translations, dtype=np.float64).reshape(-1, 3)
-        out = np.zeros(len(Q), dtype=bool)
-        rob = self._robot
-        for V, F, (lo, hi), obs in self.bodies:
-            # broad phase: the robot's ball about q against the body's box
-            near = np.nonzero(((Q >= lo - self._reach) & (Q <= hi + self._reach)).all(axis=1)
-                              & ~out)[0]
-            for i in near.tolist():
-                rob.setTransform(fcl.Transform(Rs[i], Q[i]))
-                out[i] = fcl.collide(rob, obs, fcl.CollisionRequest(), fcl.CollisionResult()) > 0
-            rest = near[~out[near]]
-            if rest.size:  # containment: a robot vertex in the body, a body vertex in the robot
-                p = np.einsum("kij,j->ki", Rs[rest], self.robot_vertices[0]) + Q[rest]
-                inside = winding_number(V, F, p) > 0.5
-                local = np.einsum("kji,kj->ki", Rs[rest], V[0] - Q[rest])
-                inside |= winding_number(self.robot_vertices, self.robot_faces, local) > 0.5
-                out[rest[inside]] = True
-        return out
+        return self.oracle.collides_poses(rotations, translations)
 
 
 def pose_path_collisions(scene, positions, rotations, *, per_metre: float = 1e4,
@@ -582,11 +618,13 @@ def pose_path_collisions(scene, positions, rotations, *, per_metre: float = 1e4,
     """Re-check a path of poses with FCL along its continuous motions.
 
     Between consecutive waypoints the reference point moves on the straight segment while
-    the robot turns about it on the shortest arc (slerp), both at constant speed: the
-    motion OMPL's SE(2) and SE(3) spaces interpolate, and for a turning path
+    the robot turns about it on the shortest arc (slerp), both at constant speed and
+    together: the motion OMPL's SE(2) and SE(3) spaces interpolate, and for a turning path
     (:func:`cspace.ompl_plugin.plan_turning`) a translation or a turn in place. Each motion
     is sampled at ``max(per_metre * length, per_degree * angle in degrees)`` poses (at least
-    one step), both ends included.
+    one step), both ends included: consecutive samples are at most ``1 / per_metre`` apart
+    and ``1 / per_degree`` degrees apart. Every pose is checked against every body of the raw
+    scene (:class:`SceneOracle`).
 
     Parameters
     ----------
@@ -599,12 +637,11 @@ def pose_path_collisions(scene, positions, rotations, *, per_metre: float = 1e4,
 
     Returns
     -------
-    (colliding, samples) : the number of poses FCL finds in collision (solid semantics,
-    :class:`PoseCollider`) and of poses checked.
+    (colliding, samples) : the number of poses FCL finds in collision and of poses checked.
     """
     from scipy.spatial.transform import Rotation, Slerp
 
-    collider = PoseCollider(scene)
+    oracle = SceneOracle(scene)
     P = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
     Rs = np.asarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
     if len(P) != len(Rs):
@@ -615,7 +652,7 @@ def pose_path_collisions(scene, positions, rotations, *, per_metre: float = 1e4,
     def flush():
         nonlocal colliding, total, rots, pos
         if pos:
-            colliding += int(collider.collides(np.concatenate(rots), np.concatenate(pos)).sum())
+            colliding += int(oracle.collides_poses(np.concatenate(rots), np.concatenate(pos)).sum())
             total += sum(len(x) for x in pos)
             rots, pos = [], []
 
@@ -634,3 +671,313 @@ def pose_path_collisions(scene, positions, rotations, *, per_metre: float = 1e4,
         pos.append(P), rots.append(Rs)
     flush()
     return colliding, total
+
+
+# --------------------------------------------------------------------------------------
+# the independent scene oracle: raw meshes, FCL's broad phase, its own solid semantics
+
+
+def _welded(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Faces re-indexed so that vertices with bit-identical coordinates (-0.0 = 0.0) share an
+    index, the first such vertex's (so the faces still index ``V``): the topology of the
+    float mesh as its file gives it, nothing snapped."""
+    _, first, inv = np.unique(V + 0.0, axis=0, return_index=True, return_inverse=True)
+    return first[inv.reshape(-1)][F]
+
+
+def _components(W: np.ndarray, n: int) -> np.ndarray:
+    """(m,) component label of each face: faces sharing a (welded) vertex are connected."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    a = np.concatenate([W[:, 0], W[:, 1]])
+    b = np.concatenate([W[:, 1], W[:, 2]])
+    g = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n, n))
+    _, labels = connected_components(g, directed=False)
+    _, comp = np.unique(labels[W[:, 0]], return_inverse=True)
+    return comp.reshape(-1)
+
+
+def _balanced(W: np.ndarray, comp: np.ndarray, n_comp: int) -> np.ndarray:
+    """(n_comp,) bool: the component is a closed 2-cycle, every edge used as often in one
+    direction as in the other (a closed, consistently oriented surface; two solids sharing
+    an edge too). Edges from a vertex to itself (welded-away triangles) are ignored."""
+    a = W.reshape(-1)
+    b = np.roll(W, -1, axis=1).reshape(-1)
+    fc = np.repeat(comp, 3)
+    keep = a != b
+    a, b, fc = a[keep], b[keep], fc[keep]
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    sign = np.where(a < b, 1, -1)
+    keys, inv = np.unique(np.stack([lo, hi], axis=1), axis=0, return_inverse=True)
+    total = np.bincount(inv.reshape(-1), weights=sign, minlength=len(keys))
+    closed = np.ones(n_comp, dtype=bool)
+    open_edges = total[inv.reshape(-1)] != 0
+    closed[np.unique(fc[open_edges])] = False
+    closed[np.setdiff1d(np.arange(n_comp), fc)] = False  # nothing but welded-away triangles
+    return closed
+
+
+def _self_intersects(fcl, V: np.ndarray, W: np.ndarray) -> bool:
+    """Whether two triangles of the mesh that share no (welded) vertex meet: FCL's
+    triangle-triangle test on every pair its BVH finds (the mesh collided with a copy of
+    itself; all contacts). Float64: triangles that only touch count as meeting."""
+    bvh = fcl.BVHModel()
+    bvh.beginModel(len(W), len(V))
+    bvh.addSubModel(V, W)
+    bvh.endModel()
+    a, b = fcl.CollisionObject(bvh, fcl.Transform()), fcl.CollisionObject(bvh, fcl.Transform())
+    res = fcl.CollisionResult()
+    fcl.collide(a, b, fcl.CollisionRequest(num_max_contacts=64 * len(W) + 64), res)
+    if not res.contacts:
+        return False
+    pairs = np.array([(c.b1, c.b2) for c in res.contacts], dtype=np.int64)
+    share = (W[pairs[:, 0]][:, :, None] == W[pairs[:, 1]][:, None, :]).any(axis=(1, 2))
+    return bool((~share).any())
+
+
+class _Mesh:
+    """One raw mesh of the scene as :class:`SceneOracle` sees it (see its docstring)."""
+
+    def __init__(self, fcl, name, V, F, limit):
+        self.name = name
+        self.V = np.ascontiguousarray(V, dtype=np.float64)
+        self.F = np.ascontiguousarray(F, dtype=np.int64)
+        W = _welded(self.V, self.F)
+        comp = _components(W, len(self.V))
+        n_comp = int(comp.max()) + 1
+        closed = _balanced(W, comp, n_comp)
+        self.undecided = []  # closed components too large for the self-intersection test
+        self.self_intersecting = []
+        for k in np.nonzero(closed)[0].tolist():
+            faces = np.nonzero(comp == k)[0]
+            if len(faces) > limit:
+                self.undecided.append(k)
+            elif _self_intersects(fcl, self.V, W[faces]):
+                closed[k] = False
+                self.self_intersecting.append(k)
+        self.n_components = n_comp
+        self.closed = closed
+        # One vertex of every component (the first corner of its first face).
+        first = np.unique(comp, return_index=True)[1]
+        self.points = self.V[self.F[first, 0]]
+        sf = self.F[closed[comp]]
+        if len(sf):  # outward: a solid of negative (float) volume is turned inside out
+            T = self.V[sf] - self.V[sf].mean(axis=(0, 1))
+            vol = np.einsum("ij,ij->i", T[:, 0], np.cross(T[:, 1], T[:, 2])).sum()
+            if vol < 0:
+                sf = sf[:, ::-1]
+        self.solid_faces = np.ascontiguousarray(sf)
+        used = self.V[np.unique(sf)] if len(sf) else np.zeros((0, 3))
+        self.solid_box = (np.stack([used.min(axis=0), used.max(axis=0)]) if len(used) else None)
+        self.bvh = fcl.BVHModel()
+        self.bvh.beginModel(len(self.F), len(self.V))
+        self.bvh.addSubModel(self.V, self.F)
+        self.bvh.endModel()
+
+    @property
+    def solid(self) -> bool:
+        return self.solid_box is not None
+
+    def inside(self, p: np.ndarray) -> np.ndarray:
+        """(k,) bool: points inside the solid part (winding number > 1/2)."""
+        out = np.zeros(len(p), dtype=bool)
+        if self.solid_box is None or not len(p):
+            return out
+        lo, hi = self.solid_box
+        cand = np.nonzero(((p >= lo) & (p <= hi)).all(axis=1))[0]  # outside the box: w = 0
+        if cand.size:
+            out[cand] = winding_number(self.V, self.solid_faces, p[cand]) > 0.5
+        return out
+
+    def describe(self) -> str:
+        kinds = ("solid" if self.closed.all() else "surface" if not self.closed.any()
+                 else f"{int(self.closed.sum())} of {self.n_components} components solid")
+        return f"{self.name}: {len(self.F)} triangles, {self.n_components} components, {kinds}"
+
+
+class SceneOracle:
+    """FCL's verdict on a scene's robot against all its obstacle bodies, from the raw meshes.
+
+    Built from the :class:`cspace.Scene` as loaded and nothing else: ``scene.robot``,
+    ``scene.reference_point`` and ``scene.obstacles`` (float64 vertices and faces after the
+    scene file's transforms). No grid, snapped coordinate, C-obstacle, box, piece or model
+    decision of cspace enters, so a bug in those cannot hide itself here.
+
+    **Semantics (the published rule).** Each mesh (the robot, every obstacle body) is split
+    into connected components (triangles sharing a vertex, after welding vertices with
+    bit-identical coordinates). A component is *closed* when every edge is used as often in
+    one direction as in the other (a closed, consistently oriented surface; solids meeting at
+    an edge included) and *self-intersection free* when no two of its triangles that share no
+    vertex meet (FCL's triangle-triangle test on every pair its BVH finds). A closed,
+    self-intersection-free component is **solid**; every other component (open, or
+    self-intersecting, or inconsistently oriented) is a **surface**. A mesh's solid is the
+    region where the generalized winding number (:func:`winding_number`) of all its solid
+    components together exceeds 1/2, after turning them inside out if their total volume is
+    negative (cavities, wound inwards, stay holes). Components of more than
+    ``self_intersection_limit`` triangles (default 20000; about 1 s each) are not tested
+    for self-intersection and count as solid when closed: listed in :attr:`undecided`.
+
+    A pose collides when
+
+    1. FCL finds surface contact between the robot mesh and any body mesh (BVH against BVH:
+       the bodies registered once in a ``fcl.DynamicAABBTreeCollisionManager``, the robot the
+       query object); touching counts; or
+    2. (no surface contact) one vertex of **every** robot component lies inside some body's
+       solid, or one vertex of **every** component of every body lies inside the robot's
+       solid. Without surface contact a connected component lies wholly inside or wholly
+       outside a solid, so one vertex per component decides it. Surfaces get no winding test.
+
+    Poses: :meth:`collides` takes translations ``q`` (the robot occupies
+    ``v - reference_point + q``), :meth:`collides_poses` rotations and positions (the robot
+    occupies ``R (v - reference_point) + q``).
+
+    **Tolerance.** Everything here is float64. Contact is resolved to about
+    ``|x| * 2**-52`` times a small factor at coordinates of size ``|x|``: measured with a unit
+    box robot against a unit box obstacle translated along x, FCL's verdict was right at every
+    gap or overlap of at least 4 ulp of the coordinates (``|x| * 2**-50``) at 10^3, 10^4, 10^5
+    and 10^6, and could be wrong within it (FCL builds each BVH in the mesh's own frame and
+    composes the transforms in float64). Winding numbers decide containment only well away
+    from the surface (the contact test covers the rest). So compare with exact answers outside
+    a band of a few ulp of the scene's coordinates (``band`` of :func:`cross_check`; 1e-9 is
+    ample at 10^6).
+
+    Parameters
+    ----------
+    scene : Scene
+    robot_hull : bool, default False
+        The robot's convex hull (scipy's qhull on its vertices) instead of its mesh: the robot
+        a C-space built with ``robot_hull=True`` stands for.
+    self_intersection_limit : int, default 20000
+
+    Attributes
+    ----------
+    robot : the robot's mesh analysis; ``bodies``: one per obstacle body (``describe()``).
+    undecided : list of (mesh name, component) closed components not tested for
+        self-intersection (too large).
+    """
+
+    def __init__(self, scene, *, robot_hull: bool = False, self_intersection_limit: int = 20000):
+        fcl = self._fcl = _fcl()
+        c = np.asarray(scene.reference_point, dtype=np.float64).reshape(3)
+        RV = np.asarray(scene.robot.vertices, dtype=np.float64) - c
+        RF = np.asarray(scene.robot.faces, dtype=np.int64)
+        if robot_hull:
+            RV, RF = _hull(RV)
+        limit = int(self_intersection_limit)
+        self.robot = _Mesh(fcl, scene.robot.name, RV, RF, limit)
+        self.bodies = [_Mesh(fcl, b.name, b.vertices, b.faces, limit) for b in scene.obstacles]
+        self.undecided = [(m.name, k) for m in [self.robot] + self.bodies for k in m.undecided]
+        self._robot_obj = fcl.CollisionObject(self.robot.bvh, fcl.Transform())
+        self._objects = [fcl.CollisionObject(b.bvh, fcl.Transform()) for b in self.bodies]
+        self._manager = fcl.DynamicAABBTreeCollisionManager()
+        if self._objects:
+            self._manager.registerObjects(self._objects)
+        self._manager.setup()
+        self._solid_bodies = [b for b in self.bodies if b.solid]
+        # Body component points, all bodies together, for the robot-solid test.
+        self._body_points = (np.vstack([b.points for b in self.bodies]) if self.bodies
+                             else np.zeros((0, 3)))
+
+    def describe(self) -> str:
+        return "\n".join(["robot " + self.robot.describe()] + [b.describe() for b in self.bodies])
+
+    # ---- surface contact (FCL broad and narrow phase) ------------------------------------
+
+    def _contact(self, Rs, Q) -> np.ndarray:
+        fcl = self._fcl
+        out = np.zeros(len(Q), dtype=bool)
+        if not self._objects:
+            return out
+        rob, mgr = self._robot_obj, self._manager
+        cb = fcl.defaultCollisionCallback
+        for i in range(len(Q)):
+            if Rs is None:
+                rob.setTranslation(Q[i])
+            else:
+                rob.setTransform(fcl.Transform(Rs[i], Q[i]))
+            data = fcl.CollisionData(request=fcl.CollisionRequest())
+            mgr.collide(rob, data, cb)
+            out[i] = data.result.is_collision
+        return out
+
+    def _contained(self, Rs, Q, idx) -> np.ndarray:
+        """(len(idx),) bool: containment (rule 2) at the poses ``idx``."""
+        hit = np.zeros(len(idx), dtype=bool)
+        if not idx.size:
+            return hit
+        Qi = Q[idx]
+        Ri = None if Rs is None else Rs[idx]
+        # every robot component's vertex, placed, against every solid body
+        for p in self.robot.points:
+            world = Qi + (p if Ri is None else Ri @ p)
+            for b in self._solid_bodies:
+                rest = np.nonzero(~hit)[0]
+                if not rest.size:
+                    return hit
+                hit[rest] |= b.inside(world[rest])
+        # every body component's vertex, in the robot's frame, against the robot's solid
+        if self.robot.solid:
+            for p in self._body_points:
+                rest = np.nonzero(~hit)[0]
+                if not rest.size:
+                    break
+                d = p - Qi[rest]
+                local = d if Ri is None else np.einsum("kji,kj->ki", Ri[rest], d)
+                hit[rest] |= self.robot.inside(local)
+        return hit
+
+    def _verdict(self, Rs, Q) -> np.ndarray:
+        out = self._contact(Rs, Q)
+        free = np.nonzero(~out)[0]
+        out[free] = self._contained(Rs, Q, free)
+        return out
+
+    def collides(self, q) -> np.ndarray:
+        """(k,) bool: the robot with its reference point at ``q`` (k, 3) meets some body."""
+        return self._verdict(None, FclOracle._q(q))
+
+    def collides_poses(self, rotations, positions) -> np.ndarray:
+        """(k,) bool for ``(k, 3, 3)`` rotations about the reference point and ``(k, 3)``
+        reference-point positions."""
+        Q = FclOracle._q(positions)
+        Rs = np.ascontiguousarray(rotations, dtype=np.float64).reshape(-1, 3, 3)
+        if len(Rs) != len(Q):
+            raise InvalidArgumentError(f"{len(Rs)} rotations but {len(Q)} positions")
+        if not np.isfinite(Rs).all():
+            from .errors import NonFiniteError
+
+            raise NonFiniteError("rotations: not finite")
+        return self._verdict(Rs, Q)
+
+    def distance(self, q) -> np.ndarray:
+        """(k,) float64 FCL distance between the robot at translation ``q`` and the nearest
+        body surface (BVH against BVH through the manager); meaningful where the robot is
+        free (0 or negative in contact; inside a solid it is the distance to its surface)."""
+        fcl, q = self._fcl, FclOracle._q(q)
+        out = np.full(len(q), np.inf)
+        if not self._objects:
+            return out
+        rob, mgr = self._robot_obj, self._manager
+        for i in range(len(q)):
+            rob.setTranslation(q[i])
+            data = fcl.DistanceData()
+            mgr.distance(rob, data, fcl.defaultDistanceCallback)
+            out[i] = data.result.min_distance
+        return out
+
+
+def _hull(V: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The convex hull of points as outward triangles (scipy's qhull); flat points: refused."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    try:
+        h = ConvexHull(V)
+    except QhullError as exc:
+        raise InvalidMeshError(f"the robot's convex hull is flat or degenerate: {exc}") from None
+    F = h.simplices.astype(np.int64)
+    T = V[F]
+    n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    flip = np.einsum("ij,ij->i", n, h.equations[:, :3]) < 0
+    F[flip] = F[flip][:, ::-1]
+    return np.ascontiguousarray(V), F
