@@ -146,6 +146,10 @@ class ConvexPolytope:
     edge_facets: np.ndarray
     name: str = "polytope"
     _cache: dict = field(default_factory=dict, repr=False)
+    #: How far this polytope may exceed the snapped body it was built for (scene units):
+    #: 0 for a hull of points or an exactly convex mesh; for a mesh that snapping bent (see
+    #: :func:`convex_within_bound`) the bound proved there. Counted in ``error_bound``.
+    excess: float = 0.0
 
     # ---- construction ---------------------------------------------------------------
 
@@ -247,46 +251,27 @@ class ConvexPolytope:
         mesh : ClosedMesh, trimesh.Trimesh, (vertices, faces) or path
             Validated as a closed oriented 2-manifold first (:func:`cspace.mesh.as_mesh`).
 
+        Returns
+        -------
+        ConvexPolytope
+            The exact hull of the snapped vertices when the snapped mesh is convex, or convex
+            within the bend that snapping can make (:func:`convex_within_bound`, the one
+            definition of "convex"; ``excess`` then says by how much the hull may exceed the
+            snapped mesh, and is counted in the sums' ``error_bound``).
+
         Raises
         ------
         NotConvexError
-            If a face of the mesh does not lie on a facet of its convex hull with the same
-            outward orientation, or the mesh's volume differs from its hull's (decided
-            exactly); the message names the first offending face.
+            Otherwise; the message says why (the first reflex edge beyond the bound, or the
+            first face off the hull).
         """
         from .mesh import as_mesh
 
         m = as_mesh(mesh, grid=grid, name=name)
-        reflex = _reflex_edge(m.ints, m.faces)
-        if reflex is not None:  # cheap and exact: no hull of a large non-convex mesh
-            f, (u, v) = reflex
-            raise NotConvexError(
-                f"mesh '{m.name}' is not convex: its edge ({u}, {v}) of face {f} is reflex "
-                "(the neighbouring face turns outwards)"
-            )
-        hull = cls.from_ints(m.ints, grid=m.grid, name=m.name)
-        tri = m.ints[m.faces]
-        tri_n = exact.primitive(exact.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
-        # A face is on the hull iff its normal is a hull facet's and its vertices are on that plane.
-        key = {tuple(n): j for j, n in enumerate(hull.normals.tolist())}
-        facet_of = np.array([key.get(tuple(n), -1) for n in tri_n.tolist()], dtype=np.int64)
-        bad = np.nonzero(facet_of < 0)[0]
-        if not bad.size:
-            q = hull.ints[hull.facet_indices[hull.facet_offsets[facet_of]]]
-            side = exact.dot_sign(tri[:, 0] - q, hull.normals[facet_of])
-            bad = np.nonzero(side != 0)[0]
-        if bad.size:
-            raise NotConvexError(
-                f"mesh '{m.name}' is not convex: {bad.size} of {len(m.faces)} faces are not on its "
-                f"convex hull (reflex or interior), first face {int(bad[0])} with vertices "
-                f"{tuple(int(i) for i in m.faces[bad[0]])}"
-            )
-        if m.volume6() != hull.volume6():
-            raise NotConvexError(
-                f"mesh '{m.name}' is not convex: its faces lie on its hull but its volume differs "
-                "(faces cover the hull more than once)"
-            )
-        return cls(**{**hull.__dict__, "name": m.name, "_cache": {}})
+        poly, why = convex_within_bound(m)
+        if poly is None:
+            raise NotConvexError(f"mesh '{m.name}' is not convex: {why}")
+        return poly
 
     # ---- derived data ---------------------------------------------------------------
 
@@ -383,13 +368,15 @@ class ConvexPolytope:
             edges=edges,
             edge_facets=edge_facets,
             name=f"-{self.name}",
+            excess=self.excess,
         )
 
     def on_grid(self, grid: Grid) -> "ConvexPolytope":
         """The same polytope snapped onto another grid (the hull is recomputed if snapping moves points)."""
         if grid == self.grid:
             return self
-        return ConvexPolytope.from_points(self.vertices, grid=grid, name=self.name)
+        out = ConvexPolytope.from_points(self.vertices, grid=grid, name=self.name)
+        return replace(out, excess=self.excess, _cache={}) if self.excess else out
 
     def to_trimesh(self):
         """A ``trimesh.Trimesh`` of the fan-triangulated facets (float64, not re-processed)."""
@@ -826,23 +813,172 @@ def hull_minkowski_sum(A, B, *, method: str = "auto") -> ConvexPolytope:
                                     method=method)
 
 
-def _reflex_edge(ints: np.ndarray, faces: np.ndarray):
-    """A strictly reflex edge of a closed, outward-oriented 2-manifold triangle mesh, as
-    ``(face, (u, v))``, or None: edge ``u -> v`` of ``face = (u, v, w)`` is reflex when the
-    far corner of the face across it lies strictly on the outer side of ``face``'s plane
-    (exact ``orient3d``). A mesh with one is not convex; one without may still not be."""
-    m = len(faces)
-    u = faces.reshape(-1)
-    v = faces[:, [1, 2, 0]].reshape(-1)
-    w = faces[:, [2, 0, 1]].reshape(-1)
-    n = int(u.max()) + 1 if m else 0
-    key = u * n + v
-    order = np.argsort(key)
-    twin = order[np.searchsorted(key[order], v * n + u)]  # the half-edge v -> u
-    far = w[twin]
-    side = exact.orient3d(ints[u], ints[v], ints[w], ints[far])
-    bad = np.nonzero(side > 0)[0]
+# --------------------------------------------------------------------------------------
+# the one definition of a convex mesh
+
+
+_MAX_FLIP_ROUNDS = 64
+
+
+def convex_within_bound(mesh, bend: float | None = None):
+    """Whether a snapped closed mesh is convex, within the bend snapping can make, exactly.
+
+    This is the one place where "convex" is decided for a mesh (``ConvexPolytope.from_mesh``,
+    ``cspace.minkowski_sum``, ``CSpaceObstacle.build`` and scene modelling all call it).
+
+    Rule. Let B be the snapped mesh (closed, oriented outwards) and H the exact hull of its
+    vertices. An edge ``u -> v`` whose faces ``(u, v, w)`` and ``(v, u, x)`` turn outwards
+    (``orient3d(u, v, w, x) > 0``, exact) is *reflex*. B is convex within ``bend`` (default
+    ``2 * grid.point_error_bound``) when flipping reflex edges, in rounds, makes it exactly
+    convex:
+
+    1. in each round, reflex edges that share no face (greedily, in order) are flipped from
+       ``uv`` to ``wx``; each must be *thin*: with ``c = (v - u) x (x - w)`` oriented so that
+       ``c . n(u, v, w) > 0``, all four triangles ``(u, v, w)``, ``(v, u, x)``,
+       ``(u, x, w)``, ``(x, v, w)`` face along ``c`` (exact signs), ``wx`` is not an edge
+       yet, and the distance between the lines ``uv`` and ``wx``,
+       ``g = |orient3d(u, v, w, x)| / |c|``, is at most ``bend`` (exact, in rationals:
+       ``det^2 <= bend^2 |c|^2``);
+    2. the sum over rounds of each round's largest ``g`` (rounded up) stays within
+       ``2 * bend``; that sum is ``excess``;
+    3. when no reflex edge is left, every face lies on a facet plane of H with H's outward
+       normal (exact) and the faces enclose H's volume (exact).
+
+    With no reflex edge this is the exact test (``excess`` 0).
+
+    Proof of the bound. Flipping ``uv`` to ``wx`` changes the surface (as a 2-chain) by the
+    boundary of the tetrahedron ``T = conv(u, v, w, x)``; the flipped surface is H (3), so
+    B's winding number is H's (1) outside the ``T``'s: ``H \\ B ⊆ ∪ T``. Seen along ``c``
+    the four triangles of a ``T`` are graphs over one convex quadrilateral (1), the pair of
+    the surface before the flip below, the flipped pair above; the vertical gap is linear on
+    the overlay of the two triangulations, zero at the corners and ``g`` where the diagonals
+    cross, so every point of ``T`` is within ``g`` of the surface before the flip, whose
+    points are within the earlier rounds' sum of B (induction). Hence
+    ``B ⊆ H ⊆ B ⊕ ball(excess)``: using H for B can only add collisions, at most ``excess``
+    away.
+
+    Why ``2 * point_error_bound``: a convex input's nearly planar quad (a rotated box's
+    face) whose four corners each moved by at most ``e = point_error_bound``: the images of
+    the two diagonals' common point are at most ``2 e`` apart, so the lines are. A larger
+    bend, a vertex strictly inside H (a cylinder's cap centre snapped inwards, a dent), a
+    fold that is not thin: not convex, and the body takes the non-convex path (exact,
+    slower) -- it is never hulled.
+
+    Parameters
+    ----------
+    mesh : ClosedMesh
+        A validated closed oriented mesh on its grid.
+    bend : float, optional
+        The largest accepted bend, scene units.
+
+    Returns
+    -------
+    (ConvexPolytope or None, str)
+        The hull (``excess`` set) or None, and the reason (why it is not convex, or how many
+        edges snapping bent).
+    """
+    from fractions import Fraction
+
+    ints, faces, grid = mesh.ints, mesh.faces, mesh.grid
+    if bend is None:
+        bend = 2.0 * grid.point_error_bound
+    bend_steps = Fraction(bend) / Fraction(grid.step)
+    m, n = len(faces), int(ints.shape[0])
+    P = [tuple(int(c) for c in row) for row in ints.tolist()]
+
+    def sub(a, b):
+        return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+    def cross(a, b):
+        return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+
+    def dot(a, b):
+        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+    flipped = faces.copy()
+    total = Fraction(0)  # the sum over rounds of the round's largest gap, grid steps
+    n_flips = rounds = 0
+    while True:
+        u = flipped.reshape(-1)
+        v = flipped[:, [1, 2, 0]].reshape(-1)
+        w = flipped[:, [2, 0, 1]].reshape(-1)
+        key = u * n + v
+        order = np.argsort(key)
+        twin = order[np.searchsorted(key[order], v * n + u)]  # the half-edge v -> u
+        far = w[twin]
+        side = exact.orient3d(ints[u], ints[v], ints[w], ints[far])
+        reflex = np.nonzero((side > 0) & (u < v))[0]
+        if not reflex.size:
+            break
+        rounds += 1
+        if rounds > _MAX_FLIP_ROUNDS:
+            return None, f"{reflex.size} reflex edges left after {_MAX_FLIP_ROUNDS} rounds of flips"
+        edges = {(min(a, b), max(a, b)) for a, b in zip(u.tolist(), v.tolist())}
+        used = np.zeros(m, dtype=bool)
+        widest = Fraction(0)
+        new = flipped.copy()
+        for k in reflex.tolist():
+            f, g_ = k // 3, int(twin[k]) // 3
+            a, b, cw, cx = int(u[k]), int(v[k]), int(w[k]), int(far[k])
+            where = f"its edge ({a}, {b}) of face {f} is reflex"
+            if used[f] or used[g_]:
+                continue  # next round
+            if cw == cx or (min(cw, cx), max(cw, cx)) in edges:
+                return None, where + " and cannot be flipped (its flip is an edge already)"
+            pu, pv, pw, px = P[a], P[b], P[cw], P[cx]
+            c = cross(sub(pv, pu), sub(px, pw))
+            if dot(c, cross(sub(pv, pu), sub(pw, pu))) < 0:
+                c = (-c[0], -c[1], -c[2])
+            tris = ((pu, pv, pw), (pv, pu, px), (pu, px, pw), (px, pv, pw))
+            if any(dot(c, cross(sub(q, p), sub(r, p))) <= 0 for p, q, r in tris):
+                return None, where + " (the turn is not a thin fold of a quadrilateral)"
+            det = dot(cross(sub(pv, pu), sub(pw, pu)), sub(px, pu))
+            gap2 = Fraction(det * det, dot(c, c))
+            if gap2 > bend_steps * bend_steps:
+                return None, where + (f" by {float(gap2) ** 0.5 * grid.step:.3g}, beyond the "
+                                      f"{bend:.3g} snapping can bend")
+            used[f] = used[g_] = True
+            edges.add((min(cw, cx), max(cw, cx)))
+            new[f] = (a, cx, cw)
+            new[g_] = (cx, b, cw)
+            widest = max(widest, gap2)
+            n_flips += 1
+        flipped = new
+        # a bound, never below the exact gap: the square root of an upper float, rounded up
+        total += Fraction(float(widest) ** 0.5 * (1.0 + 1e-12))
+        if total > 2 * bend_steps:
+            return None, (f"snapping would have bent it by more than {2 * bend:.3g} "
+                          f"({rounds} rounds of flips)")
+    hull = ConvexPolytope.from_ints(ints, grid=grid, name=mesh.name)
+    tri = ints[flipped]
+    tri_n = exact.primitive(exact.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]))
+    # A face is on the hull iff its normal is a hull facet's and its vertices are on that plane.
+    facet = {tuple(nn): j for j, nn in enumerate(hull.normals.tolist())}
+    facet_of = np.array([facet.get(tuple(nn), -1) for nn in tri_n.tolist()], dtype=np.int64)
+    bad = np.nonzero(facet_of < 0)[0]
     if not bad.size:
-        return None
-    k = int(bad[0])
-    return k // 3, (int(u[k]), int(v[k]))
+        q = hull.ints[hull.facet_indices[hull.facet_offsets[facet_of]]]
+        bad = np.nonzero(exact.dot_sign(tri[:, 0] - q, hull.normals[facet_of]) != 0)[0]
+    if bad.size:
+        return None, (f"{bad.size} of {m} faces are not on its convex hull (reflex or "
+                      f"interior), first face {int(bad[0])} with vertices "
+                      f"{tuple(int(i) for i in faces[bad[0]])}")
+    vol6 = _volume6_faces(ints, flipped)
+    if vol6 != hull.volume6():
+        return None, "its faces lie on its hull but its volume differs (faces cover the hull more than once)"
+    excess = 0.0
+    why = "exactly convex"
+    if n_flips:
+        excess = float(total * Fraction(grid.step)) * (1.0 + 1e-12)
+        why = (f"convex within {excess:.3g}: snapping bent {n_flips} edge"
+               f"{'s' if n_flips != 1 else ''} (the hull exceeds it by at most that)")
+    return replace(hull, name=mesh.name, excess=excess, _cache={}), why
+
+
+def _volume6_faces(ints: np.ndarray, faces: np.ndarray) -> int:
+    """Six times the enclosed volume of a closed triangle mesh on grid ints (exact)."""
+    total = 0
+    for a, b, c in ints[faces].tolist():
+        total += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0])
+                  + a[2] * (b[0] * c[1] - b[1] * c[0]))
+    return total

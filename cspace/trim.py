@@ -162,10 +162,13 @@ class SumPolyhedron:
         """Hausdorff distance bound between this sum and the sum of the unsnapped inputs
         (twice the grid's point error bound), plus half a float64 ulp of rounding per
         coordinate of :attr:`vertices`, plus ``sqrt(3)`` steps per flat operand thickened
-        (``stats['thickened_operands']``; the sum then holds the exact one)."""
+        (``stats['thickened_operands']``; the sum then holds the exact one), plus how far the
+        hulls of operands that snapping bent may exceed them (``stats['hull_excess']``,
+        :func:`cspace.convex.convex_within_bound`; the sum then holds the exact one)."""
         scale = float(np.abs(self.vertices).max()) if len(self.vertices) else 0.0
         thick = self.stats.get("thickened_operands", 0) * np.sqrt(3.0) * self.grid.step
-        return 2.0 * self.grid.point_error_bound + float(np.spacing(scale)) + thick
+        return (2.0 * self.grid.point_error_bound + float(np.spacing(scale)) + thick
+                + self.stats.get("hull_excess", 0.0))
 
     def to_trimesh(self):
         import trimesh
@@ -187,23 +190,49 @@ def _convex_operand(obj, name: str, grid: Grid | None = None) -> ConvexPolytope 
 
 
 def _convex_or_thickened(obj, name: str, grid: Grid | None):
-    """``(ConvexPolytope or None, thickened)``: a flat convex point set (a panel, a triangle,
-    a rod) has no volume; it is grown by one grid step on every axis (its hull with the
-    corners of the box ``[-1, 1]^3`` steps around each point) so that the sum has a solid
-    operand. The sum then holds the exact one and lies within ``sqrt(3)`` steps of it."""
+    """``(ConvexPolytope or None, thickened)``.
+
+    Only a *flat* operand is thickened: its snapped points all coplanar or collinear
+    (decided exactly), and, for a mesh, its triangles covering their hull (a convex panel,
+    one- or two-sided; exact areas). Such a point set has no volume; it is grown by one grid
+    step on every axis (its hull with the corners of the box ``[-1, 1]^3`` steps around each
+    point) so that the sum has a solid operand; the sum then holds the exact one and lies
+    within ``sqrt(3)`` steps of it.
+
+    Anything else is never hulled: a mesh is convex only by
+    :func:`cspace.convex.convex_within_bound` (else None: the non-convex path), and a mesh
+    that is not flat but fails validation after snapping (a needle or a plate thinner than a
+    step making zero-area triangles) raises its named error. A flat mesh that is not convex
+    (a flat L) raises :class:`~cspace.errors.DegenerateError`: it has no solid and is not its
+    hull."""
+    from .convex import _find_tetrahedron
     from .errors import DegenerateError
 
-    try:
-        return _convex_operand(obj, name, grid), False
-    except DegenerateError:
-        points = _raw_points(obj, name)
-        if points is None:
-            raise
-        from .margin import grow_points
-
+    points = _raw_points(obj, name)
+    if points is not None and len(points):
         g = grid if grid is not None else Grid.for_points(points)
-        return ConvexPolytope.from_ints(grow_points(g.snap(points), (1, 1, 1)), grid=g,
-                                        name=name), True
+        ints = np.unique(g.snap(points), axis=0)
+        try:
+            _find_tetrahedron(ints, name)
+        except DegenerateError as exc:
+            if not isinstance(obj, np.ndarray):
+                from .obstacle import _flat_convex_mesh, _mesh_arrays
+
+                P = g.snap(points)
+                F = _mesh_arrays(obj)[1]
+                if (F.ndim != 2 or F.shape[1:] != (3,) or not F.size or F.min() < 0
+                        or F.max() >= len(P)):
+                    return _convex_operand(obj, name, grid), False  # its named error
+                if not _flat_convex_mesh(P, F):
+                    raise DegenerateError(
+                        f"{exc} after snapping to a grid of step {g.step:.3g}, and its "
+                        "triangles do not cover their hull (a flat non-convex shape): it has no "
+                        "solid and is not its hull; model it as a surface (a scene does)") from None
+            from .margin import grow_points
+
+            return ConvexPolytope.from_ints(grow_points(ints, (1, 1, 1)), grid=g,
+                                            name=name), True
+    return _convex_operand(obj, name, grid), False
 
 
 def _from_convex(A: ConvexPolytope, B: ConvexPolytope, t0: float) -> SumPolyhedron:
@@ -278,6 +307,7 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     if Ac is not None:
         out = _from_convex(Ac, Bc, t0)
         out.stats["thickened_operands"] = thick_a + thick_b
+        out.stats["hull_excess"] = Ac.excess + Bc.excess
         return out
     A = as_mesh(A, grid=grid_a, name=getattr(A, "name", None) or "A")
     crossing = self_intersections(A)
@@ -294,6 +324,7 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     try:
         out = _trim(A, Bc, t0, progress, worker_count(workers))
         out.stats["thickened_operands"] = int(thick_b)
+        out.stats["hull_excess"] = Bc.excess
         return out
     finally:
         if enabled:
