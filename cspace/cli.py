@@ -168,6 +168,8 @@ def _check(args: argparse.Namespace) -> int:
     print(f"{scene.name}: {r['n']} translations, {r['n_inside']} in collision (FCL: {r['n_inside_fcl']})")
     print(f"membership disagreements beyond {args.band:g} of the surface: {r['n_disagree']} "
           f"({r['n_in_band']} within the band ignored)")
+    print(f"in margin (ours in collision, FCL free within the error bound "
+          f"{r['error_bound']:.3g}): {r['n_in_margin']}; false free: {r['n_false_free']}")
     print(f"max |distance - FCL distance| outside: {r['max_distance_error']:.3g} "
           f"(scene size {r['scene_size']:.3g})")
     print(f"time per query: ours {r['seconds_per_query_ours'] * 1e6:.2f} us, "
@@ -256,6 +258,8 @@ def _build(args: argparse.Namespace) -> int:
     else:
         c = m.counts()
         print(f"{m.scene.name}: {len(m.bodies)} bodies: " + ", ".join(f"{c[k]} {k}" for k in c))
+        for line in m.meaning_changes(limit=10):  # the same lines as --explain's
+            print(line)
     where = ""
     if args.scheduler:
         where = (" on a local Dask cluster" if args.scheduler == "local"
@@ -303,6 +307,9 @@ def _plan(args: argparse.Namespace) -> int:
     m = _model(args, scene)
     if args.explain:
         print(m.explain())
+    else:
+        for line in m.meaning_changes(limit=10):  # the same lines as --explain's
+            print(line)
     scene = m.scene
     cs = m.cspace()
     r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner=args.planner,

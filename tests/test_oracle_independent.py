@@ -279,3 +279,9 @@ def test_correct_piece_boxes_pass(tmp_path, capsys):
     assert "membership disagreements beyond 1e-09 of the surface: 0 " in out
     assert through > 0 and around == 0
     assert cs.segment_free(np.array(AROUND[:-1]), np.array(AROUND[1:])).all()
+    # the scene may be given as the first argument; without one, the C-obstacles' operands
+    scene = load_scene(tmp_path / "far.toml")
+    assert len(path_collisions(scene, GRAZE)[0]) == through
+    assert len(path_collisions(cs, GRAZE)[0]) > 0 and len(path_collisions(cs, AROUND)[0]) == 0
+    band = SceneOracle(scene).band
+    assert 300 * 2.0**-48 <= band < 1e-11  # 16 ulp of the scene's largest coordinate
