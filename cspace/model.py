@@ -52,8 +52,8 @@ import numpy as np
 
 from .cache import COCache, co_key, pack_polytopes, unpack_polytopes
 from .components import edge_uses, split_parts, weld_dedupe
-from .convex import ConvexPolytope
-from .errors import BuildError, InvalidMeshError, NotConvexError
+from .convex import ConvexPolytope, convex_within_bound
+from .errors import BuildError, InvalidMeshError
 from .exact import Grid
 from .graphs import component_labels
 from .margin import Margin, snap_deviation
@@ -108,6 +108,11 @@ class BodyModel:
         '' when not built.
     error : str
         Why the build failed ('' if it did not).
+    changed : str
+        How modelling changed what the body means ('' when it did not): a closed body
+        modelled as its surface (its inside counts as free), or a bent convex body modelled by
+        its hull (within a stated excess, counted in ``error_bound``). Announced in the normal
+        output of ``cspace build``/``plan`` and in :meth:`SceneModel.explain` alike.
     """
 
     name: str
@@ -122,6 +127,7 @@ class BodyModel:
     seconds: float = 0.0
     cache: str = ""
     error: str = ""
+    changed: str = ""
     _ints: np.ndarray | None = field(default=None, repr=False)
     _solid: object = field(default=None, repr=False)
     _keep: np.ndarray | None = field(default=None, repr=False)
@@ -255,8 +261,21 @@ class SceneModel:
         """How far (scene units) a translation reported in collision can be from the scene's
         true C-obstacles (the largest over the built ones); with ``conservative=True`` no true
         collision is ever missed."""
-        built = [co.margin.error_bound for b in self.bodies for co in b.cos]
+        built = [co.margin.error_bound + _excess(b) for b in self.bodies for co in b.cos]
         return max(built + [self.margin.error_bound if self.margin else 0.0])
+
+    def meaning_changes(self, limit: int | None = None) -> list[str]:
+        """One line per body whose meaning modelling changed (:attr:`BodyModel.changed`),
+        the first ``limit`` of them and a count of the rest; empty when none did."""
+        changed = [b for b in self.bodies if b.changed]
+        if not changed:
+            return []
+        lines = [f"meaning changed for {len(changed)} of {len(self.bodies)} bodies:"]
+        shown = changed if limit is None else changed[:limit]
+        lines += [f"  {b.name}: {b.changed}" for b in shown]
+        if len(shown) < len(changed):
+            lines.append(f"  ... and {len(changed) - len(shown)} more (--explain lists them)")
+        return lines
 
     def of_kind(self, kind: str) -> list[BodyModel]:
         return [b for b in self.bodies if b.kind == kind]
@@ -335,6 +354,7 @@ class SceneModel:
         used = sorted({p.construction for b in self.bodies for p in b.pairs})
         if len(self.robot_parts) > 1 or any(p.kind != "convex" for p in self.robot_parts):
             lines += ["constructions:"] + [f"  {c}: {CONSTRUCTIONS[c]}" for c in used]
+        lines += self.meaning_changes()
         lines.append(f"modelling {self.seconds['model']:.3f} s, building "
                      f"{self.seconds['build']:.3f} s")
         return "\n".join(lines)
@@ -349,6 +369,11 @@ class SceneModel:
 
 # --------------------------------------------------------------------------------------
 # steps 4-5: drop and classify
+
+
+def _excess(body) -> float:
+    """How far a convex body's hull may exceed its snapped mesh (0 for the others)."""
+    return float(getattr(body._solid, "excess", 0.0) or 0.0) if body.kind == "convex" else 0.0
 
 
 def _closed_kind(name, P, F, grid):
@@ -376,12 +401,13 @@ def _closed_kind(name, P, F, grid):
                            f"{len(crossing)} pairs), so it bounds no solid"), None
     shells = int(solid.components.max()) + 1
     chi = len(solid.ints) - len(F) * 3 // 2 + len(F)
-    try:
-        poly = ConvexPolytope.from_mesh(solid)
-    except NotConvexError:
+    poly, why = convex_within_bound(solid)  # the one definition of "convex"
+    if poly is None:
         genus = f", genus {1 - chi // 2}" if shells == 1 else ""
         return "solid", (f"closed 2-manifold, not convex ({shells} shell"
                          f"{'s' if shells > 1 else ''}, Euler characteristic {chi}{genus})"), solid
+    if poly.excess:
+        return "convex", f"closed and {why}; modelled by its hull ({poly.n_facets} facets)", poly
     return "convex", f"closed and convex ({poly.n_facets} facets)", poly
 
 
@@ -407,11 +433,16 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
         kind, why, operand = memo[key]
     if kind != "surface":
         body.kind, body._solid = kind, operand
+        if kind == "convex" and operand.excess:
+            body.changed = (f"modelled by its convex hull, which exceeds the snapped body by at "
+                            f"most {operand.excess:.3g} (counted in the error bound)")
         # With a convex robot the body's kind names its algorithm; else each pair's line does.
         body.reason = why + ((": CVMS" if kind == "convex" else ": NCC-CVMS") if convex_robot
                              else "")
         return body
     # Surface semantics; leave out triangles whose piece cannot meet the bounds.
+    if why.startswith("closed"):
+        body.changed = f"a closed body modelled as its surface (its inside counts as free): {why}"
     tri = P[F]
     keep = _meets(tri.min(axis=1) + r_lo, tri.max(axis=1) + r_hi, *bounds_g)
     body.kind, body._keep, body.pieces = "surface", keep, int(keep.sum())

@@ -136,3 +136,33 @@ def test_rotated_convex_bodies_stay_convex_with_an_honest_bound(shape):
         assert S.error_bound >= 2 * S.grid.point_error_bound + P.excess
     if shape != "icosphere":
         assert bent  # the rounding did bend some of them: the rule was exercised
+
+
+# ---------------------------------------------------------------------------------------
+# 4c. every change of meaning is announced, in the normal output as in --explain
+
+
+def test_meaning_changes_are_announced_without_explain(tmp_path, capsys):
+    from cspace.cli import main
+
+    a = trimesh.creation.box((1, 1, 1))
+    V = a.vertices.copy()
+    V[int(np.argmax(V.sum(axis=1)))] = (-0.2, -0.1, -0.9)  # a corner pushed through: crossed
+    trimesh.Trimesh(V, a.faces, process=False).export(tmp_path / "crossed.obj")
+    V, F = _placed(trimesh.creation.box((0.5, 0.4, 0.3)), 3)
+    trimesh.Trimesh((V - (250, 150, -300)) / 1e3 + (1.5, 0, 0), F,
+                    process=False).export(tmp_path / "tilted.obj")
+    (tmp_path / "t.toml").write_text(
+        '[robot]\nbox = [0.2, 0.2, 0.2]\n[planning]\nbounds = [[-3, -3, -3], [3, 3, 3]]\n'
+        'start = [-2.8, -2.8, -2.8]\ngoal = [2.8, 2.8, 2.8]\n'
+        '[[obstacles]]\nname = "crossed"\nmesh = "crossed.obj"\n'
+        '[[obstacles]]\nname = "tilted"\nmesh = "tilted.obj"\n')
+    assert main(["build", str(tmp_path / "t.toml"), "-q", "--no-cache"]) == 0
+    plain = capsys.readouterr().out
+    assert main(["build", str(tmp_path / "t.toml"), "-q", "--no-cache", "--explain"]) == 0
+    explained = capsys.readouterr().out
+    assert "meaning changed for" in plain
+    assert "crossed: a closed body modelled as its surface (its inside counts as free)" in plain
+    changes = [ln for ln in plain.splitlines() if ln.startswith(("meaning changed", "  "))]
+    assert changes and all(ln in explained.splitlines() for ln in changes)
+    assert "tilted: convex" in explained  # bent or not by the scene's grid, still convex
