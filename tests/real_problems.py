@@ -307,12 +307,14 @@ def slot_wall(folder: Path, *, wall: str = "boxes", cells: int = 30,
     four tessellated boxes round the slot (``cells`` faces a side along the long axes),
     overlapping at their ends, each its own node and matrix, as OMPL.app's ``cubicles``
     builds walls; ``wall='solid'``: one closed genus-1 solid of ``cells x cells`` faces per
-    side, as a modeller exports a holed wall (``Twistycool``). The T robot's bar (60 along
+    side, as a modeller exports a holed wall (``Twistycool``); ``wall='sheet'``: the wall's
+    mid-plane alone, an open quad strip grid round the slot listed with both windings
+    (double-sided, zero thickness). The T robot's bar (60 along
     z) cannot pass the slot; turned 90 degrees about x (the goal's orientation) it stands
     60 tall in the 90-tall slot. The bounds keep the reference point 90 units inside the
     wall's edges, so nothing passes around it."""
     folder.mkdir(parents=True, exist_ok=True)
-    if wall == "solid":
+    if wall in ("solid", "sheet"):
         # lattice coordinates: the slot's edges are lattice lines
         ys = np.unique(np.concatenate([np.linspace(0, 105, cells // 3 + 1),
                                        np.linspace(105, 195, cells // 3 + 1),
@@ -324,8 +326,17 @@ def slot_wall(folder: Path, *, wall: str = "boxes", cells: int = 30,
         jy = (ys[:-1] >= 105) & (ys[1:] <= 195)
         jz = (zs[:-1] >= -307) & (zs[1:] <= -293)
         occ[0][np.ix_(jy, jz)] = False
-        world = [("wall", lattice_solid(occ, [246.0, 254.0], ys, zs),
-                  matrix((0, 0, 30), (5.0, -3.0, 2.0)))]
+        if wall == "solid":
+            mesh = lattice_solid(occ, [246.0, 254.0], ys, zs)
+        else:  # the plane x = 250 as a quad strip grid without the slot's cells
+            Y, Z = np.meshgrid(ys, zs, indexing="ij")
+            V = np.stack([np.full(Y.size, 250.0), Y.ravel(), Z.ravel()], axis=1)
+            idx = np.arange(Y.size).reshape(Y.shape)
+            i, j = np.nonzero(occ[0])
+            a, b, c, d = idx[i, j], idx[i + 1, j], idx[i + 1, j + 1], idx[i, j + 1]
+            mesh = double_sided((V, np.concatenate([np.stack([a, b, c], 1),
+                                                    np.stack([a, c, d], 1)])))
+        world = [("wall", mesh, matrix((0, 0, 30), (5.0, -3.0, 2.0)))]
     elif wall == "boxes":
         def slab(lo, hi):
             n = [1, max(1, cells * int(hi[1] - lo[1]) // 300),
@@ -337,7 +348,7 @@ def slot_wall(folder: Path, *, wall: str = "boxes", cells: int = 30,
                  ("left", slab((246, 100, -450), (254, 200, -307)), matrix((0, -45, 0), (1, 1, 1))),
                  ("right", slab((246, 100, -293), (254, 200, -150)), matrix((0, 0, 0), (0, 0, 0)))]
     else:
-        raise ValueError(f"wall must be 'boxes' or 'solid', got {wall!r}")
+        raise ValueError(f"wall must be 'boxes', 'solid' or 'sheet', got {wall!r}")
     write_dae(folder / "world.dae", world)
     T = t_robot(sliver_edges)
     offset = np.array([31.0, -18.0, 22.0])
@@ -351,7 +362,7 @@ def slot_wall(folder: Path, *, wall: str = "boxes", cells: int = 30,
                     goal_rotation=((1.0, 0.0, 0.0), math.pi / 2))
     return Problem("slot_wall", cfg, folder / "world.dae", robot, n_triangles(world),
                    len(T[1]), len(world),
-                   facts={"wall_x": (246.0, 254.0), "slot_z": (-307.0, -293.0),
+                   facts={"wall": wall, "wall_x": (246.0, 254.0), "slot_z": (-307.0, -293.0),
                           "slot_y": (105.0, 195.0), "bar_offset": c - offset})
 
 
@@ -427,4 +438,6 @@ def thin_wall(folder: Path, *, n_clutter: int = 36, tessellation: int = 1, seed:
                    facts={"normal": normal, "u": u, "v": v, "half": 80.0,
                           "design_offset": c - offset,
                           "duplicates": sum(n.endswith("dup") for n, _, _ in world),
+                          "duplicate_triangles": sum(len(m[1]) for n, m, _ in world
+                                                     if n.endswith("dup")),
                           "panels": sum(n.startswith("panel") for n, _, _ in world)})

@@ -267,22 +267,40 @@ def _states(scene, rng, n_uniform: int, near: np.ndarray, n_near: int, jitter: f
 # problem 1: a wall with a slot the T passes only turned
 
 
-@pytest.fixture(scope="module")
-def slot_wall(tmp_path_factory):
+#: The wall's three forms (``real_problems.slot_wall``): four box bodies, one double-sided
+#: open sheet, one genus-1 solid; the solid again with 33,000 triangles (slow).
+SLOT_WALLS = [
+    pytest.param(("boxes", 30), id="boxes"),
+    pytest.param(("sheet", 30), id="sheet"),
+    pytest.param(("solid", 30), id="solid"),
+    pytest.param(("solid", 90), id="solid-33k", marks=pytest.mark.slow),
+]
+
+
+@pytest.fixture(scope="module", params=SLOT_WALLS)
+def slot_wall(request, tmp_path_factory):
+    wall, cells = request.param
     t = time.perf_counter()
-    p = rp.slot_wall(tmp_path_factory.mktemp("slot_wall"))
+    p = rp.slot_wall(tmp_path_factory.mktemp(f"slot_wall_{wall}{cells}"), wall=wall,
+                     cells=cells)
     with pytest.warns(UserWarning, match="goal rotation differs"):
         scene = load_scene(p.cfg)
+    p.name = f"slot_wall[{wall}, {p.world_triangles} triangles]"
     return p, scene, time.perf_counter() - t
 
 
 def test_slot_wall_is_an_omplapp_problem(slot_wall):
-    """As OMPL.app gives it: four box bodies with their own matrices, the goal turned 90
+    """As OMPL.app gives it: the wall's bodies with their own matrices, the goal turned 90
     degrees about x, the robot's centre off the origin; the world centred near
     (250, 150, -300)."""
     p, scene, _ = slot_wall
     _check_reference(scene, p)
-    assert p.world_nodes == 4 and len(read_raw(p.world)) == 4
+    assert len(read_raw(p.world)) == p.world_nodes
+    kinds = model_scene(scene, build=False).counts()
+    # float32 storage under turning matrices bends the tessellated boxes' faces slightly:
+    # a box may be modelled as a (barely) non-convex solid
+    kind = {"boxes": ("convex", "solid"), "sheet": ("surface",), "solid": ("solid",)}
+    assert sum(kinds[k] for k in kind[p.facts["wall"]]) == p.world_nodes, kinds
     lo, hi = scene.obstacles[0].bounds
     assert np.allclose((lo + hi) / 2, rp.CENTRE, atol=1.0) and (hi - lo).max() == pytest.approx(300, abs=1e-3)
     rel = scene.goal_rotation @ scene.start_rotation.T
@@ -292,14 +310,14 @@ def test_slot_wall_is_an_omplapp_problem(slot_wall):
 def test_slot_wall_blocks_the_start_orientation(slot_wall):
     """At the start orientation the bar (60 along z) cannot cross the 14-wide slot: with the
     bar's core in the wall's thickness (reference x such that the bar centre is at x = 250)
-    every (y, z) in the bounds collides, for cspace (a 1-unit grid) and for the raw FCL
+    every (y, z) in the bounds collides, for cspace (a 2-unit grid) and for the raw FCL
     oracle (a sample of it); turned to the goal's orientation, the slot's axis is free."""
     p, scene, _ = slot_wall
     m = model_scene(scene, cache=False)
     cs = m.cspace()
     lo, hi = scene.bounds
     x = 250.0 + p.facts["bar_offset"][0]
-    y, z = np.meshgrid(np.arange(lo[1], hi[1] + 0.5, 1.0), np.arange(lo[2], hi[2] + 0.5, 1.0))
+    y, z = np.meshgrid(np.arange(lo[1], hi[1] + 0.5, 2.0), np.arange(lo[2], hi[2] + 0.5, 2.0))
     plane = np.stack([np.full(y.size, x), y.ravel(), z.ravel()], axis=1)
     assert cs.contains(plane).all()
     oracle = RawFcl(p.world, p.robot, scene.reference_point)
@@ -336,7 +354,7 @@ def test_slot_wall_states_agree_with_raw_fcl(slot_wall):
                        turned, q, m.error_bound)
     assert not oracle.collides(np.eye(3), scene.start) and not oracle.collides(turned, scene.goal)
     assert r0["colliding"] > 20 and r1["colliding"] > 20  # the samples do meet the wall
-    _report("slot_wall", states_start_orientation=r0, states_turned=r1)
+    _report(p.name, states_start_orientation=r0, states_turned=r1)
 
 
 @pytest.mark.filterwarnings("ignore:.*goal rotation differs")
@@ -359,7 +377,7 @@ def test_slot_wall_plans_with_turns_and_both_oracles_agree(slot_wall, tmp_path):
     # the wall is crossed only at the turned orientation
     crossing = (P[:-1, 0] < 246) & (P[1:, 0] > 254)
     assert (K[:-1][crossing] == 1).all()
-    _report("slot_wall", world_triangles=p.world_triangles, robot_triangles=p.robot_triangles,
+    _report(p.name, world_triangles=p.world_triangles, robot_triangles=p.robot_triangles,
             build_s=build, plan_s=r["seconds"], cli_s=seconds,
             turns=int((np.diff(K) != 0).sum()), fcl_cspace=f"{bad}/{n}",
             fcl_raw=f"{bad_raw}/{n_raw}", cli_fcl=f"0/{r['fcl_recheck']['samples']}")
@@ -449,11 +467,22 @@ def test_u_post_plans_and_both_oracles_agree(u_post, tmp_path):
 # problem 3: a straight line through a thin wall
 
 
-@pytest.fixture(scope="module")
-def thin_wall(tmp_path_factory):
+#: Clutter round the thin wall: 36 bodies of a few hundred triangles in all, or 90 bodies
+#: with tessellated boxes, 20,000 triangles (slow).
+THIN_WALLS = [
+    pytest.param((36, 1), id="clutter36"),
+    pytest.param((90, 8), id="clutter90-20k", marks=pytest.mark.slow),
+]
+
+
+@pytest.fixture(scope="module", params=THIN_WALLS)
+def thin_wall(request, tmp_path_factory):
+    n, tessellation = request.param
     t = time.perf_counter()
-    p = rp.thin_wall(tmp_path_factory.mktemp("thin_wall"))
+    p = rp.thin_wall(tmp_path_factory.mktemp(f"thin_wall{n}"), n_clutter=n,
+                     tessellation=tessellation)
     scene = load_scene(p.cfg)
+    p.name = f"thin_wall[{p.world_nodes} nodes, {p.world_triangles} triangles]"
     return p, scene, time.perf_counter() - t
 
 
@@ -468,10 +497,11 @@ def test_thin_wall_straight_motion_collides(thin_wall):
     m = model_scene(scene, cache=False)
     src = next(iter(m.sources.values()))
     # the quad's back and each panel's (8 triangles) dropped as double-sided, the duplicate
-    # boxes' 12 triangles as repeated; one part per node that is not a duplicate
+    # boxes' triangles as repeated; one part per node that is not a duplicate
     dups, panels = p.facts["duplicates"], p.facts["panels"]
     assert dups >= 3 and panels >= 5
-    assert src["double_sided"] == 2 + 8 * panels and src["repeated"] == 12 * dups
+    assert src["double_sided"] == 2 + 8 * panels
+    assert src["repeated"] == p.facts["duplicate_triangles"]
     assert src["parts"] == p.world_nodes - dups
     cs = m.cspace()
     assert not cs.segment_free(scene.start, scene.goal)
@@ -506,7 +536,7 @@ def test_thin_wall_states_agree_with_raw_fcl(thin_wall):
     q = _states(scene, rng, 200, near, 200, jitter=15.0)
     r = _check_states(scene, oracle, m.cspace().contains, np.eye(3), q, m.error_bound)
     assert r["colliding"] > 20
-    _report("thin_wall", states=r, error_bound=m.error_bound)
+    _report(p.name, states=r, error_bound=m.error_bound)
 
 
 def test_thin_wall_plans_round_the_edge_and_both_oracles_agree(thin_wall, tmp_path):
@@ -520,7 +550,7 @@ def test_thin_wall_plans_round_the_edge_and_both_oracles_agree(thin_wall, tmp_pa
     oracle = RawFcl(p.world, p.robot, scene.reference_point)
     bad_raw, n_raw = oracle.path(P, rel)
     assert bad == 0 and bad_raw == 0 and min(n, n_raw) > 200
-    _report("thin_wall", world_triangles=p.world_triangles, world_nodes=p.world_nodes,
+    _report(p.name, world_triangles=p.world_triangles, world_nodes=p.world_nodes,
             robot_triangles=p.robot_triangles, build_s=build,
             model_build_s=r["model"]["build_seconds"], plan_s=r["seconds"], cli_s=seconds,
             fcl_cspace=f"{bad}/{n}", fcl_raw=f"{bad_raw}/{n_raw}")
