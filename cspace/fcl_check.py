@@ -427,8 +427,9 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
         cs = CSpace([cs], bounds=np.stack([b[0] - pad, b[1] + pad]))
     if not isinstance(cs, CSpace):
         raise ArgumentTypeError(f"expected a CSpace or CSpaceObstacle, got {type(cs).__name__}")
-    if scene is None:
+    if scene is None:  # a C-space built from a scene keeps it (SceneModel.cspace)
         scene = getattr(cs, "scene", None)
+        robot_hull = robot_hull or getattr(cs, "robot_hull", False)
     rng = np.random.default_rng(seed)
     lo, hi = cs.bounds
     size = float(np.linalg.norm(hi - lo))

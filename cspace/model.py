@@ -314,7 +314,8 @@ class SceneModel:
                     else:
                         cos.append(co)
         cos += [SurfaceObstacle.union(group) for group in surfaces.values()]
-        return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name)
+        return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name, scene=self.scene,
+                      robot_hull=self.robot_hull)
 
     def _margin_line(self) -> str:
         m = self.margin

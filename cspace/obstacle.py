@@ -1167,12 +1167,21 @@ class CSpace:
     bounds : (2, 3) float64, optional
         The box translations are planned in (used by sampling checks); default the bounding
         box of the C-obstacles.
+    scene : Scene, optional
+        The scene the C-obstacles were built from: checks against FCL use its raw meshes.
+    robot_hull : bool, default False
+        The C-obstacles are of the robot's convex hull (checks use the hull too).
     """
 
-    def __init__(self, obstacles, *, bounds=None, name: str = "cspace"):
+    def __init__(self, obstacles, *, bounds=None, name: str = "cspace", scene=None,
+                 robot_hull: bool = False):
         self.obstacles = tuple(obstacles)
         self._union = _UnionOf(self.obstacles)
         self.name = name
+        # The scene as loaded (set by SceneModel.cspace): FCL cross-checks judge on its raw
+        # meshes (cspace.fcl_check.SceneOracle), never on anything built here.
+        self.scene = scene
+        self.robot_hull = bool(robot_hull)
         if bounds is None:
             if not self.obstacles:
                 raise InvalidArgumentError("a CSpace without obstacles needs bounds")
