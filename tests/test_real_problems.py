@@ -254,6 +254,23 @@ def _check_states(scene, oracle: RawFcl, contains, R, q, error_bound: float) -> 
     return {"states": len(q), "colliding": int(fcl_hit.sum()), "false_collisions": len(false_hit)}
 
 
+def _boundary_states(oracle: RawFcl, R, q, rng, pairs: int = 30, gap: float = 1e-3):
+    """States on both sides of the raw FCL boundary: for ``pairs`` (free, colliding) pairs of
+    ``q``, the segment between them is bisected to 1e-6 and the points ``gap`` before and
+    after the crossing are returned (``(2 pairs, 3)``)."""
+    hit = np.array([oracle.collides(R, x) for x in q])
+    free, coll = q[~hit], q[hit]
+    out = []
+    for _ in range(min(pairs, len(free), len(coll))):
+        a, b = free[rng.integers(len(free))], coll[rng.integers(len(coll))]
+        u = (b - a) / np.linalg.norm(b - a)
+        while np.linalg.norm(b - a) > 1e-6:
+            m = (a + b) / 2
+            a, b = (a, m) if oracle.collides(R, m) else (m, b)
+        out += [a - gap * u, b + gap * u]
+    return np.array(out).reshape(-1, 3)
+
+
 def _states(scene, rng, n_uniform: int, near: np.ndarray, n_near: int, jitter: float):
     lo, hi = np.asarray(scene.bounds)
     q = [scene.start[None], scene.goal[None], rng.uniform(lo, hi, (n_uniform, 3))]
@@ -261,6 +278,30 @@ def _states(scene, rng, n_uniform: int, near: np.ndarray, n_near: int, jitter: f
         pick = near[rng.integers(0, len(near), n_near)]
         q.append(np.clip(pick + rng.normal(scale=jitter, size=pick.shape), lo, hi))
     return np.vstack(q)
+
+
+def _check_motions(scene, oracle: RawFcl, cs, rng, near: np.ndarray, n: int = 40,
+                   length: float = 15.0) -> dict:
+    """``n`` straight motions up to ``length`` long from free states near the obstacles:
+    every one ``cs.segment_free`` calls free is free for the raw FCL oracle at every
+    :data:`STEP` (no false free motion); returns counts."""
+    lo, hi = np.asarray(scene.bounds)
+    free_said = checked = 0
+    tries = 0
+    while checked < n and tries < 50 * n:
+        tries += 1
+        a = np.clip(near[rng.integers(len(near))] + rng.normal(scale=10.0, size=3), lo, hi)
+        if cs.contains(a):
+            continue
+        d = rng.normal(size=3)
+        b = np.clip(a + d / np.linalg.norm(d) * rng.uniform(1.0, length), lo, hi)
+        checked += 1
+        if cs.segment_free(a, b):
+            free_said += 1
+            bad, _ = oracle.path(np.stack([a, b]), np.stack([np.eye(3)] * 2))
+            assert bad == 0, f"cspace calls the motion {a} -> {b} free; FCL finds {bad} poses"
+    assert checked == n
+    return {"motions": checked, "free": free_said}
 
 
 # --------------------------------------------------------------------------------------
@@ -336,7 +377,8 @@ def test_slot_wall_blocks_the_start_orientation(slot_wall):
 def test_slot_wall_states_agree_with_raw_fcl(slot_wall):
     """cspace's membership at the start orientation (the translational C-space) and at the
     turned one (the goal's slice) against the raw FCL oracle: start, goal, 150 uniform
-    states and 150 near the slot, per orientation."""
+    states, 150 near the slot and 30 pairs 1e-3 either side of FCL's contact boundary, per
+    orientation; and 40 short motions near the slot at the start orientation."""
     p, scene, _ = slot_wall
     from cspace.ompl_plugin import default_slices
     from cspace.turning import TurningCSpace
@@ -347,11 +389,14 @@ def test_slot_wall_states_agree_with_raw_fcl(slot_wall):
     rng = np.random.default_rng(11)
     near = np.array([[250.0, 150.0, -300.0]]) + p.facts["bar_offset"]
     q = _states(scene, rng, 150, near, 150, jitter=12.0)
-    r0 = _check_states(scene, oracle, cs.contains, np.eye(3), q[2:], m.error_bound)
-    tcs = TurningCSpace(scene, default_slices(scene, 4))
     turned = Rotation.from_rotvec([np.pi / 2, 0, 0]).as_matrix()
+    q0 = np.vstack([q[2:], _boundary_states(oracle, np.eye(3), q, rng)])
+    q1 = np.vstack([q, _boundary_states(oracle, turned, q, rng)])
+    r0 = _check_states(scene, oracle, cs.contains, np.eye(3), q0, m.error_bound)
+    r0["motions"] = _check_motions(scene, oracle, cs, rng, near)
+    tcs = TurningCSpace(scene, default_slices(scene, 4))
     r1 = _check_states(scene, oracle, lambda Q: [not tcs.state_free(x, 1) for x in Q],
-                       turned, q, m.error_bound)
+                       turned, q1, m.error_bound)
     assert not oracle.collides(np.eye(3), scene.start) and not oracle.collides(turned, scene.goal)
     assert r0["colliding"] > 20 and r1["colliding"] > 20  # the samples do meet the wall
     _report(p.name, states_start_orientation=r0, states_turned=r1)
@@ -427,15 +472,18 @@ def test_u_post_start_is_free_only_because_the_robot_is_not_convex(u_post):
 
 
 def test_u_post_states_agree_with_raw_fcl(u_post):
-    """Start, goal, 200 uniform states and 200 near the post and the clutter: no false
-    free, false collisions only within the error bound."""
+    """Start, goal, 200 uniform states, 200 near the post and the clutter, and 30 pairs
+    1e-3 either side of FCL's contact boundary: no false free, false collisions only within
+    the error bound; 40 short motions near them: none cspace calls free collides."""
     p, scene, _ = u_post
     m = model_scene(scene, cache=False)
     oracle = RawFcl(p.world, p.robot, scene.reference_point)
     near = np.vstack([b["V"].mean(0) for b in oracle.bodies] + [scene.start[None]] * 10)
     rng = np.random.default_rng(12)
     q = _states(scene, rng, 200, near, 200, jitter=10.0)
+    q = np.vstack([q, _boundary_states(oracle, np.eye(3), q, rng)])
     r = _check_states(scene, oracle, m.cspace().contains, np.eye(3), q, m.error_bound)
+    r["motions"] = _check_motions(scene, oracle, m.cspace(), rng, near)
     assert r["colliding"] > 20
     _report("u_post", states=r, error_bound=m.error_bound)
 
@@ -525,7 +573,8 @@ def test_thin_wall_straight_motion_collides(thin_wall):
 
 
 def test_thin_wall_states_agree_with_raw_fcl(thin_wall):
-    """Start, goal, 200 uniform states and 200 near the wall's plane and the clutter."""
+    """Start, goal, 200 uniform states, 200 near the wall's plane and the clutter, and 30
+    pairs 1e-3 either side of FCL's contact boundary; 40 short motions near them."""
     p, scene, _ = thin_wall
     m = model_scene(scene, cache=False)
     oracle = RawFcl(p.world, p.robot, scene.reference_point)
@@ -534,7 +583,9 @@ def test_thin_wall_states_agree_with_raw_fcl(thin_wall):
                      + [b["V"].mean(0)[None] for b in oracle.bodies])
     rng = np.random.default_rng(13)
     q = _states(scene, rng, 200, near, 200, jitter=15.0)
+    q = np.vstack([q, _boundary_states(oracle, np.eye(3), q, rng)])
     r = _check_states(scene, oracle, m.cspace().contains, np.eye(3), q, m.error_bound)
+    r["motions"] = _check_motions(scene, oracle, m.cspace(), rng, near)
     assert r["colliding"] > 20
     _report(p.name, states=r, error_bound=m.error_bound)
 
