@@ -261,7 +261,7 @@ class SceneModel:
         """How far (scene units) a translation reported in collision can be from the scene's
         true C-obstacles (the largest over the built ones); with ``conservative=True`` no true
         collision is ever missed."""
-        built = [co.margin.error_bound + _excess(b) for b in self.bodies for co in b.cos]
+        built = [co.error_bound for b in self.bodies for co in b.cos]  # excess included
         return max(built + [self.margin.error_bound if self.margin else 0.0])
 
     def meaning_changes(self, limit: int | None = None) -> list[str]:
@@ -373,7 +373,8 @@ class SceneModel:
 
 
 def _excess(body) -> float:
-    """How far a convex body's hull may exceed its snapped mesh (0 for the others)."""
+    """How far a convex body's (or robot part's) hull may exceed its snapped mesh (0 for the
+    others); counted in each C-obstacle's ``excess`` and so in ``error_bound``."""
     return float(getattr(body._solid, "excess", 0.0) or 0.0) if body.kind == "convex" else 0.0
 
 
@@ -485,6 +486,12 @@ def _margin_from(a: dict, margin: Margin) -> Margin:
 
 
 def _from_arrays(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
+    co = _from_arrays_of(a, body, robot, c, grid, margin)
+    co.excess = _excess(body) + robot.excess  # hulls standing for bent bodies
+    return co
+
+
+def _from_arrays_of(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
     m = _margin_from(a, margin)
     if body.kind == "convex":
         co, obs = unpack_polytopes(a, "p_", grid)
@@ -507,9 +514,11 @@ def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None
     ``grown``: ``margin.grow(robot)`` when the caller has it (one hull per robot part)."""
     if body.kind == "solid":
         S, m = grown_mesh_sum(body._solid, robot.reflected(c), margin, progress)
-        return CSpaceObstacle.from_mesh(S.vertices, S.faces, obstacle=body._solid, robot=robot,
-                                        reference_point=robot.grid.to_float(robot.grid.snap(c)),
-                                        grid=grid, sum=S, name=body.name, margin=m)
+        co = CSpaceObstacle.from_mesh(S.vertices, S.faces, obstacle=body._solid, robot=robot,
+                                      reference_point=robot.grid.to_float(robot.grid.snap(c)),
+                                      grid=grid, sum=S, name=body.name, margin=m)
+        co.excess = robot.excess
+        return co
     grown = margin.grow(robot) if grown is None else grown
     if body.kind == "surface":
         F = body.faces[body._keep]
@@ -518,6 +527,7 @@ def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None
     else:
         co = CSpaceObstacle.build(body._solid, grown, c, grid=grid, conservative=False)
     co.robot, co.margin = robot, margin
+    co.excess = _excess(body) + robot.excess  # the grown robot's hull has lost its excess
     return co
 
 
@@ -687,6 +697,7 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
                                                     name=f"{name} (containment)"))
     for co in cos:
         co.semantics = (body.kind != "surface", part.kind)
+        co.excess = _excess(body)  # a non-convex robot part is never a hull
     return cos
 
 

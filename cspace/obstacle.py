@@ -440,6 +440,12 @@ def _closed_2cycle(V: np.ndarray, F: np.ndarray) -> bool:
     return True
 
 
+def _hull_excess(*operands) -> float:
+    """How far the hulls among ``operands`` may exceed the bodies they stand for (the sum of
+    their :attr:`ConvexPolytope.excess`; 0 for anything else)."""
+    return float(sum(getattr(op, "excess", 0.0) or 0.0 for op in operands))
+
+
 def _wider_somewhere(R: np.ndarray, O: np.ndarray) -> bool:
     """Is the robot wider than the obstacle's box on some axis (exact, on the floats)? Then
     it can never lie inside the obstacle."""
@@ -697,6 +703,11 @@ class CSpaceObstacle:
         several (``parts``; an obstacle whose pieces meet at non-manifold edges or vertices).
     margin : Margin
         The outward rounding it was grown by (:mod:`cspace.margin`); ``error_bound``.
+    excess : float
+        How far the hulls standing for operands that snapping bent may exceed the snapped
+        operands (the obstacle's and the robot's :attr:`ConvexPolytope.excess`, from
+        :func:`cspace.convex.convex_within_bound`); a hull holds its body, so this only adds
+        collisions. Counted in ``error_bound``; 0 when no hull stands for a bent body.
     sum : SumPolyhedron or None
         The ``cspace.minkowski_sum`` result a mesh C-obstacle was built from (provenance,
         holes, non-manifold features), when built by :meth:`build`.
@@ -728,6 +739,8 @@ class CSpaceObstacle:
     ``benchmarks/reports/queries.md``): ``contains`` 6e6 to 8.7e6/s, ``signed_distance``
     2.8e5 to 3.9e5/s, ``segment_free`` 1e6 to 1.5e6/s, one ``contains`` call about 4 us.
     """
+
+    excess = 0.0  # hulls of bent operands (each construction that uses one sets it)
 
     def __init__(
         self, polytope: ConvexPolytope, *, obstacle=None, robot=None, reference_point=None,
@@ -869,6 +882,7 @@ class CSpaceObstacle:
         if flat is not None:
             co, O, R, m = flat
             out = cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=m)
+            out.excess = _hull_excess(O, R)
             # FCL's view: each operand a solid where it has volume, a surface where flat.
             o_flat, r_flat = isinstance(O, _FlatOperand), isinstance(R, _FlatOperand)
             out.semantics = (not o_flat, "surface" if r_flat else "convex")
@@ -890,11 +904,14 @@ class CSpaceObstacle:
             S, m = grown_mesh_sum(O, B, margin, progress)
             out = cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
                                 reference_point=c_snapped, grid=grid, sum=S, margin=m)
+            out.excess = _hull_excess(R)
             if isinstance(R, _FlatOperand):
                 out.semantics = (True, "surface")
             return out
         co = convex_minkowski_sum(O, margin.grow(R).reflected(c)).polytope
-        return cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=margin)
+        out = cls(co, obstacle=O, robot=R, reference_point=c_snapped, margin=margin)
+        out.excess = _hull_excess(O, R)
+        return out
 
     @classmethod
     def _thin(cls, obstacle, robot, c, grid: Grid, rgrid: Grid, margin: Margin, why):
@@ -919,8 +936,10 @@ class CSpaceObstacle:
             raise type(why)(f"{why} (its surface would stand for it only if the robot could not "
                             "fit inside it)") from None
         try:
-            R = margin.grow(_as_convex(robot, rgrid, "robot"))
+            hull = _as_convex(robot, rgrid, "robot")
+            excess, R = _hull_excess(hull), margin.grow(hull)
         except DegenerateError:  # a flat robot: give it volume
+            excess = 0.0
             margin = margin.at_least(1)
             R = ConvexPolytope.from_ints(margin.grow_ints(rgrid.snap(Rv)), grid=rgrid, name="robot")
         B = R.reflected(c)
@@ -932,6 +951,7 @@ class CSpaceObstacle:
                                              grid=grid.plus(B.grid), name=f"triangle {k}")
             co = cls(piece, obstacle=_FlatOperand(t, grid), robot=R, reference_point=c_snapped,
                      margin=margin)
+            co.excess = excess
             co.semantics = (False, "convex")  # FCL: the obstacle's triangles, as a surface
             cos.append(co)
         out = cls.union(cos)
@@ -1015,9 +1035,14 @@ class CSpaceObstacle:
     @property
     def error_bound(self) -> float:
         """How far (scene units) a translation reported in collision can be from the true
-        C-obstacle of the float input (:attr:`margin`'s bound). Built with
-        ``conservative=True`` the error is one-sided: every true collision is reported."""
-        return self.margin.error_bound
+        C-obstacle of the float input: :attr:`margin`'s bound plus :attr:`excess` (a hull
+        standing for a body that snapping bent); a union's is the largest of its parts'.
+        Built with ``conservative=True`` the error is one-sided: every true collision is
+        reported."""
+        parts = getattr(self, "parts", None)
+        if self.kind == "union" and parts:
+            return max(co.error_bound for co in parts)
+        return self.margin.error_bound + self.excess
 
     def __repr__(self) -> str:
         return (
