@@ -141,11 +141,11 @@ def matrix(rotvec_deg=(0.0, 0.0, 0.0), translation=(0.0, 0.0, 0.0)) -> np.ndarra
 
 
 def write_dae(path: Path, bodies) -> Path:
-    """Write ``bodies`` (``(name, (world_vertices, faces), node_matrix)``, or several names
-    sharing one geometry: ``(name, geometry_name, ...)`` is not needed, a body whose mesh is
-    the *same object* as an earlier one's instances that geometry again) as a Z_UP Collada
-    file with one node per body. The vertices are stored so that Assimp's placement
-    ``Z_UP @ node_matrix @ v`` gives back the world vertices (to float32 rounding)."""
+    """Write ``bodies``, ``(name, (world_vertices, faces), node_matrix)`` each, as a Z_UP
+    Collada file with one node per body; a body whose mesh tuple is the *same object* as an
+    earlier body's instances that geometry again (a shared ``<geometry>``). The vertices are
+    stored so that Assimp's placement ``Z_UP @ node_matrix @ v`` gives back the world
+    vertices (to float32 rounding)."""
     import collada
     from collada import geometry, material, scene, source
 
@@ -221,7 +221,8 @@ class Problem:
     facts: dict = field(default_factory=dict)
 
 
-def _robot_file(folder: Path, mesh: Mesh, offset, rotvec_deg, translation) -> tuple[Path, np.ndarray]:
+def _robot_file(folder: Path, mesh: Mesh, offset, rotvec_deg,
+                translation) -> tuple[Path, np.ndarray]:
     """The robot's file: ``mesh`` (designed about the origin) moved by ``offset`` in the world
     frame, stored under a node matrix; returns the path and OMPL.app's centre of it (as
     cspace reads it: the problem's definition, used to write start and goal)."""

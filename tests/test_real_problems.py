@@ -161,7 +161,8 @@ class RawFcl:
             return True
         probe = self.robot_probe @ np.asarray(R).T + q
         for b in self.bodies:
-            if not b["closed"] or (q + self.reach < b["lo"]).any() or (q - self.reach > b["hi"]).any():
+            far = (q + self.reach < b["lo"]).any() or (q - self.reach > b["hi"]).any()
+            if not b["closed"] or far:
                 continue
             if (winding_number(b["V"], b["F"], probe) > 0.5).any():
                 return True  # the robot inside a closed body
@@ -343,7 +344,8 @@ def test_slot_wall_is_an_omplapp_problem(slot_wall):
     kind = {"boxes": ("convex", "solid"), "sheet": ("surface",), "solid": ("solid",)}
     assert sum(kinds[k] for k in kind[p.facts["wall"]]) == p.world_nodes, kinds
     lo, hi = scene.obstacles[0].bounds
-    assert np.allclose((lo + hi) / 2, rp.CENTRE, atol=1.0) and (hi - lo).max() == pytest.approx(300, abs=1e-3)
+    assert np.allclose((lo + hi) / 2, rp.CENTRE, atol=1.0)
+    assert (hi - lo).max() == pytest.approx(300, abs=1e-3)
     rel = scene.goal_rotation @ scene.start_rotation.T
     assert np.allclose(Rotation.from_matrix(rel).as_rotvec(), [np.pi / 2, 0, 0], atol=1e-12)
 
@@ -406,7 +408,7 @@ def test_slot_wall_states_agree_with_raw_fcl(slot_wall):
 def test_slot_wall_plans_with_turns_and_both_oracles_agree(slot_wall, tmp_path):
     """``cspace plan --slices 4`` turns the T and passes the slot; the returned poses are
     re-checked along every translation and turn by cspace's FCL oracle and by the raw one:
-    0 colliding poses each. The same plan without turns finds no path."""
+    0 colliding poses each, and the wall is crossed only at the turned orientation."""
     p, scene, build = slot_wall
     code, r, seconds = _plan_cli(p.cfg, tmp_path / "r.json", "--slices", "4", time_budget=10)
     assert code == 0 and r["solved"] and r["valid_exact_recheck"]
@@ -489,6 +491,10 @@ def test_u_post_states_agree_with_raw_fcl(u_post):
 
 
 def test_u_post_plans_and_both_oracles_agree(u_post, tmp_path):
+    """``cspace plan --explain`` (translations at the start orientation) slides the U off
+    the post through its mouth and on to the goal among the clutter; the path is re-checked
+    by cspace's ``pose_path_collisions`` and ``path_collisions`` and by the raw oracle: 0
+    colliding poses each."""
     p, scene, build = u_post
     code, r, seconds = _plan_cli(p.cfg, tmp_path / "r.json", "--explain", time_budget=10)
     assert code == 0 and r["solved"] and r["fcl_recheck"]["colliding_samples"] == 0
@@ -591,6 +597,9 @@ def test_thin_wall_states_agree_with_raw_fcl(thin_wall):
 
 
 def test_thin_wall_plans_round_the_edge_and_both_oracles_agree(thin_wall, tmp_path):
+    """``cspace plan`` goes round the quad's edge (the path is longer than the straight
+    line, which collides); cspace's ``pose_path_collisions`` and the raw oracle find 0
+    colliding poses on it."""
     p, scene, build = thin_wall
     code, r, seconds = _plan_cli(p.cfg, tmp_path / "r.json", time_budget=10)
     assert code == 0 and r["solved"] and r["fcl_recheck"]["colliding_samples"] == 0
