@@ -8,6 +8,11 @@
   C-obstacle ``O ⊕ (-R)`` exactly when it is in collision.
 - :func:`membership_disagreements`: compare a membership answer with FCL's, ignoring points
   within a band of the C-obstacle boundary.
+- :func:`raw_mesh`, :func:`raw_fcl_oracle`, :func:`raw_scene`: FCL oracles from the *raw
+  float input a test gave* ``CSpaceObstacle.build`` (never ``co.obstacle`` / ``co.robot``,
+  which are cspace's snapped copies): an :class:`cspace.fcl_check.FclOracle` on the raw
+  arrays, or a :class:`cspace.Scene` of them for :class:`cspace.fcl_check.SceneOracle`
+  (``cross_check(co, scene=raw_scene(...))``).
 
 Everything is float64. The winding number and the ``fcl.Convex`` builder are
 :mod:`cspace.fcl_check`'s (one implementation, tested here against known answers).
@@ -28,6 +33,9 @@ __all__ = [
     "FclSolid",
     "FclClassification",
     "membership_disagreements",
+    "raw_mesh",
+    "raw_fcl_oracle",
+    "raw_scene",
     "exact_sum_mesh",
     "exact_sum_volume",
     "mesh_volume",
@@ -327,6 +335,51 @@ def _grid_ints(a: np.ndarray, b: np.ndarray):
             )
         out.append(k)
     return grids, out
+
+
+def raw_mesh(operand) -> tuple[np.ndarray, np.ndarray]:
+    """The raw float mesh of an operand as a test passes it to ``CSpaceObstacle.build``:
+    ``(V, F)`` as given, a ``trimesh.Trimesh``'s arrays, or points (a convex body: their
+    outward Qhull hull, in float64; nothing snapped). Flat point sets (a panel, a rod, a
+    triangle) have no hull: pass them as ``(V, F)``."""
+    if isinstance(operand, tuple) and len(operand) == 2:
+        V, F = operand
+    elif hasattr(operand, "vertices") and hasattr(operand, "faces"):
+        V, F = operand.vertices, operand.faces
+    else:
+        return _outward_hull(np.asarray(operand, dtype=np.float64))
+    return np.asarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
+
+
+def raw_fcl_oracle(obstacle, robot, reference_point=(0.0, 0.0, 0.0), **kw):
+    """:class:`cspace.fcl_check.FclOracle` on the raw operands (see :func:`raw_mesh`), the
+    robot at ``q`` occupying ``robot - reference_point + q``; ``kw`` as FclOracle's."""
+    from cspace.fcl_check import FclOracle
+
+    (OV, OF), (RV, RF) = raw_mesh(obstacle), raw_mesh(robot)
+    return FclOracle(OV, OF, RV, RF, reference_point, **kw)
+
+
+def raw_scene(obstacle, robot, reference_point=(0.0, 0.0, 0.0), bounds=None):
+    """A :class:`cspace.Scene` of the raw operands (one obstacle body or a list of them), for
+    :class:`cspace.fcl_check.SceneOracle` and ``cross_check(co, scene=...)``: the oracle's
+    own solid/surface rule on the raw meshes. ``bounds`` default: the raw C-obstacle's box
+    grown by 10% (start and goal at its corners; unused by the oracle)."""
+    from cspace.scene import Body, Scene
+
+    bodies = obstacle if isinstance(obstacle, list) else [obstacle]
+    meshes = [raw_mesh(b) for b in bodies]
+    RV, RF = raw_mesh(robot)
+    c = np.asarray(reference_point, dtype=np.float64).reshape(3)
+    if bounds is None:
+        lo = np.min([V.min(axis=0) for V, _ in meshes], axis=0) - (RV.max(axis=0) - c)
+        hi = np.max([V.max(axis=0) for V, _ in meshes], axis=0) - (RV.min(axis=0) - c)
+        pad = 0.1 * (hi - lo)
+        bounds = np.stack([lo - pad, hi + pad])
+    bounds = np.asarray(bounds, dtype=np.float64)
+    return Scene("raw", None, tuple(Body(f"obstacle-{k}", V, F, "test")
+                                    for k, (V, F) in enumerate(meshes)),
+                 Body("robot", RV, RF, "test"), c, bounds, bounds[0], bounds[1])
 
 
 def _outward_hull(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

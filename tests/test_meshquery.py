@@ -11,7 +11,9 @@
   a 1e-9 band, distance error <= 1e-9 x size; segments against dense FCL sampling; a thin
   plate that OMPL's discrete motion validator (1% resolution) steps over;
 - C-obstacles of non-convex obstacles built by ``minkowski_sum`` (zoo and shared meshes with a
-  box and a small hull robot) against FCL (robot mesh vs obstacle mesh).
+  box and a small hull robot) against FCL on the raw float operands the test built from
+  (:class:`cspace.fcl_check.SceneOracle` of them; robot mesh vs obstacle mesh): no false
+  free, false collisions within the C-obstacle's ``error_bound``.
 """
 
 from __future__ import annotations
@@ -27,9 +29,10 @@ import pytest
 import zoo
 from cspace.convex import ConvexPolytope
 from cspace.errors import InvalidMeshError, NonFiniteError, NotConvexError, OpenMeshError
-from cspace.fcl_check import FclOracle, _growth, _near_surface, cross_check, winding_number
+from cspace.fcl_check import FclOracle, _near_surface, cross_check, winding_number
 from cspace.mesh import ClosedMesh
 from cspace.obstacle import CSpace, CSpaceObstacle
+from oracles import raw_mesh, raw_scene  # tests/ is on sys.path
 
 # A point-sized robot for using a mesh directly as a C-obstacle with FCL: a tetrahedron of
 # edge 1e-11 with its reference point at a vertex, so the robot at q is within 1e-11 of q and
@@ -477,9 +480,18 @@ def _built(name: str, robot: str, root) -> CSpaceObstacle:
         pytest.skip(f"non-convex minkowski_sum not available yet (NotImplementedError: {exc})")
 
 
-def _fcl_meshes(co: CSpaceObstacle, q: np.ndarray):
-    """Robot at ``q`` and obstacle both as ``fcl.BVHModel`` meshes: per ``q``, whether the
-    surfaces meet (``fcl.collide``, triangle-triangle tests) and ``fcl.distance``.
+def _raw(name: str, robot: str, root):
+    """The raw float input :func:`_built` gave ``CSpaceObstacle.build``: ``(V, F)``, the
+    robot as an outward hull mesh ``(RV, RF)`` (float, not snapped) and the reference point."""
+    V, F = _mesh(name, root)
+    R = _robots(float(np.linalg.norm(np.ptp(V, axis=0))))[robot]
+    return (np.asarray(V, np.float64), np.asarray(F, np.int64)), raw_mesh(R), R.mean(axis=0)
+
+
+def _fcl_meshes(raw, q: np.ndarray):
+    """Robot at ``q`` and obstacle both as ``fcl.BVHModel`` meshes, from the raw operands
+    ``raw = ((V, F), (RV, RF), c)``: per ``q``, whether the surfaces meet (``fcl.collide``,
+    triangle-triangle tests) and ``fcl.distance``.
 
     A second FCL oracle, beside :class:`FclOracle` (robot ``fcl.Convex``, GJK), measured here
     to be unreliable at the scale of these checks: its distance was off by up to 1.2e-4
@@ -496,8 +508,9 @@ def _fcl_meshes(co: CSpaceObstacle, q: np.ndarray):
         m.endModel()
         return fcl.CollisionObject(m, fcl.Transform())
 
-    rob = bvh(co.robot.vertices - co.reference_point, co.robot.faces)
-    obs = bvh(co.obstacle.vertices, co.obstacle.faces)
+    (OV, OF), (RV, RF), c = raw
+    rob = bvh(RV - c, RF)
+    obs = bvh(OV, OF)
     meet, dist = np.zeros(len(q), dtype=bool), np.zeros(len(q))
     for i in range(len(q)):
         rob.setTranslation(q[i])
@@ -508,37 +521,48 @@ def _fcl_meshes(co: CSpaceObstacle, q: np.ndarray):
 
 def _check_sum_against_fcl(name, robot, shared_data, n, seed):
     co = _built(name, robot, shared_data)
+    raw = _raw(name, robot, shared_data)
     assert co.kind == "mesh" and co.sum is not None
-    r = cross_check(co, n=n, seed=seed, band=BAND)
+    # The verdict: FCL on the raw float operands (SceneOracle of a scene of them), never the
+    # C-obstacle's snapped copies; false collisions within co.error_bound are in_margin.
+    r = cross_check(co, n=n, seed=seed, band=BAND, scene=raw_scene(raw[0], raw[1], raw[2]))
+    assert r["oracle"] == "scene" and r["error_bound"] == co.error_bound
     assert 0.05 * n < r["n_inside"] < 0.95 * n
-    # Disagreements with FclOracle (Convex robot) are re-judged by the BVH-vs-BVH oracle
-    # (surface contact, or a robot vertex inside the obstacle by winding number): each must
-    # be an FclOracle error (the BVH oracle agrees with us) or within the band of the true
-    # boundary (brute-force-exact BVH distance below the band).
+    # Disagreements are re-judged by a second BVH-vs-BVH check of the raw operands (surface
+    # contact, or a robot vertex inside the obstacle by winding number): each must be an
+    # oracle error (the BVH check agrees with us) or within the band of the true boundary
+    # (brute-force-exact BVH distance below the band).
     qd = r["disagreements"]
     if len(qd):
         ours = co.contains(qd)
-        meet, dist = _fcl_meshes(co, qd)
-        inside = meet | (winding_number(co.obstacle.vertices, co.obstacle.faces,
-                                        co.robot.vertices[0] - co.reference_point + qd) > 0.5)
-        # A point inside ours and outside the snapped operands' sum within the margin's box
-        # is the stated one-sided error (outward rounding), not a disagreement.
-        grown = ours & ~inside & (dist <= _growth(co) + BAND)
+        meet, dist = _fcl_meshes(raw, qd)
+        (OV, OF), (RV, _), c = raw
+        inside = meet | (winding_number(OV, OF, RV[0] - c + qd) > 0.5)
+        # A point inside ours and outside the raw operands' sum within the stated error bound
+        # is the one-sided error (outward rounding), not a disagreement; a false free never is.
+        grown = ours & ~inside & (dist <= co.error_bound + BAND)
         wrong = ((ours != inside) & ~(dist < BAND) & ~(np.abs(co.signed_distance(qd)) < BAND)
                  & ~grown)
         assert not wrong.any(), (
             f"{name} ⊕ {robot}: {int(wrong.sum())} of {len(qd)} disagreements confirmed by the "
             f"BVH oracle, e.g. q={qd[wrong][:2].tolist()}, ours inside={ours[wrong][:2]}, "
             f"our signed distance {co.signed_distance(qd[wrong][:2])}")
-    _check_distances(co, n, seed, f"{name} ⊕ {robot}")
+    _check_distances(co, n, seed, f"{name} ⊕ {robot}", raw=raw, slack=co.error_bound)
 
 
-def _check_distances(co: CSpaceObstacle, n: int, seed: int, what: str) -> None:
+def _check_distances(co: CSpaceObstacle, n: int, seed: int, what: str, *, raw=None,
+                     slack: float = 0.0) -> None:
     """Distance error <= 1e-9 x size against FCL (BVH vs BVH, see :func:`_fcl_meshes`; not
     cross_check's max_distance_error, which uses FCL's Convex robot), on cross_check's kind
     of samples (uniform in the grown bounds and near the surface), outside for both. FCL sees
-    the snapped operands, ours is grown by its margin box: ours must lie in
-    ``[d_FCL - growth, d_FCL]``, the interval the grown set's distance lies in."""
+    the raw operands ``raw`` (default: ``co.obstacle`` and ``co.robot``, for a mesh used
+    directly as a C-obstacle those are the raw arrays), ours is grown by up to ``slack`` (its
+    ``error_bound``): ours must lie in ``[d_FCL - slack, d_FCL]``, the interval the grown
+    set's distance lies in."""
+    if raw is None:
+        raw = ((co.obstacle.vertices, co.obstacle.faces), (co.robot.vertices, co.robot.faces),
+               co.reference_point)
+    (OV, OF), (RV, RF), c = raw
     rng = np.random.default_rng(seed)
     lo, hi = co.bounds
     pad = 0.1 * (hi - lo)
@@ -546,14 +570,12 @@ def _check_distances(co: CSpaceObstacle, n: int, seed: int, what: str) -> None:
     q = np.vstack([rng.uniform(lo - pad, hi + pad, (n // 2, 3)),
                    _near_surface(co, n - n // 2, rng, size)])
     d = co.signed_distance(q)
-    orc = FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices, co.robot.faces,
-                    co.reference_point, convex=False)
+    orc = FclOracle(OV, OF, RV, RF, c, convex=False)
     out = d > 0
     out[out] = ~orc.collides(q[out])
-    _, fd = _fcl_meshes(co, q[out])
+    _, fd = _fcl_meshes(raw, q[out])
     ok = fd > 0  # FCL's BVH distance is 0 where the surfaces touch (inside the band)
-    growth = _growth(co)
-    err = np.maximum(d[out][ok] - fd[ok], fd[ok] - growth - d[out][ok]).clip(0.0)
+    err = np.maximum(d[out][ok] - fd[ok], fd[ok] - slack - d[out][ok]).clip(0.0)
     assert ok.sum() > 0.3 * n
     j = int(err.argmax())
     assert err.max() <= 1e-9 * size, (f"{what}: distance error {err.max():.3g} at "

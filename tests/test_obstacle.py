@@ -26,6 +26,7 @@ from cspace.errors import DegenerateError, NonFiniteError
 from cspace.fcl_check import FclOracle, cross_check
 from cspace.obstacle import CSpace, CSpaceObstacle
 from cspace.scene import Body, Scene
+from oracles import raw_fcl_oracle, raw_mesh, raw_scene  # tests/ is on sys.path
 
 SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
 CUBE = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=np.float64)
@@ -172,6 +173,9 @@ def test_signed_distance_box(box_co):
 def test_signed_distance_against_fcl(random_co):
     """Outside: FCL distance; inside: FCL's Convex-Convex signed distance (EPA depth)."""
     co = random_co
+    # Two-sided exactness of the construction on its own (snapped) input: random_co is built
+    # with conservative=False, so the oracle is FCL on the snapped operands (co.obstacle,
+    # co.robot), not a safety check against the raw input (those use the raw arrays).
     orc = FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices, co.robot.faces,
                     co.reference_point, convex=True)
     rng = np.random.default_rng(3)
@@ -269,6 +273,8 @@ def _swept_hit(orc: FclOracle, a, b) -> bool:
 
 def test_segment_free_against_fcl(random_co):
     co = random_co
+    # Exactness on its own input (conservative=False, snapped operands), both sides; the
+    # safety of segments against the raw input: test_thin_wall_caught_where_sampling_misses.
     orc = FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices, co.robot.faces,
                     co.reference_point, convex=True)
     rng = np.random.default_rng(6)
@@ -292,8 +298,8 @@ def test_thin_wall_caught_where_sampling_misses():
     robot = 2e-4 * CUBE
     co = CSpaceObstacle.build(wall, robot, (1e-4, 1e-4, 1e-4))
     q0, q1 = np.array([-0.5, 0.0, 0.0]), np.array([0.5053, 0.0, 0.0])
-    orc = FclOracle(co.obstacle.vertices, co.obstacle.faces, co.robot.vertices, co.robot.faces,
-                    co.reference_point, convex=True)
+    # FCL on the raw wall and robot the test built from (not the C-obstacle's snapped copies).
+    orc = raw_fcl_oracle(wall, robot, (1e-4, 1e-4, 1e-4), convex=True)
     ts = np.linspace(0.0, 1.0, 101)  # 1% resolution
     assert not orc.collides(q0 + ts[:, None] * (q1 - q0)).any()  # sampling says free
     assert co.segment_free(q0, q1) is False  # exact: the wall is crossed
@@ -302,6 +308,12 @@ def test_thin_wall_caught_where_sampling_misses():
     xmin = Fraction(float(co.bounds[0, 0]))
     assert t == float((xmin - Fraction(q0[0])) / (Fraction(q1[0]) - Fraction(q0[0])))
     assert _swept_hit(orc, q0, q1)
+    # Safe against the raw input: the raw wall is not met before the reported entry, and is
+    # met within the stated error bound after it.
+    L = float(np.linalg.norm(q1 - q0))
+    u = (q1 - q0) / L
+    assert not orc.collides(q0 + (t * L - np.array([1e-9, 1e-6, 1e-3]))[:, None] * u).any()
+    assert orc.collides(q0 + (t * L + co.error_bound + 1e-12) * u)[0]
 
 
 def test_vectorised_equals_scalar(random_co):
@@ -364,6 +376,8 @@ def test_shipped_scene_cross_check(path):
 
 
 def test_cross_check_single_obstacle(random_co):
+    # A bare C-obstacle's cross_check judges on its snapped operands: two-sided exactness of
+    # the construction on its own input (random_co: conservative=False), not safety.
     report = cross_check(random_co, n=2000, seed=1)
     assert report["ok"] and report["n_disagree"] == 0
     assert report["max_distance_error"] <= 1e-12
@@ -480,14 +494,29 @@ def test_flat_convex_operands_against_fcl(case):
     o, r = (flat, box) if case == "panel obstacle" else (box, flat)
     co = CSpaceObstacle.build(o, r, (0.05, 0.0, 0.0))
     assert co.kind == "convex"
-    report = cross_check(co, n=4000, seed=3)
+    # FCL judges the raw operands (a scene of them, SceneOracle: the box its float hull, a
+    # solid; the flat one its raw triangles, a surface), not the C-obstacle's snapped copies.
+    report = cross_check(co, n=4000, seed=3,
+                         scene=raw_scene(_flat_mesh(o), _flat_mesh(r), (0.05, 0.0, 0.0)))
+    assert report["oracle"] == "scene"
     assert report["n_disagree"] == 0, report["disagreements"][:5]
     assert 500 < report["n_inside"] < 3500
     # Flat against flat in parallel planes: a flat sum, held as a solid grown by at least one
     # grid step (a false collision within the stated bound, never a false free).
-    co = CSpaceObstacle.build(flat[:3] if len(flat) >= 3 else flat, flat)
+    o = flat[:3] if len(flat) >= 3 else flat
+    co = CSpaceObstacle.build(o, flat)
     assert min(co.margin.steps) >= 1 and co.error_bound < 1e-6
     # FCL's collide on two degenerate (segment) triangles answers within about 1e-7 of
     # contact either way (its distance there is positive): a wider band for its fuzz.
-    report = cross_check(co, n=2000, seed=4, band=1e-6)
+    report = cross_check(co, n=2000, seed=4, band=1e-6,
+                         scene=raw_scene(_flat_mesh(o), _flat_mesh(flat)))
     assert report["n_disagree"] == 0 and report["n_inside"] > 0
+
+
+def _flat_mesh(points):
+    """A raw operand of test_flat_convex_operands_against_fcl as a float mesh: a box by its
+    hull; a rod (2 points) as one degenerate triangle, a triangle as itself, a 4-point panel
+    (convex, in order) as two triangles."""
+    P = np.asarray(points, dtype=np.float64)
+    F = {2: [[0, 1, 1]], 3: [[0, 1, 2]], 4: [[0, 1, 2], [0, 2, 3]]}.get(len(P))
+    return raw_mesh(P) if F is None else (P, np.array(F, dtype=np.int64))
