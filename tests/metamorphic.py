@@ -78,7 +78,7 @@ CASES = {c.name: c for c in [
     Case("robot parts", (L_BRACKET,), _two_part_robot()),
     # The robot's vertices 16.6 units from its frame's origin, the reference point beside
     # them (as OMPL.app's robots are in their files).
-    Case("robot off its origin", (torus(0.8, 0.3, 24, 12),),
+    Case("robot off its origin", (torus(0.8, 0.3, 12, 8),),
          _shifted(_u_robot(0.4), (16.6, -3.0, 5.0)), reference_point=(16.7, -3.0, 5.0)),
     Case("convex robot off its origin", (L_BRACKET, _shifted(OPEN_BOX, (1.2, 1.2, 0.0)),
                                          _shifted(POST, (-1.5, 1.5, 0.0))),
