@@ -57,7 +57,9 @@ class ClosedMesh:
         Snapped coordinates in scene units, exactly ``grid.to_float(ints)``.
     faces : (m, 3) int64
         Vertex indices, counter-clockwise seen from outside (normals point out of the solid).
-        Faces keep the order of the input faces; only their winding may have been reversed.
+        Faces keep the order of the input faces; only their winding may have been reversed,
+        except where zero-area faces were repaired (step 5: dropped, and a face split in two
+        keeps its first half in its place and appends the second).
     ints : (n, 3) int64
         Grid integer coordinates of the vertices (``|ints| <= grid.limit``).
     grid : Grid
@@ -137,7 +139,8 @@ class ClosedMesh:
         GridRangeError
             A vertex lies beyond the range of the given ``grid``.
         DegenerateError
-            A face collapses when welded, has zero area, or a component encloses zero volume.
+            A face collapses when welded or has zero area and cannot be repaired (step 5), or
+            a component encloses zero volume.
         DuplicateFaceError
             Two faces use the same three vertices (opposite windings: a double-sided surface).
         OpenMeshError
@@ -160,8 +163,18 @@ class ClosedMesh:
            that differ after snapping never do. Vertices no face uses are dropped. Welded
            vertices are numbered in the order they are first met in the input vertex array,
            so a clean mesh keeps its vertex numbering;
-        5. degenerate faces: a face whose vertices weld together, or whose exact integer
-           cross product of edge vectors is zero (collinear vertices);
+        5. degenerate faces: a face whose vertices weld together (a *needle*), or whose
+           exact integer cross product of edge vectors is zero (a *cap*: three collinear
+           vertices). Real meshes have slivers and snapping makes more, so they are
+           **repaired exactly** when that keeps a solid: a needle is dropped (welding has
+           collapsed its zero-length edge), a cap ``(u, v, w)`` with ``w`` strictly inside
+           ``uv`` is dropped and its neighbour across ``uv`` split at ``w`` (an edge split),
+           repeated until none is left. The repaired surface is the same point set with the
+           same winding number everywhere, so no error bound grows. The repaired mesh must
+           pass steps 6-10 and not meet itself (:func:`cspace.trim.self_intersections`: a
+           part thinner than a step flattens into a fin); else, or when a cap's longest edge
+           does not have exactly one other face, the degenerate face is the error (with why
+           the repair failed);
         6. duplicate faces (the same three vertices);
         7. every edge is used by exactly two faces;
         8. orientation: within each connected component, faces are flipped to agree with
@@ -490,29 +503,147 @@ def _validate(vertices, faces, grid, name):
     F = remap[f]
     k = len(ints)
 
-    # 5. Degenerate faces: collapsed by welding, then exactly zero area.
+    # 5. Degenerate faces: collapsed by welding, then exactly zero area. They are repaired
+    #    when that keeps a valid solid with the same point set (_repair_degenerate).
     collapsed = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])
+    P = ints[F]  # (m, 3, 3)
+    normal = cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    flat = ~normal.any(axis=1) & ~collapsed
     if collapsed.any():
         rows = np.nonzero(collapsed)[0]
         i = int(rows[0])
         distinct = len(set(F[i].tolist()))
         points = "one grid point" if distinct == 1 else f"{distinct} distinct grid points"
-        raise fail(
-            DegenerateError,
-            f"face {i} collapses: its vertices {_fmt(f[i])} weld to {points} "
-            f"(grid step 2**{grid.exponent})" + _count(len(rows), "faces collapse"),
-        )
-    P = ints[F]  # (m, 3, 3)
-    normal = cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
-    flat = ~normal.any(axis=1)
-    if flat.any():
+        message = (f"face {i} collapses: its vertices {_fmt(f[i])} weld to {points} "
+                   f"(grid step 2**{grid.exponent})" + _count(len(rows), "faces collapse"))
+    elif flat.any():
         rows = np.nonzero(flat)[0]
         i = int(rows[0])
-        raise fail(
-            DegenerateError,
-            f"face {i} has zero area (collinear vertices {_fmt(rep[F[i]])} on the grid of "
-            f"step 2**{grid.exponent})" + _count(len(rows), "faces have zero area"),
-        )
+        message = (f"face {i} has zero area (collinear vertices {_fmt(rep[F[i]])} on the grid "
+                   f"of step 2**{grid.exponent})" + _count(len(rows), "faces have zero area"))
+    if collapsed.any() or flat.any():
+        return _repaired(ints, F, collapsed, flat, rep, grid, name, message)
+    return _validate_faces(ints, F, rep, grid, name)
+
+
+def _repaired(ints, F, collapsed, flat, rep, grid, name, message):
+    """Steps 6-10 on the mesh with its degenerate faces repaired (step 5), or the
+    :class:`DegenerateError` of ``message`` saying why the repair cannot keep a solid."""
+
+    def fail(why: str):
+        return DegenerateError(f"mesh {name!r}: {message}; {why}")
+
+    G, why = _repair_degenerate(ints, F, collapsed, flat)
+    if G is None or not len(G):
+        raise fail(f"not repairable: {why or 'every face collapses'}")
+    used = np.unique(G)
+    if len(used) < len(ints):  # vertices only collapsed faces used
+        G = np.searchsorted(used, G)
+        ints, rep = ints[used], rep[used]
+    try:
+        ints, G, grid, components = _validate_faces(ints, G, rep, grid, name)
+        repaired = ClosedMesh._trusted(ints, G, grid, name, components)
+        from .trim import self_intersections
+
+        crossing = self_intersections(repaired)
+    except InvalidMeshError as exc:
+        detail = str(exc).removeprefix(f"mesh {name!r}: ")
+        raise fail(f"repairing them leaves no valid solid ({type(exc).__name__}: {detail})"
+                   ) from None
+    if len(crossing):  # a part thinner than a step flattened into a fin: no solid
+        i, j = crossing[0].tolist()
+        raise fail(f"repairing them leaves a surface meeting itself (triangles {i} and {j} of "
+                   f"the repaired mesh overlap; {len(crossing)} pairs): a part thinner than "
+                   "the grid step has no solid")
+    return ints, G, grid, components
+
+
+def _repair_degenerate(ints, F, collapsed, flat):
+    """Faces with the zero-area triangles of a welded mesh repaired exactly, keeping the
+    point set of the surface: ``(faces, None)``, or ``(None, why)`` when they cannot be.
+
+    - a *needle* (two corners welded to one grid point) is dropped: welding has already
+      collapsed its zero-length edge, and its two other edges are one edge now, shared by
+      its neighbours;
+    - a *cap* ``(u, v, w)``, three distinct collinear corners with ``w`` strictly between
+      ``u`` and ``v`` (exact integer predicates), is dropped and its neighbour across
+      ``uv``, ``(u, v, x)`` in its own winding, becomes ``(u, w, x)`` and ``(w, v, x)``: an
+      edge split, which covers the same points, keeps every edge used twice and each face's
+      winding. Caps made by a split (the neighbour was a cap) are split in turn.
+
+    The surface is the same point set and its winding number is the same everywhere (a face
+    of zero area adds none), so nothing is added to any error bound. Not repairable: a
+    cap's long edge used by other than two faces, or its neighbour already using the middle
+    corner. Faces keep their order; a split face's second half is appended.
+    """
+    keep = ~collapsed
+    faces = [tuple(t) for t in F[keep].tolist()]
+    caps = np.nonzero(flat[keep])[0].tolist()
+    if not caps:
+        return np.asarray(faces, dtype=np.int64).reshape(-1, 3), None
+    X = [tuple(p) for p in ints.tolist()]  # exact Python ints
+    alive = [True] * len(faces)
+    edges: dict = {}
+
+    def key(a, b):
+        return (a, b) if a < b else (b, a)
+
+    def link(i, on=True):
+        for a, b in ((0, 1), (1, 2), (2, 0)):
+            users = edges.setdefault(key(faces[i][a], faces[i][b]), [])
+            users.append(i) if on else users.remove(i)
+
+    def zero_area(t) -> bool:
+        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = (X[k] for k in t)
+        ux, uy, uz, vx, vy, vz = bx - ax, by - ay, bz - az, cx - ax, cy - ay, cz - az
+        return uy * vz == uz * vy and uz * vx == ux * vz and ux * vy == uy * vx
+
+    def between(w, u, v) -> bool:  # collinear, distinct: is w strictly inside uv?
+        return sum((X[u][k] - X[w][k]) * (X[v][k] - X[w][k]) for k in range(3)) < 0
+
+    for i in range(len(faces)):
+        link(i)
+    budget = 4 * len(faces) + 16  # each split shortens the caps' long edges: it ends
+    while caps:
+        i = caps.pop()
+        if not alive[i]:
+            continue
+        a, b, c = faces[i]
+        u, v, w = next(t for t in ((a, b, c), (b, c, a), (c, a, b)) if between(t[2], t[0], t[1]))
+        others = [j for j in edges[key(u, v)] if j != i]
+        if len(others) != 1:
+            return None, (f"a zero-area face's longest edge is used by {len(others) + 1} faces "
+                          "(a split needs exactly one neighbour)")
+        j = others[0]
+        if w in faces[j]:
+            return None, ("a zero-area face's neighbour across its longest edge already uses its "
+                          "middle corner (a flap of zero width)")
+        budget -= 1
+        if budget < 0:
+            return None, "splitting zero-area faces does not end"
+        link(i, False)
+        link(j, False)
+        alive[i] = False
+        old = faces[j]
+        faces[j] = tuple(w if k == v else k for k in old)  # (u, w, x) in old's winding
+        faces.append(tuple(w if k == u else k for k in old))  # (w, v, x)
+        alive.append(True)
+        for n in (j, len(faces) - 1):
+            link(n)
+            if zero_area(faces[n]):
+                caps.append(n)
+    out = [t for t, ok in zip(faces, alive) if ok]
+    return np.asarray(out, dtype=np.int64).reshape(-1, 3), None
+
+
+def _validate_faces(ints, F, rep, grid, name):
+    """Steps 6-10 of :func:`_validate` on welded faces without zero area."""
+
+    def fail(error, message):
+        return error(f"mesh {name!r}: {message}")
+
+    k = len(ints)
+    m = len(F)
 
     # 6. Duplicate faces: the same sorted vertex triple.
     S = np.sort(F, axis=1)

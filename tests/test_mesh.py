@@ -318,11 +318,20 @@ def test_collapsed_face():
     v, f = tetra()
     v = np.vstack([v, v[1] + 1e-12])  # vertex 4 welds onto vertex 1
     f = np.vstack([f, [[4, 1, 2]]])
-    msg = r"face 4 collapses: its vertices \(4, 1, 2\) weld to 2 distinct"
+    # A needle after welding is dropped (its zero-length edge is collapsed): the same point
+    # set, and the rest is a valid solid, so it is the tetrahedron.
+    mesh = ClosedMesh.from_arrays(v, f)
+    assert len(mesh.faces) == 4 and mesh.volume == pytest.approx(1 / 6)
+    assert len(ClosedMesh.from_arrays(v, [[1, 1, 1]] + f.tolist()).faces) == 4
+    # When what is left is no solid, the collapse is the error, and why the repair failed.
+    w = np.vstack([v[:4], v[0] + 1e-12])  # vertex 4 welds onto vertex 0
+    g = np.where(f[:4] == 1, 4, f[:4])  # the tetrahedron on vertices 0, 4, 2, 3
+    msg = (r"face 0 collapses: its vertices \(0, 2, 4\) weld to 2 distinct .*; 2 faces "
+           r"collapse; repairing them leaves no valid solid \(DuplicateFaceError")
     with pytest.raises(DegenerateError, match=msg):
-        ClosedMesh.from_arrays(v, f)
+        ClosedMesh.from_arrays(w, g)
     with pytest.raises(DegenerateError, match=r"face 0 collapses: .* weld to one grid point"):
-        ClosedMesh.from_arrays(v, [[1, 1, 1]] + f.tolist())
+        ClosedMesh.from_arrays(v, [[1, 1, 1]])
 
 
 def test_zero_area_face():

@@ -65,3 +65,129 @@ def test_build_counts_the_hull_excess_of_a_bent_obstacle_and_robot():
     co = cspace.CSpaceObstacle.build(cube, (Vr, F), reference_point=FAR)
     assert co.robot.excess > 0 and co.excess == co.robot.excess
     assert co.error_bound == co.margin.error_bound + co.robot.excess
+
+
+# ---------------------------------------------------------------------------------------
+# 1. slivers that snap to zero area do not demote a solid to a surface
+
+
+def _lattice(m, scale: float, unit: float = 2.0**-4):
+    """A mesh scaled and rounded to multiples of ``unit``: its edge midpoints are on any grid
+    finer than ``unit / 2``, where an inserted midpoint snaps exactly onto the edge."""
+    return np.round(np.asarray(m.vertices) * scale / unit) * unit, np.asarray(m.faces)
+
+
+def _with_sliver(V, F, edge: int = 0, lift: float = 1e-12):
+    """A valid closed mesh with a sliver: a vertex ``w`` within ``lift`` of the midpoint of
+    an edge ``uv`` (outwards), the face on one side of ``uv`` split at ``w`` and the sliver
+    ``(v, u, w)`` closing the gap. At any grid finer than the edge's midpoint ``w`` snaps onto
+    ``uv``: the sliver becomes a cap (zero area, three collinear grid corners)."""
+    F = [list(t) for t in F]
+    u, v = F[edge][0], F[edge][1]  # half-edge u -> v of face `edge`
+    j = next(k for k, t in enumerate(F) if k != edge and u in t and v in t)
+    y = next(x for x in F[j] if x not in (u, v))
+    n = np.cross(V[F[edge][1]] - V[F[edge][0]], V[F[edge][2]] - V[F[edge][0]])
+    n2 = np.cross(V[F[j][1]] - V[F[j][0]], V[F[j][2]] - V[F[j][0]])
+    out = n / np.linalg.norm(n) + n2 / np.linalg.norm(n2)
+    w_at = (V[u] + V[v]) / 2 + lift * out / np.linalg.norm(out)
+    w = len(V)
+    F[j] = [v, w, y]  # (v, u, y) split at w: (v, w, y), (w, u, y); the sliver (v, u, w)
+    F += [[w, u, y], [v, u, w]]
+    return np.vstack([V, w_at]), np.asarray(F, dtype=np.int64)
+
+
+def _capped_box(scale=100.0, at=FAR):
+    V, F = _lattice(trimesh.creation.box((1, 1, 1)), scale)
+    return _with_sliver(V + at, F, edge=0)
+
+
+def _capped_ball(scale=20.0, at=FAR, edge=5):
+    V, F = _lattice(trimesh.creation.icosphere(1), scale)
+    return _with_sliver(V + at, F, edge=edge)
+
+
+def _zero_area_on(grid, V, F) -> int:
+    """Snapped triangles of zero area (exact integer cross products)."""
+    P = grid.snap(V)[F].astype(object)
+    n = np.cross(P[:, 1] - P[:, 0], P[:, 2] - P[:, 0])
+    return int(sum(not any(r) for r in n))
+
+
+@pytest.mark.parametrize("make", [_capped_box, _capped_ball])
+def test_a_mesh_with_caps_after_snapping_is_repaired_into_its_solid(make):
+    V, F = make()
+    assert trimesh.Trimesh(V, F, process=False).is_watertight
+    mesh = cspace.ClosedMesh.from_arrays(V, F)  # was: DegenerateError (zero area)
+    assert _zero_area_on(mesh.grid, V, F) == 1  # the sliver is a cap on this grid
+    # the same point set: the volume of the snapped input, and every face of positive area
+    assert mesh.volume == pytest.approx(abs(trimesh.Trimesh(V, F).volume), rel=1e-9)
+    assert _zero_area_on(mesh.grid, mesh.vertices, mesh.faces) == 0
+    assert len(mesh.faces) == len(F)  # the cap dropped, its neighbour split in two
+
+
+def _capped_l(scale=25.0, at=FAR):
+    from zoo import l_shape  # tests/ is on sys.path (rootdir conftest)
+
+    V, F = l_shape(arm=2)
+    V, F = _lattice(trimesh.Trimesh(V, F, process=False), scale)
+    return _with_sliver(V + at, F, edge=0)
+
+
+def _scene(obstacles, robot, reference_point, half=120.0):
+    from cspace.scene import Body, Scene
+
+    lo, hi = FAR - half, FAR + half
+    bodies = tuple(Body(name, V, F, "test") for name, (V, F) in obstacles.items())
+    return Scene("slivers", None, bodies, Body("robot", *robot, "test"),
+                 np.asarray(reference_point, float), np.stack([lo, hi]), lo + 1.0, lo + 2.0)
+
+
+def _near_surfaces(scene, n, seed):
+    """Translations near where the robot touches an obstacle: random pairs of an obstacle
+    vertex and a robot vertex, moved a little (sizes from 1e-9 to 1 of the scene)."""
+    rng = np.random.default_rng(seed)
+    O = np.vstack([b.vertices for b in scene.obstacles])
+    R = scene.robot.vertices - scene.reference_point
+    q = O[rng.integers(len(O), size=n)] - R[rng.integers(len(R), size=n)]
+    return q + rng.normal(size=(n, 3)) * 10.0 ** rng.uniform(-9, 1, size=(n, 1))
+
+
+@pytest.mark.parametrize("robot", ["ball", "L"])
+def test_capped_bodies_stay_solid_in_a_scene_and_agree_with_fcl(robot):
+    from cspace.fcl_check import SceneOracle
+    from cspace.model import model_scene
+
+    obstacles = {"box": _capped_box(), "L": _capped_l(at=FAR + (-110, 60, 0))}
+    if robot == "ball":
+        R = _capped_ball(scale=8.0)
+    else:
+        R = _capped_l(scale=6.0)
+    scene = _scene(obstacles, R, R[0].mean(axis=0))
+    model = model_scene(scene)
+    kinds = {b.name: b.kind for b in model.bodies}
+    assert kinds["box"] == "convex" and kinds["L"] == "solid"  # was: surface, both
+    assert [p.kind for p in model.robot_parts] == (["convex"] if robot == "ball" else ["solid"])
+    assert not model.meaning_changes()
+    cs = model.cspace()
+    oracle = SceneOracle(scene)
+    Q = _near_surfaces(scene, 1500, seed=1)
+    inside = FAR - 40 + np.random.default_rng(2).uniform(0, 80, (200, 3))
+    Q = np.vstack([Q, inside])  # deep inside the box: its inside collides
+    truth, ours = oracle.collides(Q), cs.contains(Q)
+    assert not (truth & ~ours).any()  # no false free
+    assert ours[-200:].all() and truth[-200:].all()
+    # false collisions only within the stated bound of a true one (FCL distance)
+    false = ours & ~truth
+    assert truth.sum() > 300 and oracle.distance(Q[false]).max(initial=0) <= model.error_bound
+
+
+def test_capped_meshes_through_the_api():
+    L, box = _capped_l(), _capped_box()
+    M = cspace.minkowski_sum(L, ROBOT.reflected((0, 0, 0)))  # was: DegenerateError
+    assert not M.convex and M.volume > abs(trimesh.Trimesh(*L).volume)
+    co = cspace.CSpaceObstacle.build(L, ROBOT)
+    assert co.kind == "mesh"
+    q = L[0][L[1][0]].mean(axis=0)  # a point of the L's surface
+    assert co.contains(q)
+    co = cspace.CSpaceObstacle.build(box, ROBOT)
+    assert co.kind == "convex" and co.contains(FAR)
