@@ -550,11 +550,11 @@ def _repaired(ints, F, collapsed, flat, rep, grid, name, message):
         detail = str(exc).removeprefix(f"mesh {name!r}: ")
         raise fail(f"repairing them leaves no valid solid ({type(exc).__name__}: {detail})"
                    ) from None
-    if len(crossing):  # a part thinner than a step flattened into a fin: no solid
+    if len(crossing):  # snapping folded it, or flattened a part thinner than a step
         i, j = crossing[0].tolist()
         raise fail(f"repairing them leaves a surface meeting itself (triangles {i} and {j} of "
-                   f"the repaired mesh overlap; {len(crossing)} pairs): a part thinner than "
-                   "the grid step has no solid")
+                   f"the repaired mesh; {len(crossing)} pairs): snapping moved faces through "
+                   "each other or flattened a part thinner than the step, so it bounds no solid")
     return ints, G, grid, components
 
 
