@@ -17,7 +17,7 @@ import trimesh
 from cspace import CSpace, CSpaceObstacle, load_scene
 from cspace.cache import COCache, cache_dir
 from cspace.errors import BuildError
-from cspace.fcl_check import co_collider
+from cspace.fcl_check import SceneOracle
 from cspace.model import model_scene
 from cspace.scene import Body, Scene
 
@@ -145,7 +145,10 @@ def test_surface_co_agrees_with_fcl_mesh_collision_and_with_its_pieces():
     for piece in co._impl.impl:
         brute |= piece.contains(Q)
     np.testing.assert_array_equal(ours, brute)
-    fcl_hit = co_collider(co)(Q)  # FCL's plain mesh collision (FclOracle(surface=True))
+    # FCL on the raw scene (SceneOracle: the open torus a surface by its own rule), not the
+    # C-obstacle's snapped pieces. Exact agreement on these samples (the stated one-sided
+    # error, error_bound 7.5e-8, is not hit by uniform samples).
+    fcl_hit = SceneOracle(scene).collides(Q)
     assert 300 < ours.sum() < 2700
     assert (ours != fcl_hit).sum() == 0
     # Segments: exact against the pieces one by one.
@@ -305,11 +308,8 @@ def test_solid_body_builds_or_says_clearly_why_not():
         cs = m.cspace()
         rng = np.random.default_rng(0)
         Q = rng.uniform(scene.bounds[0], scene.bounds[1], (2000, 3))
-        from cspace.fcl_check import FclOracle
-
-        orc = FclOracle(V, F, m.robot.vertices, m.robot.faces, scene.reference_point,
-                        convex=False)
-        assert (cs.contains(Q) != orc.collides(Q)).sum() == 0
+        # FCL on the raw scene (m.robot is the model's snapped hull: not the oracle's).
+        assert (cs.contains(Q) != SceneOracle(scene).collides(Q)).sum() == 0
 
 
 # --------------------------------------------------------------------------------------
@@ -433,7 +433,8 @@ def test_parasol_solid_builds_and_agrees_with_fcl(shared_data, tmp_path, rel):
 
     r = cross_check(cs, n=4000, seed=0, band=1e-9)
     assert r["n_disagree"] == 0, r["disagreements"][:5]
-    fcl_hit = co_collider(cs.obstacles[0])(np.stack([scene.start, scene.goal]))
+    # FCL on the raw scene, with the robot's hull as the C-space was built (robot_hull=True).
+    fcl_hit = SceneOracle(scene, robot_hull=True).collides(np.stack([scene.start, scene.goal]))
     ours = cs.contains(np.stack([scene.start, scene.goal]))
     np.testing.assert_array_equal(ours, fcl_hit)
     # The bug trap's query is free; the alpha puzzle's start interlocks the two alpha shapes and

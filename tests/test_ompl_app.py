@@ -18,7 +18,7 @@ from test_meshfile import _doc, _geometry, _instance, _write  # tests/ is on sys
 from test_robot_parts import _box, _u_robot
 
 from cspace import load_scene, model_scene
-from cspace.fcl_check import FclOracle
+from cspace.fcl_check import SceneOracle
 from cspace.meshfile import read_mesh_file
 
 collada = pytest.importorskip("collada")
@@ -75,10 +75,10 @@ def test_start_and_goal_agree_with_fcl_at_omplapps_pose(tmp_path):
     m = model_scene(scene)
     assert [p.kind for p in m.robot_parts] == ["solid"]
     space = m.cspace()
-    # FCL with the actual robot mesh, centred on OMPL.app's centre, as BVHs.
-    world, robot = scene.obstacles[0], scene.robot
-    oracle = FclOracle(world.vertices, world.faces, robot.vertices, robot.faces,
-                       scene.reference_point, convex=False, robot_kind="solid")
+    # FCL with the actual robot mesh, centred on OMPL.app's centre, as BVHs: the raw scene
+    # (SceneOracle, its own solid rule; the test's U robot is closed: a solid).
+    oracle = SceneOracle(scene)
+    assert oracle.robot.solid
     q = np.stack([scene.start, scene.goal])
     assert not oracle.collides(q).any()
     assert not space.contains(q).any()
@@ -137,11 +137,8 @@ def test_real_robots_start_and_goal_agree_with_fcl(shared_data, rel):
     rng = np.random.default_rng(4)
     q = np.vstack([scene.start, scene.goal, scene.start + rng.normal(scale=2.0, size=(40, 3))])
     q = q[((scene.bounds[0] <= q) & (q <= scene.bounds[1])).all(axis=1)]
-    robot, hit = scene.robot, np.zeros(len(q), dtype=bool)
-    for body in scene.obstacles:
-        oracle = FclOracle(body.vertices, body.faces, robot.vertices, robot.faces,
-                           scene.reference_point, convex=False,
-                           robot_kind=m.robot_parts[0].kind)
-        hit |= oracle.collides(q)
+    # FCL on the raw scene, every body, with the oracle's own solid/surface rule (was: the
+    # robot's kind as the model classified it).
+    hit = SceneOracle(scene).collides(q)
     assert not hit[:2].any()  # a valid problem: start and goal free
     assert np.array_equal(space.contains(q), hit), (hit.sum(), space.contains(q).sum())

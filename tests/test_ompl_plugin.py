@@ -2,7 +2,8 @@
 
 No mocks: every run plans with OMPL 2.0.1 on a shipped scene, and every returned path (exact
 or approximate) is re-checked exactly (``segment_free``) and with FCL sampled along each
-segment at 1e-3 of the scene size (solid semantics, the same snapped operands).
+segment at 1e-3 of the scene size, on the raw scene meshes as loaded
+(:class:`cspace.fcl_check.SceneOracle`; nothing of the C-space).
 """
 
 from __future__ import annotations
@@ -38,14 +39,15 @@ MUST_SOLVE = {"comb": 0.7}  # fraction of runs per scene
 
 
 class _Fcl:
-    """FCL re-check of a path, sampled along every segment (cspace.fcl_check.path_collisions)."""
+    """FCL re-check of a path on the raw scene, sampled along every segment
+    (cspace.fcl_check.path_collisions of the Scene: SceneOracle)."""
 
-    def __init__(self, cs: cspace.CSpace):
-        self.cs = cs
+    def __init__(self, scene: cspace.Scene):
+        self.scene = scene
 
     def colliding(self, P: np.ndarray) -> np.ndarray:
         """Sample points along the path where FCL reports a collision."""
-        return path_collisions(self.cs, P)[0]
+        return path_collisions(self.scene, P)[0]
 
 
 @pytest.fixture(scope="module")
@@ -54,7 +56,7 @@ def scenes():
     for name in ("window", "comb", "maze", "cavity"):
         s = cspace.load_scene(SCENES / f"{name}.toml")
         cs = cspace.CSpace.from_scene(s)
-        out[name] = (s, cs, _Fcl(cs))
+        out[name] = (s, cs, _Fcl(s))
     return out
 
 

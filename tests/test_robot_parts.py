@@ -14,7 +14,7 @@ import trimesh
 from zoo import l_shape, voxel_solid
 
 from cspace import model_scene
-from cspace.fcl_check import _oracle, cross_check, path_collisions
+from cspace.fcl_check import SceneOracle, cross_check, path_collisions
 from cspace.ompl_plugin import plan
 from cspace.pairs import pair_construction, triangle_pair_pieces
 from cspace.scene import Body, Scene
@@ -130,15 +130,17 @@ def test_coplanar_open_triangles_touch_only_in_their_plane():
     # Two open triangles in one plane: only the flat piece records their contact, exactly.
     # (Dyadic coordinates: snapping moves nothing, so no margin is added.)
     tri = (np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), np.array([[0, 1, 2]]))
-    m = model_scene(_scene(tri, tri))
+    scene = _scene(tri, tri)
+    m = model_scene(scene)
     assert m.margin.steps == (0, 0, 0) and m.error_bound == 0.0
     assert [p.construction for p in m.bodies[0].pairs] == ["triangle pairs"]
     cs = m.cspace()
     q = np.array([[0.2, 0.2, 0.0], [0.2, 0.2, 2.0**-30], [-0.5, 0.5, 0.0], [1.0, 0.0, 0.0],
                   [1.0 + 2.0**-30, 0.0, 0.0]])
     assert cs.contains(q).tolist() == [True, False, True, True, False]
-    oracle = _oracle(cs.obstacles[0])
-    assert oracle.collides(q[[0, 1, 2]]).tolist() == [True, False, True]
+    # FCL on the raw scene (two open triangles, surfaces by the oracle's own rule).
+    oracle = SceneOracle(scene)
+    assert oracle.collides(q).tolist() == [True, False, True, True, False]
     # A translation through the plane is a collision; one beside it is not.
     assert not cs.segment_free([0.2, 0.2, -1.0], [0.2, 0.2, 1.0])
     assert cs.segment_free([3.0, 3.0, -1.0], [3.0, 3.0, 1.0])
@@ -198,7 +200,8 @@ def test_l_robot_plans_through_an_l_corridor_and_fcl_agrees():
     assert r["n_disagree"] == 0, r["disagreements"][:5]
     result = plan(scene, seed=2, time=10.0)
     assert result.solved
-    hits, n = path_collisions(cs, result.path, step=1e-3 * np.linalg.norm(np.ptp(
+    # Re-checked on the raw scene's meshes (SceneOracle), nothing of the C-space.
+    hits, n = path_collisions(scene, result.path, step=1e-3 * np.linalg.norm(np.ptp(
         np.asarray(bounds), axis=0)))
     assert n > 100 and len(hits) == 0
 
