@@ -25,6 +25,7 @@ robot's width may flip under a non-dyadic scale; that is within the bound).
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 from dataclasses import dataclass
 
@@ -214,3 +215,24 @@ def judge(ours: np.ndarray, Q: np.ndarray, oracle, error_bound: float) -> Verdic
         beyond = int((d > error_bound + oracle.band).sum())
     return Verdict(len(Q), int(ours.sum()), int(truth.sum()), int(false_free.sum()),
                    int(false_coll.sum()), beyond, float(error_bound), Q[false_free])
+
+
+@contextlib.contextmanager
+def shifted_piece_boxes():
+    """Re-introduce the bug of issue #27 while inside: triangle-pair boxes shifted by the
+    grid's origin (added twice). A check that passes with it is a check that cannot fail."""
+    import cspace.pairs as pairs
+
+    init = pairs._PairsCO.__init__
+
+    def shifted(self, S, T, p, grid, margin=(0, 0, 0)):
+        init(self, S, T, p, grid, margin)
+        o = grid.to_float(np.zeros(3, np.int64))
+        self.lo, self.hi = self.lo + o, self.hi + o
+        self.cells = type(self.cells)(self.lo, self.hi)
+
+    pairs._PairsCO.__init__ = shifted
+    try:
+        yield
+    finally:
+        pairs._PairsCO.__init__ = init

@@ -14,7 +14,8 @@ import zlib
 
 import numpy as np
 import pytest
-from metamorphic import CASES, GRID_MOVES, Case, Move, judge, moved_scene, random_moves, samples
+from metamorphic import (CASES, GRID_MOVES, Case, Move, judge, moved_scene, random_moves,
+                         samples, shifted_piece_boxes)
 from scipy.spatial.transform import Rotation
 
 from cspace import model_scene
@@ -83,24 +84,14 @@ def test_moved_scene_has_no_false_free(name, move):
         assert got == EXPECTED[name], got
 
 
-def test_the_check_catches_a_shifted_piece_box(monkeypatch):
+def test_the_check_catches_a_shifted_piece_box():
     # The bug this file exists for: triangle-pair boxes shifted by the grid's origin. With
     # it re-introduced the moved scene must fail the oracle (and only the moved one).
-    import cspace.pairs as pairs
-
-    init = pairs._PairsCO.__init__
-
-    def shifted(self, S, T, p, grid, margin=(0, 0, 0)):
-        init(self, S, T, p, grid, margin)
-        o = grid.to_float(np.zeros(3, np.int64))
-        self.lo, self.hi = self.lo + o, self.hi + o
-        self.cells = type(self.cells)(self.lo, self.hi)
-
-    monkeypatch.setattr(pairs._PairsCO, "__init__", shifted)
     case = CASES["triangle pairs"]
-    _check(case, GRID_MOVES[0])  # at the origin the grid's origin is 0: nothing shifts
-    with pytest.raises(AssertionError, match="triangle pairs"):
-        _check(case, GRID_MOVES[1])
+    with shifted_piece_boxes():
+        _check(case, GRID_MOVES[0])  # at the origin the grid's origin is 0: nothing shifts
+        with pytest.raises(AssertionError, match="triangle pairs"):
+            _check(case, GRID_MOVES[1])
 
 
 @pytest.mark.slow
