@@ -424,7 +424,13 @@ def main() -> None:
     text = "\n".join(head + summary() + body)
     if args.out or not args.quick:
         path = args.out or REPORT
-        path.write_text(text + "\n")
+        # The metamorphic sweep's section is bench_metamorphic.py's: kept as it is.
+        old = path.read_text() if path.exists() else ""
+        kept = old.find("## Metamorphic sweep")
+        text += "" if kept < 0 else "\n" + old[kept:].rstrip("\n")
+        tmp = path.with_suffix(".tmp")
+        tmp.write_text(text + "\n")
+        tmp.replace(path)  # atomic: never a half-written report
         print(f"wrote {path}")
     else:
         print(text)
