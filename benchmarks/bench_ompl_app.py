@@ -119,7 +119,7 @@ def row(name, scene, hull: bool, tmp: Path) -> str:
         r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, seed=1, time=5.0)
         solved = "yes" if r.solved else "no"
         if r.solved:
-            bad, n = path_collisions(cs, r.path)
+            bad, n = path_collisions(scene, r.path)  # the raw scene meshes (SceneOracle)
             solved += f" (FCL: {len(bad)}/{n} colliding)"
     except ValueError as exc:
         solved = "no: " + str(exc).split(" (in the closed")[0]

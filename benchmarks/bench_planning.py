@@ -4,9 +4,11 @@
   the build of every kept body, cold (empty cache: build and store) and warm (every body
   loaded from the disk cache), on the shipped scenes and the shared-data scenes.
 - Throughput: seconds per state-validity call (``CSpaceValidityChecker.isValid`` vs an
-  ``ob.StateValidityChecker`` calling FCL per C-obstacle with an AABB broad phase, each with
-  the obstacle's semantics: ``cspace.fcl_check.co_collider``) on uniform states of each
-  scene, and per exact ``checkMotion`` call.
+  ``ob.StateValidityChecker`` calling FCL on the scene's raw meshes as loaded: a
+  ``cspace.fcl_check.SceneOracle`` per body behind an AABB broad phase, nothing of the
+  C-space) on uniform states of each scene, and per exact ``checkMotion`` call. The FCL
+  column includes the oracle's containment test (numpy winding numbers of a body's solid
+  components): on fcl-env, one triangle-soup body with 27 closed parts, that dominates.
 - Narrow passages: PRM on window, cavity and maze with OMPL's uniform valid-state sampler vs
   ``sampler='narrow'`` (``narrow_passage_samples``), same seeds and budget.
 - Planning: ``plan()`` (exact checker + exact motion validator) vs the FCL checker with OMPL's
@@ -40,7 +42,7 @@ from pathlib import Path
 import numpy as np
 
 import cspace
-from cspace.fcl_check import co_collider
+from cspace.fcl_check import SceneOracle
 from cspace.model import model_scene
 from cspace.ompl_plugin import _classes, narrow_passage_samples, plan
 
@@ -82,7 +84,20 @@ def _fcl_checker_class():
     class FclChecker(ob.StateValidityChecker):
         def __init__(self, si, cs, bounds):
             super().__init__(si)
-            self.oracles = [(co_collider(o), o.bounds) for o in cs.obstacles]
+            # FCL on the raw scene (cs.scene, as loaded), the robot as the C-space models it
+            # (its hull only where robot_hull was asked): one SceneOracle per raw body behind
+            # the box of translations where the raw robot's box meets the body's; no
+            # C-obstacle, operand or box of cspace.
+            scene = cs.scene
+            c = np.asarray(scene.reference_point, dtype=np.float64)
+            r_lo = scene.robot.vertices.min(axis=0) - c
+            r_hi = scene.robot.vertices.max(axis=0) - c
+            self.oracles = []
+            for body in scene.obstacles:
+                one = cspace.Scene(body.name, None, (body,), scene.robot, c, scene.bounds,
+                                   scene.start, scene.goal)
+                box = (body.vertices.min(axis=0) - r_hi, body.vertices.max(axis=0) - r_lo)
+                self.oracles.append((SceneOracle(one, robot_hull=cs.robot_hull).collides, box))
             self.lo, self.hi = bounds
             self.calls = 0
 

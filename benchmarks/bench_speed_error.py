@@ -27,9 +27,10 @@ and motion validation for a planner on short motions near the obstacles:
 
 - *cspace, N bits*: ``CSpace.contains`` and the exact continuous ``CSpace.segment_free`` (what
   ``cspace.ompl_plugin``'s checker and motion validator call), batched;
-- *FCL, discrete r*: ``fcl.collide`` per state (``cspace.fcl_check.co_collider``: solid
-  semantics, behind a bounding-box broad phase), a motion valid when every state sampled at
-  spacing ``r × S`` (r = 0.1 ... 0.0001; both ends included) is free;
+- *FCL, discrete r*: ``fcl.collide`` per state on the raw float input (a
+  ``cspace.fcl_check.FclOracle`` per obstacle body against the robot mesh: solid semantics,
+  behind a bounding-box broad phase; nothing of the C-space), a motion valid when every
+  state sampled at spacing ``r × S`` (r = 0.1 ... 0.0001; both ends included) is free;
 - *voxels, h = S/k*: one look-up per state; a motion valid when every state sampled at spacing
   h/4 is free.
 
@@ -107,7 +108,7 @@ import zoo  # noqa: E402
 
 import cspace  # noqa: E402
 from cspace import CSpace, CSpaceObstacle, Grid  # noqa: E402
-from cspace.fcl_check import FclOracle, _near_surface, co_collider  # noqa: E402
+from cspace.fcl_check import FclOracle, _near_surface  # noqa: E402
 
 REPORTS = ROOT / "benchmarks" / "reports"
 SHARED = ROOT.parent / "shared" / "data"
@@ -270,12 +271,23 @@ def sampled_motions_free(collides: Callable, q0: np.ndarray, q1: np.ndarray,
 
 
 # --------------------------------------------------------------------------------------
-# FCL checker (solid semantics, one oracle per C-obstacle's operands, box broad phase)
+# FCL checker (solid semantics, one oracle per raw obstacle body, box broad phase)
 
 
 class FclChecker:
-    def __init__(self, cs: CSpace):
-        self.parts = [(co_collider(co), co.bounds, co) for co in cs.obstacles]
+    """FCL on a check scene's raw float input (``sc.bodies``, ``sc.robot_V``/``robot_F``,
+    reference point at 0), never the C-space's snapped operands: one :class:`FclOracle` per
+    body, behind the box of the translations where the robot's box meets the body's."""
+
+    def __init__(self, sc: "CheckScene"):
+        RV = np.ascontiguousarray(sc.robot_V, dtype=np.float64)
+        RF = np.asarray(sc.robot_F, dtype=np.int64)
+        self.robot_V = RV
+        self.parts = []
+        for V, F in sc.bodies:
+            V, F = np.ascontiguousarray(V, dtype=np.float64), np.asarray(F, dtype=np.int64)
+            box = np.stack([V.min(axis=0) - RV.max(axis=0), V.max(axis=0) - RV.min(axis=0)])
+            self.parts.append((FclOracle(V, F, RV, RF).collides, box, (V, F)))
 
     def collides(self, q: np.ndarray) -> np.ndarray:
         out = np.zeros(len(q), dtype=bool)
@@ -293,15 +305,13 @@ class FclChecker:
 
         out = self.collides(q0)
         objs = []
-        for _, _, co in self.parts:
-            V, F = np.ascontiguousarray(co.obstacle.vertices), np.asarray(co.obstacle.faces)
+        for _, box, (V, F) in self.parts:
             m = fcl.BVHModel()
             m.beginModel(len(F), len(V))
             m.addSubModel(V, F)
             m.endModel()
-            objs.append((fcl.CollisionObject(m, fcl.Transform()), co.bounds))
-        co0 = self.parts[0][2]
-        Rv = np.asarray(co0.robot.vertices) - co0.reference_point
+            objs.append((fcl.CollisionObject(m, fcl.Transform()), box))
+        Rv = self.robot_V
         for i in np.nonzero(~out)[0]:
             P = np.vstack([Rv + q0[i], Rv + q1[i]])
             H = ConvexHull(P)
@@ -711,7 +721,7 @@ def run_checks(sc: CheckScene, n: int, m: int, voxel_ks, fcl_res, n_cross: int, 
     lo, hi = sc.bounds
     size = float((hi - lo).max())
     band = BAND * size
-    fclc = FclChecker(fine)
+    fclc = FclChecker(sc)
     q = near_states(fine, n, size, rng)
     # state truth: exact reference, else FCL outside the band of the finest C-space
     fcl_hit, fcl_state_s = timed(lambda: fclc.collides(q))

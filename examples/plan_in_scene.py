@@ -43,7 +43,7 @@ def main(scene_file: str, seconds: float) -> int:
         print("no path returned")
         return 1
     valid = verify_path(cs, r.path, scene.bounds)["valid"]
-    bad, n_samples = path_collisions(cs, r.path)
+    bad, n_samples = path_collisions(scene, r.path)  # FCL on the raw scene meshes as loaded
     print(f"exact re-check: valid={valid}; FCL re-check: {len(bad)} colliding of {n_samples} "
           "samples")
     out = ROOT / "out"
