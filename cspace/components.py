@@ -18,7 +18,7 @@ from .errors import InvalidMeshError
 from .exact import Grid
 from .graphs import component_labels
 
-__all__ = ["weld_dedupe", "edge_uses", "split_parts"]
+__all__ = ["weld_dedupe", "edge_uses", "split_parts", "split_mesh", "nested_pairs"]
 
 
 def _parity(F: np.ndarray) -> np.ndarray:
@@ -66,35 +66,79 @@ def split_parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
     ncomp, label = component_labels(m, face[link], first[edge][link])
     boundary = np.zeros(ncomp, dtype=bool)
     np.logical_or.at(boundary, label[face], count[edge] == 1)
-    # Closed components nested in another closed one's box stay with it (possible cavity).
+    # Closed components nested in another closed one's solid stay with it (a cavity).
+    closed = np.nonzero(~boundary)[0]
+    i, j = nested_pairs(ints, F, label, closed, closed)
+    _, group = component_labels(ncomp, i, j)
+    group = group[label]
+    firsts = np.full(group.max() + 1, m)
+    np.minimum.at(firsts, group, np.arange(m))
+    return [np.nonzero(group == g)[0] for g in np.argsort(firsts) if firsts[g] < m]
+
+
+def split_mesh(vertices, faces, grid: Grid) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A mesh welded and split on ``grid`` as scenes split a body (:func:`weld_dedupe`,
+    :func:`split_parts`): one ``(float64 vertices on the grid, faces)`` per part. Closed
+    pieces meeting at non-manifold edges or vertices (two boxes sharing an edge) fall apart
+    here; :meth:`cspace.CSpaceObstacle.build` and :func:`cspace.minkowski_sum` answer such a
+    mesh as the union of its parts."""
+    from types import SimpleNamespace
+
+    ints, F, _ = weld_dedupe(SimpleNamespace(vertices=vertices, faces=faces), grid)
+    out = []
+    for part in split_parts(ints, F) if len(F) else []:
+        used, local = np.unique(F[part], return_inverse=True)
+        out.append((grid.to_float(ints[used]), local.reshape(-1, 3)))
+    return out
+
+
+def nested_pairs(ints: np.ndarray, F: np.ndarray, label: np.ndarray, outer, inner):
+    """Which closed components lie inside which others' solids, decided exactly: the one
+    definition of nesting, for scenes (:func:`split_parts`: a cavity stays with its solid)
+    and for :class:`cspace.mesh.ClosedMesh` (an inward shell is a cavity only inside an
+    outward one's solid).
+
+    Parameters
+    ----------
+    ints : (n, 3) int64
+        Grid coordinates.
+    F : (m, 3) int64
+        Triangles.
+    label : (m,) int64
+        Component of each triangle.
+    outer, inner : array of int
+        Labels of the candidate enclosing components and of the candidate enclosed ones.
+
+    Returns
+    -------
+    a, b : (k,) int64
+        Pairs of labels ``a`` in ``outer``, ``b`` in ``inner``, ``a != b``, such that ``b``'s
+        box lies in ``a``'s and a vertex of ``b`` in ``a``'s solid (winding number from a
+        symbolically perturbed ray, boundary included: :class:`cspace.meshquery.MeshCO`).
+        Closed shells that do not cross lie wholly inside or outside each other, so one
+        vertex decides. An ``a`` that is not an oriented 2-cycle keeps the boxes' verdict.
+    """
+    outer = np.asarray(outer, dtype=np.int64)
+    inner = np.asarray(inner, dtype=np.int64)
+    ncomp = int(label.max()) + 1 if len(label) else 0
     lo = np.full((ncomp, 3), np.iinfo(np.int64).max)
     hi = np.full((ncomp, 3), np.iinfo(np.int64).min)
     corners = ints[F]  # (m, 3, 3)
     np.minimum.at(lo, label, corners.min(axis=1))
     np.maximum.at(hi, label, corners.max(axis=1))
-    closed = np.nonzero(~boundary)[0]
-    inside = ((lo[closed, None] <= lo[None, closed])
-              & (hi[None, closed] <= hi[closed, None])).all(2)
-    np.fill_diagonal(inside, False)
-    i, j = np.nonzero(inside)
-    # A box inside a box is not a cavity yet: one vertex of the inner component must lie in
-    # the outer one's solid, decided exactly (winding number from a symbolically perturbed
-    # ray, boundary included).
-    keep = np.ones(len(i), dtype=bool)
-    for a in np.unique(i).tolist():
-        rows = np.nonzero(i == a)[0]
-        outer = F[label == closed[a]]
+    fits = ((lo[outer, None] <= lo[None, inner]) & (hi[None, inner] <= hi[outer, None])).all(2)
+    fits &= outer[:, None] != inner[None, :]
+    i, j = np.nonzero(fits)
+    a, b = outer[i], inner[j]
+    keep = np.ones(len(a), dtype=bool)
+    for c in np.unique(a).tolist():
+        rows = np.nonzero(a == c)[0]
         try:
             from .meshquery import MeshCO
 
-            solid = MeshCO(ints.astype(np.float64), outer, name="part")
+            solid = MeshCO(ints.astype(np.float64), F[label == c], name="part")
         except InvalidMeshError:  # not an oriented 2-cycle: keep the boxes' verdict
             continue
-        probes = np.array([ints[F[label == closed[b]][0, 0]] for b in j[rows].tolist()])
+        probes = np.array([ints[F[label == d][0, 0]] for d in b[rows].tolist()])
         keep[rows] = solid.contains(probes.astype(np.float64))
-    i, j = i[keep], j[keep]
-    _, group = component_labels(ncomp, closed[i], closed[j])
-    group = group[label]
-    firsts = np.full(group.max() + 1, m)
-    np.minimum.at(firsts, group, np.arange(m))
-    return [np.nonzero(group == g)[0] for g in np.argsort(firsts) if firsts[g] < m]
+    return a[keep], b[keep]

@@ -130,8 +130,7 @@ class ClosedMesh:
         Raises
         ------
         InvalidMeshError
-            Wrong shape or dtype, a face index out of range, or an inward-wound component
-            that cannot be a cavity (step 10).
+            Wrong shape or dtype, or a face index out of range.
         EmptyMeshError
             No vertices or no faces.
         NonFiniteError
@@ -187,10 +186,13 @@ class ClosedMesh:
             vertex is an outer shell (nothing encloses it); if its volume is negative the
             whole mesh is inside out and every face is flipped. So a mesh whose components
             are all negative is flipped, one whose components are all positive is kept.
-            When signs are mixed, the negative components are **cavities** (inner shells of
-            a solid with holes, wound inwards): each must lie within the bounding box of a
-            positive component, else the mesh is refused (a separate body wound inside out).
-            Nesting is not otherwise checked, nor are self-intersections.
+            When signs are mixed, a negative component is a **cavity** (an inner shell of a
+            solid with holes, wound inwards) when it lies inside a positive component's
+            solid, decided exactly as scenes decide it
+            (:func:`cspace.components.nested_pairs`: a vertex of it inside, by an exact
+            winding number); one inside no positive component's solid bounds nothing (its
+            inside would be unbounded): it is a separate body wound inside out and is
+            turned outwards, as a scene turns it. Self-intersections are not checked here.
 
         Cost: ``O(m log m)``, vectorised (sorting and scipy graph traversals).
 
@@ -749,44 +751,19 @@ def _validate_faces(ints, F, rep, grid, name):
         volumes = [-vol for vol in volumes]
     cavities = np.array([c for c, vol in enumerate(volumes) if vol < 0], dtype=np.int64)
     if len(cavities):
-        stray = _stray_cavities(ints, F, components, ncomp, cavities)
+        # A cavity is an inward shell inside an outward shell's solid, decided exactly as
+        # scenes decide it (cspace.components.nested_pairs). One inside none bounds nothing
+        # (its inside would be unbounded): a separate body wound inside out, turned outwards
+        # as a scene turns it.
+        from .components import nested_pairs
+
+        shells = np.setdiff1d(np.arange(ncomp), cavities)
+        _, held = nested_pairs(ints, F, components, shells, cavities)
+        stray = np.setdiff1d(cavities, held)
         if len(stray):
-            c = int(stray[0])
-            raise fail(
-                InvalidMeshError,
-                f"the closed surface through face {int(roots[c])} is wound inwards (negative "
-                "volume, as a cavity) but lies inside no outward shell's bounding box: it is a "
-                "separate body with inverted winding; reverse its faces"
-                + _count(len(stray), "such surfaces"),
-            )
+            turn = np.isin(components, stray)
+            F[turn] = F[turn][:, [0, 2, 1]]
     return ints, F, grid, components
-
-
-def _stray_cavities(ints, faces, components, count, cavities) -> np.ndarray:
-    """Inward components whose bounding box lies in no outward component's bounding box.
-
-    A cavity lies inside an outer shell, so its bounding box is inside that shell's: the
-    components returned cannot be cavities. (The converse does not hold: a box test cannot
-    prove nesting, so a component that passes is accepted as a cavity.)
-
-    Returns
-    -------
-    stray : (s,) int64
-        Labels from ``cavities``, in increasing order.
-    """
-    corner = np.repeat(components, 3)
-    lo = np.full((count, 3), np.iinfo(np.int64).max, dtype=np.int64)
-    hi = np.full((count, 3), np.iinfo(np.int64).min, dtype=np.int64)
-    np.minimum.at(lo, corner, ints[faces.reshape(-1)])
-    np.maximum.at(hi, corner, ints[faces.reshape(-1)])
-    shells = np.setdiff1d(np.arange(count), cavities)
-    inside = np.zeros(len(cavities), dtype=bool)
-    chunk = max(1, 2**20 // max(1, len(shells)))
-    for s in range(0, len(cavities), chunk):
-        c = cavities[s : s + chunk]
-        fits = (lo[shells][None] <= lo[c][:, None]) & (hi[c][:, None] <= hi[shells][None])
-        inside[s : s + chunk] = fits.all(axis=2).any(axis=1)
-    return cavities[~inside]
 
 
 def _components(fa: np.ndarray, fb: np.ndarray, m: int):

@@ -896,8 +896,8 @@ class CSpaceObstacle:
         except (NotConvexError, NonManifoldError):
             try:
                 O = as_mesh(obstacle, grid=grid, name="obstacle")
-            except NonManifoldError:  # pieces meeting at edges or vertices: one CO each
-                return cls._of_parts(obstacle, robot, c, grid, margin, progress)
+            except NonManifoldError as exc:  # pieces meeting at edges or vertices: one CO each
+                return cls._of_parts(obstacle, robot, c, grid, margin, progress, exc)
             except DegenerateError as exc:  # thinner than a grid step somewhere
                 return cls._thin(obstacle, robot, c, grid, rgrid, margin, exc)
             B = R.reflected(c) if isinstance(R, ConvexPolytope) else rgrid.snap(c) - R.ints
@@ -959,25 +959,23 @@ class CSpaceObstacle:
         return out
 
     @classmethod
-    def _of_parts(cls, obstacle, robot, c, grid: Grid, margin: Margin, progress=None):
+    def _of_parts(cls, obstacle, robot, c, grid: Grid, margin: Margin, progress=None,
+                  why=None):
         """A closed obstacle whose pieces meet at non-manifold edges or vertices (two boxes
         sharing an edge): split there into closed manifold pieces (exactly, as scenes are,
-        :func:`cspace.components.split_parts`); the C-obstacle is the union of theirs."""
-        from types import SimpleNamespace
-
-        from .components import split_parts, weld_dedupe
+        :func:`cspace.components.split_mesh`); the C-obstacle is the union of theirs. One
+        part (a surface pinched at a vertex, not split apart): ``why`` stands."""
+        from .components import split_mesh
         from .errors import NonManifoldError
 
-        V, F = _mesh_arrays(obstacle)
-        ints, F, _ = weld_dedupe(SimpleNamespace(vertices=V, faces=F), grid)
-        parts = split_parts(ints, F)
+        parts = split_mesh(*_mesh_arrays(obstacle), grid)
+        if len(parts) < 2 and why is not None:
+            raise why
         cos = []
-        for k, faces in enumerate(parts):
-            used, local = np.unique(F[faces], return_inverse=True)
-            piece = (grid.to_float(ints[used]), local.reshape(-1, 3))
+        for k, piece in enumerate(parts):
             try:
                 cos.append(cls._grown(piece, robot, c, grid, margin, progress))
-            except NonManifoldError as exc:  # pragma: no cover - split_parts leaves none
+            except NonManifoldError as exc:  # a part pinched at a vertex
                 raise NonManifoldError(f"obstacle: piece {k} of {len(parts)}: {exc}") from None
         return cls.union(cos)
 

@@ -203,11 +203,12 @@ def test_cavity_and_separate_components():
 
 
 def test_separate_body_wound_inside_out():
+    # An inward shell inside no outward shell's solid bounds nothing: a separate body wound
+    # inside out, turned outwards (as a scene turns it), not refused.
     a_v, a_f = box()
     b_v, b_f = box(offset=(5.0, 0.0, 0.0))
-    msg = r"surface through face 0 is wound inwards .* separate body with inverted winding"
-    with pytest.raises(InvalidMeshError, match=msg):
-        ClosedMesh.from_arrays(np.vstack([a_v, b_v]), np.vstack([a_f[:, ::-1], b_f + 8]))
+    mesh = ClosedMesh.from_arrays(np.vstack([a_v, b_v]), np.vstack([a_f[:, ::-1], b_f + 8]))
+    assert mesh.volume == 16.0  # both outwards (one inwards would make it 0)
 
 
 def test_on_grid():

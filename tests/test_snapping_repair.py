@@ -191,3 +191,53 @@ def test_capped_meshes_through_the_api():
     assert co.contains(q)
     co = cspace.CSpaceObstacle.build(box, ROBOT)
     assert co.kind == "convex" and co.contains(FAR)
+
+
+# ---------------------------------------------------------------------------------------
+# 2. nesting decided exactly in the API as in scenes (cspace.components.nested_pairs)
+
+
+def _l_and_inverted_box(centre):
+    from zoo import l_shape
+
+    V, F = l_shape(arm=2)  # [0, 3] x [0, 3] x [0, 1], the notch is [1, 3] x [1, 3]
+    small = trimesh.creation.box((0.5, 0.5, 0.5))
+    return (np.vstack([V, small.vertices + centre]),
+            np.vstack([F, small.faces[:, ::-1] + len(V)]))
+
+
+def test_an_inside_out_box_in_the_notch_of_an_l_is_a_body_not_a_dropped_cavity():
+    """Inside the L's box but outside its solid: it bounds nothing wound inwards, so it is a
+    separate body turned outwards, as scenes model it (was: accepted as a cavity by the box
+    test and dropped from the sum silently)."""
+    A = _l_and_inverted_box((2.0, 2.0, 0.5))
+    mesh = cspace.ClosedMesh.from_arrays(*A)
+    assert mesh.volume == pytest.approx(5.0 + 0.125)  # both outwards
+    M = cspace.minkowski_sum(A, ROBOT.reflected((0, 0, 0)))
+    L = cspace.minkowski_sum((A[0][:-8], A[1][:-12]), ROBOT.reflected((0, 0, 0)))
+    assert M.volume > L.volume + 0.125
+    co = cspace.CSpaceObstacle.build(A, ROBOT)
+    assert co.contains([2.0, 2.0, 0.5]) and not co.contains([1.6, 1.6, 0.5])
+    # the scene answers the same
+    from cspace.model import model_scene
+    from cspace.scene import Body, Scene
+
+    robot = Body("robot", ROBOT_MESH.vertices, ROBOT_MESH.faces, "test")
+    scene = Scene("notch", None, (Body("w", *A, "test"),), robot, np.zeros(3),
+                  np.array([[-1.0, -1, -1], [4, 4, 2]]), np.array([-0.9, -0.9, -0.9]),
+                  np.array([-0.8, -0.9, -0.9]))
+    cs = model_scene(scene).cspace()
+    Q = np.random.default_rng(0).uniform((-0.5, -0.5, -0.5), (3.5, 3.5, 1.5), (3000, 3))
+    assert np.array_equal(cs.contains(Q), co.contains(Q))
+
+
+def test_an_inside_out_box_inside_a_solid_is_its_cavity():
+    big = trimesh.creation.box((2.0, 2.0, 2.0))
+    small = trimesh.creation.box((1.0, 1.0, 1.0))
+    A = (np.vstack([big.vertices, small.vertices]),
+         np.vstack([big.faces, small.faces[:, ::-1] + 8]))
+    assert cspace.ClosedMesh.from_arrays(*A).volume == 7.0
+    M = cspace.minkowski_sum(A, ROBOT.reflected((0, 0, 0)))
+    assert M.n_holes == 1
+    co = cspace.CSpaceObstacle.build(A, ROBOT)
+    assert not co.contains([0.0, 0.0, 0.0]) and co.contains([0.0, 0.0, 0.45])
