@@ -15,7 +15,8 @@ Public API
   closed mesh and a convex polytope, an oriented 2-cycle with signed corner multiplicities.
 - :func:`minkowski_sum` → :class:`SumPolyhedron` — the exact sum of a closed (non-convex)
   polyhedron and a convex one: NCC-CVMS (superset, exact trimming, holes, non-manifold
-  contacts), CVMS when both are convex.
+  contacts), CVMS when both are convex; :class:`SumUnion` (the sum of each piece) when the
+  polyhedron is closed pieces meeting at non-manifold edges or vertices.
 - :class:`CSpaceObstacle`, :class:`CSpace` — C-obstacles and exact queries over translations
   (``contains``, ``signed_distance``, ``segment_free``, ``first_contact``). FCL cross-checks:
   :mod:`cspace.fcl_check`.
@@ -39,7 +40,7 @@ from .model import SceneModel, model_scene
 from .obstacle import CSpace, CSpaceObstacle
 from .scene import Body, Scene, load_scene
 from .superset import SUPERSET_KINDS, Superset, minkowski_superset
-from .trim import SumPolyhedron, minkowski_sum
+from .trim import SumPolyhedron, SumUnion, minkowski_sum
 
 __version__ = "0.1.0"
 
@@ -57,6 +58,7 @@ __all__ = [
     "minkowski_superset",
     "minkowski_sum",
     "SumPolyhedron",
+    "SumUnion",
     "Body",
     "Scene",
     "load_scene",

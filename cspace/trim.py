@@ -29,7 +29,8 @@ from .arrangement import (
     intersect_pairs,
 )
 from .convex import ConvexPolytope, convex_minkowski_sum
-from .errors import ExactnessError, InvalidMeshError, NotConvexError, SelfIntersectionError
+from .errors import (ExactnessError, InvalidMeshError, NonManifoldError, NotConvexError,
+                     SelfIntersectionError)
 from .exact import Grid
 from .graphs import component_labels
 from .mesh import ClosedMesh, as_mesh
@@ -53,7 +54,7 @@ from ._kernels import load
 
 _compiled = load("trim")
 
-__all__ = ["SumPolyhedron", "minkowski_sum"]
+__all__ = ["SumPolyhedron", "SumUnion", "minkowski_sum"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -176,6 +177,80 @@ class SumPolyhedron:
         return trimesh.Trimesh(self.vertices, self.faces, process=False)
 
 
+@dataclass(frozen=True, eq=False)
+class SumUnion:
+    """``A ⊕ B`` for an A made of closed pieces that meet at non-manifold edges or vertices
+    (two boxes sharing an edge or a corner): the union of the pieces' sums, each exact, not
+    merged into one surface. ``(P1 ∪ P2) ⊕ B = (P1 ⊕ B) ∪ (P2 ⊕ B)``.
+
+    Attributes
+    ----------
+    parts : tuple of SumPolyhedron
+        The sum of each piece (``A`` split exactly as scenes split a body:
+        :func:`cspace.components.split_mesh`), each closed and oriented outwards.
+    pieces : tuple of (vertices, faces)
+        The pieces of A (float64 vertices on the grid, faces).
+    grid : Grid
+    stats : dict
+        ``parts`` (how many), ``total`` seconds, and the largest ``thickened_operands`` and
+        ``hull_excess`` of the parts.
+
+    Notes
+    -----
+    The parts' sums overlap (they share at least the sum of the contact), so
+    :attr:`vertices`/:attr:`faces` (and :meth:`to_trimesh`) are the parts' closed surfaces
+    joined, **not** the boundary of the union: a point is in ``A ⊕ B`` exactly when it is in
+    some part (:meth:`cspace.CSpaceObstacle.build` answers queries on such a union). There is
+    no single volume, hole count or non-manifold list of the union; ask each part.
+    """
+
+    parts: tuple
+    pieces: tuple = field(repr=False)
+    grid: Grid = field(repr=False)
+    stats: dict = field(default_factory=dict, repr=False)
+    convex = False
+
+    @cached_property
+    def _joined(self):
+        V, F, n = [], [], 0
+        for p in self.parts:
+            V.append(np.asarray(p.vertices, dtype=np.float64))
+            F.append(np.asarray(p.faces, dtype=np.int64) + n)
+            n += len(V[-1])
+        return np.vstack(V), np.vstack(F)
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64: every part's vertices, one after the other."""
+        return self._joined[0]
+
+    @property
+    def faces(self) -> np.ndarray:
+        """(m, 3) int64: every part's closed surface (overlapping; not the union's boundary)."""
+        return self._joined[1]
+
+    @property
+    def rounding(self) -> np.ndarray:
+        """Per axis, the largest of the parts' float64 rounding bounds."""
+        return np.max([p.rounding for p in self.parts], axis=0)
+
+    @property
+    def error_bound(self) -> float:
+        """The largest of the parts' bounds (a union of sums each within its bound of the
+        unsnapped one is within the largest of them)."""
+        return max(p.error_bound for p in self.parts)
+
+    def __repr__(self) -> str:
+        return (f"SumUnion(parts={len(self.parts)}, vertices={len(self.vertices)}, "
+                f"faces={len(self.faces)})")
+
+    def to_trimesh(self):
+        """The parts' closed surfaces in one ``trimesh.Trimesh`` (overlapping shells)."""
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+
 def _convex_operand(obj, name: str, grid: Grid | None = None) -> ConvexPolytope | None:
     """``obj`` as a ConvexPolytope, or None when it is a non-convex closed mesh."""
     if isinstance(obj, ConvexPolytope):
@@ -285,15 +360,19 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
 
     Returns
     -------
-    SumPolyhedron
+    SumPolyhedron or SumUnion
         Closed and oriented; CVMS when A is convex too (``result.convex``), NCC-CVMS otherwise.
+        When A is closed pieces meeting at non-manifold edges or vertices (two boxes sharing
+        an edge), a :class:`SumUnion`: A split there exactly, as scenes and
+        :meth:`cspace.CSpaceObstacle.build` split it, and the sum of each piece (their union
+        is the sum; its surfaces overlap, see :class:`SumUnion`).
 
     Raises
     ------
     InvalidMeshError
-        Bad operands (open, non-manifold, NaN, ...), A intersecting itself
-        (``SelfIntersectionError``, naming two triangles that cross), or B not convex
-        (``NotConvexError``).
+        Bad operands (open, non-manifold where it does not split into pieces, NaN, ...), A
+        intersecting itself (``SelfIntersectionError``, naming two triangles that cross), or
+        B not convex (``NotConvexError``).
     """
     t0 = time.perf_counter()
     A, B = _loaded(A), _loaded(B)
@@ -303,6 +382,44 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     Bc, thick_b = _convex_or_thickened(B, "B", grid_b)
     if Bc is None:
         raise NotConvexError("B must be convex (the robot of a translational C-obstacle)")
+    try:
+        return _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0)
+    except NonManifoldError as exc:  # closed pieces meeting at edges or vertices?
+        return _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, exc)
+
+
+def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why) -> SumUnion:
+    """:class:`SumUnion` of A split as scenes split a body; ``why`` stands when A does not
+    fall apart (one piece: a surface pinched at a vertex)."""
+    from .components import split_mesh
+    from .obstacle import _mesh_arrays
+
+    t0 = time.perf_counter()
+    if isinstance(A, ClosedMesh):
+        raise why
+    V, F = _mesh_arrays(A)
+    grid = grid_a if grid_a is not None else Grid.for_points(V[np.unique(F)])
+    pieces = split_mesh(V, F, grid)
+    if len(pieces) < 2:
+        raise why
+    parts = []
+    for k, piece in enumerate(pieces):
+        def sub(f, stage, k=k):
+            if progress is not None:
+                progress((k + f) / len(pieces), f"piece {k + 1} of {len(pieces)}: {stage}")
+        try:
+            parts.append(_sum_with(piece, Bc, thick_b, grid, sub, workers, time.perf_counter()))
+        except InvalidMeshError as exc:
+            raise type(exc)(f"A: piece {k} of {len(pieces)} (A split at its non-manifold edges "
+                            f"and vertices): {exc}") from None
+    stats = {"parts": len(parts), "total": time.perf_counter() - t0,
+             "thickened_operands": max(p.stats.get("thickened_operands", 0) for p in parts),
+             "hull_excess": max(p.stats.get("hull_excess", 0.0) for p in parts)}
+    return SumUnion(tuple(parts), tuple(pieces), grid, stats)
+
+
+def _sum_with(A, Bc: ConvexPolytope, thick_b: bool, grid_a, progress, workers, t0):
+    """:func:`minkowski_sum` with B made convex and A's grid decided."""
     Ac, thick_a = _convex_or_thickened(A, "A", grid_a)
     if Ac is not None:
         out = _from_convex(Ac, Bc, t0)

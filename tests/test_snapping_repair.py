@@ -241,3 +241,35 @@ def test_an_inside_out_box_inside_a_solid_is_its_cavity():
     assert M.n_holes == 1
     co = cspace.CSpaceObstacle.build(A, ROBOT)
     assert not co.contains([0.0, 0.0, 0.0]) and co.contains([0.0, 0.0, 0.45])
+
+
+# ---------------------------------------------------------------------------------------
+# 3. solids sharing an edge or a vertex in one mesh: a union in minkowski_sum too
+
+
+def _two_boxes(shared: str):
+    a = trimesh.creation.box((1.0, 1.0, 1.0))
+    shift = {"edge": (1.0, 1.0, 0.0), "vertex": (1.0, 1.0, 1.0)}[shared]
+    return (np.vstack([a.vertices, a.vertices + shift]), np.vstack([a.faces, a.faces + 8]))
+
+
+@pytest.mark.parametrize("shared", ["edge", "vertex"])
+def test_minkowski_sum_of_solids_sharing_an_edge_or_a_vertex_is_their_union(shared):
+    A = _two_boxes(shared)
+    with pytest.raises(cspace.NonManifoldError):
+        cspace.ClosedMesh.from_arrays(*A)
+    B = ROBOT.reflected((0, 0, 0))
+    M = cspace.minkowski_sum(A, B)  # was: NonManifoldError
+    assert isinstance(M, cspace.SumUnion) and len(M.parts) == 2
+    one = cspace.minkowski_sum(trimesh.creation.box((1.0, 1.0, 1.0)), B)
+    for part in M.parts:  # each piece's exact sum: a translate of one box's
+        assert part.convex and part.volume_exact == one.volume_exact
+    assert M.error_bound == max(p.error_bound for p in M.parts)
+    assert len(M.to_trimesh().faces) == sum(len(p.faces) for p in M.parts)
+    # a point is in the sum exactly when it is in some part: the same as build's union
+    co = cspace.CSpaceObstacle.build(A, ROBOT, conservative=False)
+    assert co.kind == "union"
+    parts = [cspace.CSpaceObstacle.from_mesh(p.vertices, p.faces) for p in M.parts]
+    Q = np.random.default_rng(3).uniform(-0.8, 2.8, (4000, 3))
+    ours = np.any([p.contains(Q) for p in parts], axis=0)
+    assert np.array_equal(ours, co.contains(Q)) and 0 < ours.sum() < len(Q)
