@@ -501,9 +501,9 @@ def cross_check(cspace_or_obstacle, n: int = 10000, seed: int = 0, band: float =
 
 
 def _error_bound(co) -> float:
-    """A C-obstacle's stated error bound (scene units; 0 without a margin)."""
-    m = getattr(co, "margin", None)
-    return 0.0 if m is None else float(m.error_bound)
+    """A C-obstacle's stated error bound (scene units: its margin's plus a hull's excess; 0
+    for an object without one)."""
+    return float(getattr(co, "error_bound", 0.0) or 0.0)
 
 
 def _growth(co) -> float:
@@ -730,28 +730,10 @@ def _balanced(W: np.ndarray, comp: np.ndarray, n_comp: int) -> np.ndarray:
     return closed
 
 
-def _self_intersects(fcl, V: np.ndarray, W: np.ndarray) -> bool:
-    """Whether two triangles of the mesh that share no (welded) vertex meet: FCL's
-    triangle-triangle test on every pair its BVH finds (the mesh collided with a copy of
-    itself; all contacts). Float64: triangles that only touch count as meeting."""
-    bvh = fcl.BVHModel()
-    bvh.beginModel(len(W), len(V))
-    bvh.addSubModel(V, W)
-    bvh.endModel()
-    a, b = fcl.CollisionObject(bvh, fcl.Transform()), fcl.CollisionObject(bvh, fcl.Transform())
-    res = fcl.CollisionResult()
-    fcl.collide(a, b, fcl.CollisionRequest(num_max_contacts=64 * len(W) + 64), res)
-    if not res.contacts:
-        return False
-    pairs = np.array([(c.b1, c.b2) for c in res.contacts], dtype=np.int64)
-    share = (W[pairs[:, 0]][:, :, None] == W[pairs[:, 1]][:, None, :]).any(axis=(1, 2))
-    return bool((~share).any())
-
-
 class _Mesh:
     """One raw mesh of the scene as :class:`SceneOracle` sees it (see its docstring)."""
 
-    def __init__(self, fcl, name, V, F, limit):
+    def __init__(self, fcl, name, V, F):
         self.name = name
         self.V = np.ascontiguousarray(V, dtype=np.float64)
         self.F = np.ascontiguousarray(F, dtype=np.int64)
@@ -759,26 +741,12 @@ class _Mesh:
         comp = _components(W, len(self.V))
         n_comp = int(comp.max()) + 1
         closed = _balanced(W, comp, n_comp)
-        self.undecided = []  # closed components too large for the self-intersection test
-        self.self_intersecting = []
-        for k in np.nonzero(closed)[0].tolist():
-            faces = np.nonzero(comp == k)[0]
-            if len(faces) > limit:
-                self.undecided.append(k)
-            elif _self_intersects(fcl, self.V, W[faces]):
-                closed[k] = False
-                self.self_intersecting.append(k)
         self.n_components = n_comp
         self.closed = closed
         # One vertex of every component (the first corner of its first face).
         first = np.unique(comp, return_index=True)[1]
         self.points = self.V[self.F[first, 0]]
-        sf = self.F[closed[comp]]
-        if len(sf):  # outward: a solid of negative (float) volume is turned inside out
-            T = self.V[sf] - self.V[sf].mean(axis=(0, 1))
-            vol = np.einsum("ij,ij->i", T[:, 0], np.cross(T[:, 1], T[:, 2])).sum()
-            if vol < 0:
-                sf = sf[:, ::-1]
+        sf = self.F[closed[comp]]  # |winding number| does not depend on the orientation
         self.solid_faces = np.ascontiguousarray(sf)
         used = self.V[np.unique(sf)] if len(sf) else np.zeros((0, 3))
         self.solid_box = (np.stack([used.min(axis=0), used.max(axis=0)]) if len(used) else None)
@@ -792,14 +760,14 @@ class _Mesh:
         return self.solid_box is not None
 
     def inside(self, p: np.ndarray) -> np.ndarray:
-        """(k,) bool: points inside the solid part (winding number > 1/2)."""
+        """(k,) bool: points inside the solid part (winding number not 0: |w| > 1/2)."""
         out = np.zeros(len(p), dtype=bool)
         if self.solid_box is None or not len(p):
             return out
         lo, hi = self.solid_box
         cand = np.nonzero(((p >= lo) & (p <= hi)).all(axis=1))[0]  # outside the box: w = 0
         if cand.size:
-            out[cand] = winding_number(self.V, self.solid_faces, p[cand]) > 0.5
+            out[cand] = np.abs(winding_number(self.V, self.solid_faces, p[cand])) > 0.5
         return out
 
     def describe(self) -> str:
@@ -820,18 +788,16 @@ class SceneOracle:
     into connected components (triangles sharing a vertex, after welding vertices with
     bit-identical coordinates). A component is *closed* when every edge is used as often in
     one direction as in the other (a closed, consistently oriented surface; solids meeting at
-    an edge included) and *self-intersection free* when no two of its triangles that share no
-    vertex meet (FCL's triangle-triangle test on every pair its BVH finds). A closed,
-    self-intersection-free component is **solid**; every other component (open, or
-    self-intersecting, or inconsistently oriented) is a **surface**. A mesh's solid is the
-    region where the generalized winding number (:func:`winding_number`) of all its solid
-    components together exceeds 1/2, after turning them inside out if their total volume is
-    negative (cavities, wound inwards, stay holes). Components of more than
-    ``self_intersection_limit`` triangles (default 20000; about 1 s each) are not tested
-    for self-intersection and count as solid when closed: listed in :attr:`undecided`.
-    This rule is the oracle's own and may differ from :mod:`cspace.model`'s (which welds on
-    its grid, re-orients inconsistently wound components and splits at non-manifold edges):
-    where they differ the disagreement is reported, never hidden.
+    an edge included). A closed component is **solid**; every other component (open, or
+    inconsistently oriented) is a **surface**. A mesh's solid is the region where the
+    generalized winding number (:func:`winding_number`) of all its closed components
+    together is not zero (``|w| > 1/2``): the inside of a plain closed surface, either way it
+    is wound; cavities, wound against their shell, stay holes; a closed surface that meets
+    itself (overlapping parts written as one mesh, or folds) holds everything it encloses.
+    :mod:`cspace.model` states the same rule (a closed surface whose snapped form bounds no
+    valid solid is modelled as its surface and the region it encloses), decided on its own
+    grid; it also re-orients inconsistently wound components and splits at non-manifold
+    edges, so where the two differ the disagreement is reported, never hidden.
 
     A pose collides when
 
@@ -866,29 +832,24 @@ class SceneOracle:
     robot_hull : bool, default False
         The robot's convex hull (scipy's qhull on its vertices) instead of its mesh: the robot
         a C-space built with ``robot_hull=True`` stands for.
-    self_intersection_limit : int, default 20000
 
     Attributes
     ----------
     robot : the robot's mesh analysis; ``bodies``: one per obstacle body (``describe()``).
-    undecided : list of (mesh name, component) closed components not tested for
-        self-intersection (too large).
     band : float
         FCL's float band at this scene's coordinates: ``2**-48`` times the largest coordinate
         magnitude of the bounds, the bodies and the robot's reach beyond the bounds.
     """
 
-    def __init__(self, scene, *, robot_hull: bool = False, self_intersection_limit: int = 20000):
+    def __init__(self, scene, *, robot_hull: bool = False):
         fcl = self._fcl = _fcl()
         c = np.asarray(scene.reference_point, dtype=np.float64).reshape(3)
         RV = np.asarray(scene.robot.vertices, dtype=np.float64) - c
         RF = np.asarray(scene.robot.faces, dtype=np.int64)
         if robot_hull:
             RV, RF = _hull(RV)
-        limit = int(self_intersection_limit)
-        self.robot = _Mesh(fcl, scene.robot.name, RV, RF, limit)
-        self.bodies = [_Mesh(fcl, b.name, b.vertices, b.faces, limit) for b in scene.obstacles]
-        self.undecided = [(m.name, k) for m in [self.robot] + self.bodies for k in m.undecided]
+        self.robot = _Mesh(fcl, scene.robot.name, RV, RF)
+        self.bodies = [_Mesh(fcl, b.name, b.vertices, b.faces) for b in scene.obstacles]
         self._robot_obj = fcl.CollisionObject(self.robot.bvh, fcl.Transform())
         self._objects = [fcl.CollisionObject(b.bvh, fcl.Transform()) for b in self.bodies]
         self._manager = fcl.DynamicAABBTreeCollisionManager()

@@ -686,21 +686,32 @@ def _closed_mesh_arrays(vertices, faces, name: str):
     if bad.any():
         row = int(np.nonzero(bad)[0][0])
         raise NonFiniteError(f"{name}: vertex {row} is not finite: {V[row].tolist()}")
-    # Closed 2-cycle: each directed edge is balanced by its reverse (exact integer counts).
-    u = F.ravel()
-    v = np.roll(F, -1, axis=1).ravel()
-    n = np.int64(len(V))
-    key = np.concatenate([u * n + v, v * n + u])
-    sign = np.concatenate([np.ones(len(u), np.int64), -np.ones(len(u), np.int64)])
-    keys, inv = np.unique(key, return_inverse=True)
-    bal = np.bincount(inv.ravel(), weights=sign).astype(np.int64)
-    if (bal != 0).any():
-        k = int(keys[np.nonzero(bal)[0][0]])
+    edge = unbalanced_edge(F, len(V))
+    if edge is not None:
         raise OpenMeshError(
-            f"{name}: not a closed 2-cycle: edge {k // int(n)} -> {k % int(n)} is not balanced "
+            f"{name}: not a closed 2-cycle: edge {edge[0]} -> {edge[1]} is not balanced "
             "by its reverse"
         )
     return V, F
+
+
+def unbalanced_edge(faces: np.ndarray, n: int) -> tuple[int, int] | None:
+    """A directed edge ``(u, v)`` of the triangles ``faces`` (indices below ``n``) used more
+    often than its reverse ``(v, u)``, or None when there is none: the triangles are then a
+    closed 2-cycle (a closed oriented surface, self-intersecting or not), whose winding number
+    is defined everywhere off it. Exact integer counts."""
+    F = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
+    u = F.ravel()
+    v = np.roll(F, -1, axis=1).ravel()
+    n = np.int64(n)
+    key = np.concatenate([u * n + v, v * n + u])
+    sign = np.concatenate([np.ones(len(u), np.int64), -np.ones(len(u), np.int64)])
+    keys, inv = np.unique(key, return_inverse=True)
+    bal = np.bincount(inv.ravel(), weights=sign, minlength=len(keys)).astype(np.int64)
+    if (bal != 0).any():
+        k = int(keys[np.nonzero(bal > 0)[0][0]])
+        return k // int(n), k % int(n)
+    return None
 
 
 # --------------------------------------------------------------------------------------

@@ -131,6 +131,7 @@ class BodyModel:
     _ints: np.ndarray | None = field(default=None, repr=False)
     _solid: object = field(default=None, repr=False)
     _keep: np.ndarray | None = field(default=None, repr=False)
+    _encloses: object = field(default=None, repr=False)  # Enclosing of a closed surface
 
     @property
     def cos(self) -> list:
@@ -166,8 +167,9 @@ class RobotPart:
         Welded grid vertices (for ``solid``: the validated mesh's, oriented outwards).
     faces : (m, 3) int64
     grid : Grid
-    operand : ConvexPolytope, ClosedMesh or None
-        The exact operand: the polytope (convex), the closed mesh (solid), none (surface).
+    operand : ConvexPolytope, ClosedMesh, Enclosing or None
+        The exact operand: the polytope (convex), the closed mesh (solid), the closed 2-cycle
+        of a surface that encloses a region (:class:`Enclosing`) or none (open surface).
     """
 
     name: str
@@ -177,6 +179,11 @@ class RobotPart:
     faces: np.ndarray
     grid: Grid
     operand: object = None
+
+    @property
+    def encloses(self):
+        """The :class:`Enclosing` cycle of a closed surface part, else None."""
+        return self.operand if isinstance(self.operand, Enclosing) else None
 
     @property
     def vertices(self) -> np.ndarray:
@@ -378,29 +385,51 @@ def _excess(body) -> float:
     return float(getattr(body._solid, "excess", 0.0) or 0.0) if body.kind == "convex" else 0.0
 
 
+@dataclass(frozen=True, eq=False)
+class Enclosing:
+    """A closed 2-cycle that bounds no valid solid on the grid (it meets itself, or slivers
+    that snapping flattened cannot be repaired): grid vertices and triangles, every directed
+    edge balanced by its reverse. The region it encloses is where its winding number is
+    non-zero (:class:`cspace.meshquery.MeshCO`, exact)."""
+
+    ints: np.ndarray
+    faces: np.ndarray
+
+
 def _closed_kind(name, P, F, grid):
     """Kind of a welded part, without bounds: ``(kind, reason, operand)``.
 
-    ``('convex', reason, ConvexPolytope)``, ``('solid', reason, ClosedMesh)`` or
-    ``('surface', why, None)`` (open, or closed but not a valid solid).
+    ``('convex', reason, ConvexPolytope)``, ``('solid', reason, ClosedMesh)``,
+    ``('surface', why, Enclosing)`` (closed and oriented, but its snapped surface bounds no
+    valid solid: it is modelled as its surface and the region it encloses) or
+    ``('surface', why, None)`` (open, or not consistently oriented).
+
+    A closed body whose snapped surface meets itself is never left as a bare surface: that
+    would count its inside as free. Snapping moves every point of the surface by at most the
+    snapping bound, so away from the surface the snapped winding number is the input's; near
+    it, the (grown) surface pieces hold every contact.
     """
+    from .meshquery import unbalanced_edge
+
     edge, count = edge_uses(F, len(P))
     n_boundary = int((count == 1).sum())
     if n_boundary:
         return "surface", f"open: {n_boundary} boundary edges", None
+    cycle = Enclosing(P, F) if unbalanced_edge(F, len(P)) is None else None
     V = grid.to_float(P)
     try:
         solid = ClosedMesh.from_arrays(V, F, grid=grid, name=name)
     except InvalidMeshError as exc:
         return "surface", (f"closed but not a valid solid ({type(exc).__name__}: "
-                           f"{str(exc).split(': ', 1)[-1]})"), None
+                           f"{str(exc).split(': ', 1)[-1]})"), cycle
     from .trim import self_intersections
 
     crossing = self_intersections(solid)
     if len(crossing):
         i, j = crossing[0].tolist()
         return "surface", (f"closed but intersecting itself (triangles {i} and {j} cross; "
-                           f"{len(crossing)} pairs), so it bounds no solid"), None
+                           f"{len(crossing)} pairs), so it bounds no valid solid"), Enclosing(
+                               solid.ints, solid.faces)
     shells = int(solid.components.max()) + 1
     chi = len(solid.ints) - len(F) * 3 // 2 + len(F)
     poly, why = convex_within_bound(solid)  # the one definition of "convex"
@@ -443,17 +472,24 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
                              else "")
         return body
     # Surface semantics; leave out triangles whose piece cannot meet the bounds.
-    if why.startswith("closed"):
+    body._encloses = operand
+    if operand is not None:
+        body.changed = (f"a closed body modelled as its surface and the region it encloses "
+                        f"(non-zero winding number of its snapped surface): {why}")
+    elif why.startswith("closed"):
         body.changed = f"a closed body modelled as its surface (its inside counts as free): {why}"
     tri = P[F]
     keep = _meets(tri.min(axis=1) + r_lo, tri.max(axis=1) + r_hi, *bounds_g)
     body.kind, body._keep, body.pieces = "surface", keep, int(keep.sum())
+    inside = (" and containment terms for what it encloses (non-zero winding number)"
+              if operand is not None else "")
     body.reason = (f"{why}: surface semantics, the union of triangle ⊕ (-R) over "
                    f"{int(keep.sum())} triangles" + (f" ({int((~keep).sum())} more cannot "
-                                                     "reach the bounds)" if (~keep).any() else ""))
+                                                     "reach the bounds)" if (~keep).any() else "")
+                   + inside)
     if not convex_robot:
         body.reason = (f"{why}: surface semantics (FCL's mesh collision), "
-                       f"{int(keep.sum())} triangles can reach the bounds")
+                       f"{int(keep.sum())} triangles can reach the bounds" + inside)
     return body
 
 
@@ -681,24 +717,43 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
         pieces = unpack_polytopes(arrays, "p_", grid)
         cos = [SurfaceObstacle(pieces, obstacle=obstacle, robot=part, reference_point=c,
                                grid=grid)] if pieces else []
-    if construction == "triangle pairs":
-        o_ints, o_faces = _body_operand(body)
-        terms = []
-        if part.kind == "solid":  # obstacle components small enough for the robot to hold
-            points = component_points(o_ints, o_faces, fits_in=np.ptp(part.ints, axis=0))
-            terms += containment_meshes(points, part.ints, part.faces, c_ints, robot_solid=True)
-        if body.kind == "solid":  # robot components small enough for the obstacle to hold
-            points = component_points(part.ints, part.faces, fits_in=np.ptp(o_ints, axis=0))
-            terms += containment_meshes(points, o_ints, o_faces, c_ints, robot_solid=False)
-        for ints, faces in terms:
-            if _meets(ints.min(axis=0), ints.max(axis=0), *bounds_g):
-                cos.append(CSpaceObstacle.from_mesh(grid.to_float(ints), faces, obstacle=obstacle,
-                                                    robot=part, reference_point=c, grid=grid,
-                                                    name=f"{name} (containment)"))
+    if construction in ("triangle pairs", "convex ⊕ robot triangles"):
+        cos += _containment_cos(body, part, c_ints, grid, bounds_g, obstacle, name)
     for co in cos:
         co.semantics = (body.kind != "surface", part.kind)
         co.excess = _excess(body)  # a non-convex robot part is never a hull
     return cos
+
+
+def _containment_cos(body: BodyModel, part: RobotPart, c_ints, grid, bounds_g, obstacle,
+                     name: str) -> list:
+    """The containment terms of a pair (module :mod:`cspace.pairs`), as exact mesh
+    C-obstacles; terms whose box misses the bounds are left out.
+
+    - a closed robot part (a solid, or a closed surface that encloses a region) holding an
+      obstacle component: ``o + c - R`` for one vertex o of each obstacle component;
+    - a closed body (a solid against a non-convex part, or a closed surface that encloses a
+      region) holding a robot component: ``O + c - r`` for one vertex r of each component.
+
+    A convex side needs none (its pieces are solid), nor does NCC-CVMS (its sum is).
+    """
+    c = part.grid.to_float(c_ints)
+    held_by_robot = ((part.ints, part.faces) if part.kind == "solid" else
+                     (part.encloses.ints, part.encloses.faces) if part.encloses is not None
+                     else None)
+    held_by_body = ((body._solid.ints, body._solid.faces) if body.kind == "solid" else
+                    (body._encloses.ints, body._encloses.faces)
+                    if body.kind == "surface" and body._encloses is not None else None)
+    terms = []
+    if held_by_robot is not None:  # obstacle components small enough for the robot to hold
+        points = component_points(*_body_operand(body), fits_in=np.ptp(held_by_robot[0], axis=0))
+        terms += containment_meshes(points, *held_by_robot, c_ints, robot_solid=True)
+    if held_by_body is not None:  # robot components small enough for the body to hold
+        points = component_points(part.ints, part.faces, fits_in=np.ptp(held_by_body[0], axis=0))
+        terms += containment_meshes(points, *held_by_body, c_ints, robot_solid=False)
+    return [CSpaceObstacle.from_mesh(grid.to_float(ints), faces, obstacle=obstacle, robot=part,
+                                     reference_point=c, grid=grid, name=f"{name} (containment)")
+            for ints, faces in terms if _meets(ints.min(axis=0), ints.max(axis=0), *bounds_g)]
 
 
 def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, grid, bounds_g,
@@ -780,11 +835,23 @@ def _assemble(ctx: _Context, construction, b: BodyModel, part: RobotPart, pair: 
     """The pair's C-obstacles from built or cached arrays (the one way for both)."""
     if part.kind == "convex":
         pair.cos = [_from_arrays(arrays, b, part.operand, ctx.c_snapped, ctx.grid, ctx.margin)]
+        _add_enclosed(ctx, b, part, pair)
         return
     pair.cos = _pair_cos(construction, arrays, b, part, ctx.c_ints, ctx.grid, ctx.bounds_g)
     pair.detail = _pair_detail(construction, arrays)
     for co in pair.cos:  # one margin for the pair's union
         co.margin = _margin_from(arrays, ctx.margin)
+
+
+def _add_enclosed(ctx: _Context, b: BodyModel, part: RobotPart, pair: PairModel) -> None:
+    """A closed surface body that encloses a region holds a convex robot part there too:
+    its containment term beside the surface pieces (built, never cached: one mesh)."""
+    if b._encloses is not None and pair.cos:
+        terms = _containment_cos(b, part, ctx.c_ints, ctx.grid, ctx.bounds_g,
+                                 pair.cos[0].obstacle, f"{b.name} x {part.name}")
+        for co in terms:
+            co.margin = pair.cos[0].margin
+        pair.cos += terms
 
 
 def _store(ctx: _Context, key, pair: PairModel, arrays) -> None:
@@ -1082,6 +1149,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                     pair.cos = [_build(b, part.operand, c, grid, margin, sub,
                                        _grown(ctx.grown, margin, part))]
                     arrays = _to_arrays(pair.cos[0]) if store is not None else None
+                    _add_enclosed(ctx, b, part, pair)
                 else:
                     if arrays is None:
                         arrays = _build_pair_arrays(construction, b, part, c_ints, grid,

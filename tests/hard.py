@@ -88,7 +88,8 @@ def l_cells() -> np.ndarray:
 class VoxelCase:
     """A voxel obstacle and a box robot in float coordinates, with the exact reference."""
 
-    def __init__(self, occ, cell, robot_size, transform=lambda x: x, robot_at=(0.0, 0.0, 0.0)):
+    def __init__(self, occ, cell, robot_size, transform=lambda x: x, robot_at=(0.0, 0.0, 0.0),
+                 caps: int = 0, lift: float = 0.0):
         self.occ = np.asarray(occ, bool)
         cell = np.asarray(cell, float)
         V, F = voxel_mesh(self.occ)
@@ -96,6 +97,8 @@ class VoxelCase:
         self.faces = F
         # lattice coordinates per axis as the input floats (cell corners are mesh vertices)
         self.axes = [np.unique(self.vertices[:, a]) for a in range(3)]
+        if caps:  # slivers: the surface bulges by at most ``lift``, never inwards
+            self.vertices, self.faces = with_caps(self.vertices, self.faces, caps, lift)
         half = np.asarray(robot_size, float) / 2
         corners = np.array(list(itertools.product(*[(-h, h) for h in half])))
         self.robot = np.unique(transform(corners + np.asarray(robot_at)) - transform(
@@ -155,6 +158,39 @@ class VoxelCase:
         off[rng.random(m) < 0.1] = 0.0
         p[np.arange(m), axis] += off
         return np.vstack([uni, p])
+
+
+def with_caps(V: np.ndarray, F: np.ndarray, k: int, lift: float = 0.0):
+    """The closed mesh ``(V, F)`` with ``k`` sliver caps: for ``k`` edges (u, v), no two on
+    one triangle, a new vertex m at the edge's midpoint moved ``lift`` outwards (along the sum
+    of the two faces' normals); the face (u, v, a) becomes (u, m, a), (m, v, a) and the cap
+    (v, m, u) closes the surface. With ``lift = 0`` the caps have zero area; with a small lift
+    they snap to zero area. The solid only grows (by at most ``lift``), so an exact reference
+    of the original body is one whose every collision is a true one."""
+    V = np.asarray(V, float)
+    F = [list(f) for f in np.asarray(F, np.int64).tolist()]
+    owner = {}
+    for t, (a, b, c) in enumerate(F):
+        for u, v in ((a, b), (b, c), (c, a)):
+            owner[(u, v)] = t
+    used, new_v, out = set(), [], []
+    for t, (a, b, c) in enumerate(list(F)):
+        if len(new_v) >= k:
+            break
+        u, v, w = a, b, c
+        other = owner.get((v, u))
+        if other is None or t in used or other in used:
+            continue
+        used |= {t, other}
+        n1 = np.cross(V[v] - V[u], V[w] - V[u])
+        x = V[[i for i in F[other] if i not in (u, v)][0]]
+        n2 = np.cross(V[u] - V[v], x - V[v])
+        d = n1 / np.linalg.norm(n1) + n2 / np.linalg.norm(n2)
+        m = len(V) + len(new_v)
+        new_v.append((V[u] + V[v]) / 2 + lift * d / max(np.linalg.norm(d), 1e-300))
+        F[t] = [u, m, w]
+        out += [[m, v, w], [v, m, u]]
+    return np.vstack([V] + [np.asarray(new_v).reshape(-1, 3)]), np.asarray(F + out, np.int64)
 
 
 def voxel_mesh(occ):

@@ -60,6 +60,17 @@ def _two_part_robot() -> Mesh:
     return np.vstack([a[0], b[0]]), np.vstack([a[1], np.asarray(b[1]) + len(a[0])])
 
 
+def _folded_l(size: float = 1.0) -> Mesh:
+    """A closed L with eight sliver caps 1e-12 off its edges, turned: its snapped surface
+    meets itself (the caps fold), so it bounds no valid solid on the grid."""
+    from hard import VoxelCase, l_cells
+
+    R = Rotation.random(random_state=0).as_matrix()
+    case = VoxelCase(l_cells(), (0.5 * size,) * 3, (0.1, 0.1, 0.1), caps=8, lift=1e-12,
+                     transform=lambda x: (x - x.mean(axis=0)) @ R.T)
+    return case.vertices, case.faces
+
+
 L_BRACKET = l_shape(arm=2)
 POST = _box((0.3, 0.3, 2.0))
 SMALL_BOX = _box((0.5, 0.3, 0.4))
@@ -84,6 +95,9 @@ CASES = {c.name: c for c in [
     Case("convex robot off its origin", (L_BRACKET, _shifted(OPEN_BOX, (1.2, 1.2, 0.0)),
                                          _shifted(POST, (-1.5, 1.5, 0.0))),
          _shifted(SMALL_BOX, (16.6, -3.0, 5.0)), reference_point=(16.5, -3.1, 5.0)),
+    # Closed meshes whose snapped surface meets itself: a surface and what it encloses.
+    Case("folded closed body", (_folded_l(),), SMALL_BOX),
+    Case("folded closed robot", (L_BRACKET, _shifted(POST, (-1.5, 1.5, 0.0))), _folded_l(0.4)),
     Case("several bodies", (L_BRACKET, _shifted(OPEN_BOX, (1.2, 1.2, 0.0)),
                             _shifted(POST, (-1.5, 1.5, 0.0))), _u_robot(0.4)),
 ]}

@@ -36,6 +36,8 @@ EXPECTED = {
     "robot parts": {"NCC-CVMS"},
     "robot off its origin": {"triangle pairs"},
     "convex robot off its origin": {"NCC-CVMS", "surface pieces", "CVMS"},
+    "folded closed body": {"surface pieces"},
+    "folded closed robot": {"triangle pairs", "convex ⊕ robot triangles"},
     "several bodies": {"triangle pairs", "NCC-CVMS swapped"},
 }
 

@@ -164,15 +164,21 @@ def test_poses_rotate_about_the_reference_point():
         np.stack([np.eye(3), turn]), np.stack([q, q])), [False, True])
 
 
-def test_self_intersecting_closed_mesh_is_a_surface():
-    V, F = _box([0, 0, 0], [1, 1, 1])
-    V = V.copy()
-    top = np.nonzero((V[:, 2] == 1) & (V[:, 0] == 1) & (V[:, 1] == 1))[0][0]
-    V[top] = [0.5, 0.5, -1.0]  # pulled through the bottom face: faces cross
-    orc = SceneOracle(_scene(_box([0, 0, 0], [0.1, 0.1, 0.1]), [(V, F), _box([5, 5, 5], [6, 6, 6])],
-                             (0.0, 0.0, 0.0)))
-    assert orc.bodies[0].self_intersecting == [0] and not orc.bodies[0].solid
-    assert orc.bodies[1].solid and orc.bodies[1].self_intersecting == []
+def test_self_intersecting_closed_mesh_holds_what_it_encloses():
+    # Two overlapping boxes written as one closed mesh (its surfaces cross): solid where the
+    # winding number is not zero, the overlap (w = 2) included; an inside-out box (w = -1)
+    # is solid too; an open box is a surface.
+    a, b = _box([0, 0, 0], [1, 1, 1]), _box([0.5, 0.5, 0.5], [1.5, 1.5, 1.5])
+    both = (np.vstack([a[0], b[0]]), np.vstack([a[1], b[1] + len(a[0])]))
+    inverted = (_box([5, 5, 5], [6, 6, 6])[0], _box([5, 5, 5], [6, 6, 6])[1][:, ::-1])
+    open_box = (_box([10, 0, 0], [11, 1, 1])[0], _box([10, 0, 0], [11, 1, 1])[1][2:])
+    tiny = _box([-0.01, -0.01, -0.01], [0.01, 0.01, 0.01])
+    for shift in (np.zeros(3), np.array([250.0, 150.0, -300.0])):
+        orc = SceneOracle(_scene(tiny, [both, inverted, open_box], shift))
+        assert [m.solid for m in orc.bodies] == [True, True, False]
+        q = np.array([[0.75, 0.75, 0.75], [0.25, 0.25, 0.25], [1.25, 1.25, 1.25],
+                      [5.5, 5.5, 5.5], [10.5, 0.5, 0.5], [3.0, 3.0, 3.0]]) + shift
+        assert orc.collides(q).tolist() == [True, True, True, True, False, False]
 
 
 # --------------------------------------------------------------------------------------

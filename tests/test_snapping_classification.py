@@ -162,7 +162,8 @@ def test_meaning_changes_are_announced_without_explain(tmp_path, capsys):
     assert main(["build", str(tmp_path / "t.toml"), "-q", "--no-cache", "--explain"]) == 0
     explained = capsys.readouterr().out
     assert "meaning changed for" in plain
-    assert "crossed: a closed body modelled as its surface (its inside counts as free)" in plain
+    assert ("crossed: a closed body modelled as its surface and the region it encloses "
+            "(non-zero winding number of its snapped surface)") in plain
     changes = [ln for ln in plain.splitlines() if ln.startswith(("meaning changed", "  "))]
     assert changes and all(ln in explained.splitlines() for ln in changes)
     assert "tilted: convex" in explained  # bent or not by the scene's grid, still convex
