@@ -363,6 +363,12 @@ def main() -> None:
     body += voxel_family("Thin: the L as a plate 10^-k thick", [f"10^-{k}" for k in thin],
                          lambda p: hard.VoxelCase(L, (0.5, 0.5, 10.0 ** -int(p[4:])), robot),
                          n, rng)
+    body += voxel_family("Slivers: the L with 8 cap triangles (`hard.with_caps`)",
+                         ["zero area", "1e-12 outwards", "1e-12 outwards, at 10^5"],
+                         lambda p: hard.VoxelCase(
+                             L, cell, robot, caps=8, lift=0.0 if p == "zero area" else 1e-12,
+                             transform=(lambda x: x + 1e5) if p.endswith("10^5") else
+                             (lambda x: x)), n, rng)
     body += voxel_family("Flat robot against the L", ["panel (z = 0)", "rod (along x)"],
                          lambda p: hard.VoxelCase(L, cell, (0.3, 0.3, 0.0) if p.startswith("panel")
                                         else (0.3, 0.0, 0.0)), n, rng)
@@ -418,7 +424,12 @@ def main() -> None:
         "2 ulps of the coordinates: at 10^9 and 10^12 the bound follows the floats' spacing). "
         "Thin: a closed obstacle thinner than a grid step is answered by its surface, one "
         "grown convex piece per triangle (`kind='union'`), since the robot, thicker than the "
-        "plate, can never lie inside it.",
+        "plate, can never lie inside it (a robot that could fit inside also gets the "
+        "containment term of the snapped surface's winding number).",
+        "- Slivers: eight edges of the L split at their midpoints by a cap triangle of zero "
+        "area (or moved 1e-12 outwards, so that snapping flattens it): the repair of "
+        "`ClosedMesh` keeps the solid. Turned slivers that snapping folds through the surface "
+        "are in the metamorphic sweep (`folded closed body`, `folded closed robot`).",
         "",
     ]
     text = "\n".join(head + summary() + body)

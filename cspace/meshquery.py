@@ -769,8 +769,8 @@ class MeshCO:
         zlo, zhi = self.lo[:, 2].min(), self.hi[:, 2].max()
         Ly, Lz = max(yhi - ylo, 1e-300), max(zhi - zlo, 1e-300)
         cells = 2.0 * m
-        while True:
-            ny = int(np.clip(np.sqrt(cells * Ly / Lz), 1, 4096))
+        while True:  # ny <= cells, so the count shrinks to one cell (a mesh flat in z too)
+            ny = int(np.clip(np.sqrt(cells * Ly / Lz), 1, min(4096.0, max(cells, 1.0))))
             nz = int(np.clip(cells / ny, 1, 4096))
             self._grid = (float(ylo), float(zlo), float(ny / Ly), float(nz / Lz), ny, nz)
             if ny * nz == 1 or _compiled.cell_entries(self.lo, self.hi, *self._grid) <= 32 * m:

@@ -423,21 +423,23 @@ def _mesh_arrays(obj) -> tuple[np.ndarray, np.ndarray]:
     return np.asarray(obj[0], dtype=np.float64), np.asarray(obj[1], dtype=np.int64)
 
 
-def _closed_2cycle(V: np.ndarray, F: np.ndarray) -> bool:
-    """Do the triangles, vertices welded by exact float position, form a closed 2-cycle
-    (every directed edge balanced by its reverse: the mesh queries' own check)?"""
+def _closed_2cycle(V: np.ndarray, F: np.ndarray):
+    """The triangles with vertices welded by exact float position, ``(U, G)``, when they form
+    a closed 2-cycle (every directed edge balanced by its reverse: the mesh queries' own
+    check), else None."""
     from .errors import InvalidMeshError
     from .meshquery import _closed_mesh_arrays
 
     V = np.asarray(V, dtype=np.float64).reshape(-1, 3)
     if F.min() < 0 or F.max() >= len(V):
-        return False
+        return None
     U, inv = np.unique(V, axis=0, return_inverse=True)
+    G = inv.reshape(-1)[F]
     try:
-        _closed_mesh_arrays(U, inv.reshape(-1)[F], "obstacle")
+        _closed_mesh_arrays(U, G, "obstacle")
     except InvalidMeshError:
-        return False
-    return True
+        return None
+    return U, G
 
 
 def _hull_excess(*operands) -> float:
@@ -448,7 +450,7 @@ def _hull_excess(*operands) -> float:
 
 def _wider_somewhere(R: np.ndarray, O: np.ndarray) -> bool:
     """Is the robot wider than the obstacle's box on some axis (exact, on the floats)? Then
-    it can never lie inside the obstacle."""
+    it can never lie inside the obstacle (no containment term is needed)."""
     for k in range(3):
         if (Fraction(float(R[:, k].max())) - Fraction(float(R[:, k].min()))
                 > Fraction(float(O[:, k].max())) - Fraction(float(O[:, k].min()))):
@@ -870,7 +872,7 @@ class CSpaceObstacle:
     @classmethod
     def _grown(cls, obstacle, robot, c, grid: Grid, margin: Margin, progress=None):
         """:meth:`build` with the margin decided (from the float operands)."""
-        from .errors import DegenerateError, NonManifoldError
+        from .errors import DegenerateError, NonManifoldError, SelfIntersectionError
         from .mesh import as_mesh
 
         rgrid = grid.for_robot(_vertices_of(robot), c)
@@ -901,7 +903,10 @@ class CSpaceObstacle:
             except DegenerateError as exc:  # thinner than a grid step somewhere
                 return cls._thin(obstacle, robot, c, grid, rgrid, margin, exc)
             B = R.reflected(c) if isinstance(R, ConvexPolytope) else rgrid.snap(c) - R.ints
-            S, m = grown_mesh_sum(O, B, margin, progress)
+            try:
+                S, m = grown_mesh_sum(O, B, margin, progress)
+            except SelfIntersectionError as exc:  # snapping folded it: its surface and inside
+                return cls._thin(obstacle, robot, c, grid, rgrid, margin, exc)
             out = cls.from_mesh(S.vertices, S.faces, obstacle=O, robot=R,
                                 reference_point=c_snapped, grid=grid, sum=S, margin=m)
             out.excess = _hull_excess(R)
@@ -915,26 +920,28 @@ class CSpaceObstacle:
 
     @classmethod
     def _thin(cls, obstacle, robot, c, grid: Grid, rgrid: Grid, margin: Margin, why):
-        """A closed obstacle with features thinner than a grid step (a plate 1e-9 thick): its
-        snapped solid does not exist, but its surface does. The C-obstacle of a closed solid
-        is that of its surface, ``union over triangles t of t ⊕ (c - R)``, plus the
-        positions where the robot lies wholly inside it; those need the robot to fit in the
-        obstacle's box, so when it does not (on some axis the robot is wider), the union of
-        the triangle pieces, each grown by ``margin``, is the C-obstacle, exactly and
-        conservatively (``kind='union'``, one convex piece per triangle). Otherwise ``why``
-        (the named error that the snapped solid gave) stands.
+        """A closed obstacle whose snapped solid does not exist (features thinner than a grid
+        step, a plate 1e-9 thick; or a surface that snapping folds through itself) while its
+        surface does. The C-obstacle of a closed solid is that of its surface, ``union over
+        triangles t of t ⊕ (c - R)`` (each piece grown by ``margin``: ``kind='union'``, one
+        convex piece per triangle), plus the positions where the robot lies wholly inside it:
+        when the robot fits in the obstacle's box, the containment term ``O + c - r`` for one
+        robot vertex r, a mesh C-obstacle on the snapped closed 2-cycle whose inside is its
+        non-zero winding number (exact). Snapping moves the surface by at most the snapping
+        bound, so away from it the snapped winding number is the input's, and a robot nearer
+        to it meets the grown pieces. Not a closed 2-cycle: ``why`` (the named error the
+        snapped solid gave) stands.
         """
         from .errors import DegenerateError
 
         if not _is_mesh(obstacle):
             raise why
         V, F = _mesh_arrays(obstacle)
-        if F.ndim != 2 or F.shape[1:] != (3,) or not len(F) or not _closed_2cycle(V, F):
+        cycle = (_closed_2cycle(V, F) if F.ndim == 2 and F.shape[1:] == (3,) and len(F)
+                 else None)
+        if cycle is None:
             raise why  # not a closed surface: the snapped solid's error is the answer
         Rv = np.asarray(_vertices_of(robot), dtype=np.float64).reshape(-1, 3)
-        if not _wider_somewhere(Rv, V[np.unique(F)]):
-            raise type(why)(f"{why} (its surface would stand for it only if the robot could not "
-                            "fit inside it)") from None
         try:
             hull = _as_convex(robot, rgrid, "robot")
             excess, R = _hull_excess(hull), margin.grow(hull)
@@ -953,6 +960,15 @@ class CSpaceObstacle:
                      margin=margin)
             co.excess = excess
             co.semantics = (False, "convex")  # FCL: the obstacle's triangles, as a surface
+            cos.append(co)
+        U, G = cycle
+        if not _wider_somewhere(Rv, U):  # the robot may lie wholly inside: what O encloses
+            ints = grid.snap(U) + (rgrid.snap(c) - rgrid.snap(Rv[0]))  # O + c - r, exact
+            co = cls.from_mesh(grid.to_float(ints), G, obstacle=_Mesh(U, G, "obstacle"),
+                               robot=R, reference_point=c_snapped, grid=grid, margin=margin,
+                               name="containment")
+            co.excess = excess
+            co.semantics = (True, "convex")  # FCL: the obstacle as the solid it encloses
             cos.append(co)
         out = cls.union(cos)
         out.thin = str(why)

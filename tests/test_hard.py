@@ -299,18 +299,27 @@ def test_features_thinner_than_the_grid_are_answered_by_their_surface(k):
 
 
 def test_a_flat_mesh_is_its_hull_only_when_it_is_convex():
-    # A robot that could lie inside the collapsed L (it fits in the L's box on every axis)
-    # keeps the named error: the surface alone would miss the positions inside.
+    # A robot that could lie inside the collapsed L (it fits in the L's box on every axis):
+    # the grown triangle pieces and the containment term of the snapped (flat) surface hold
+    # every position inside, since the robot there lies within the snapping deviation of the
+    # surface (the plate is 1e-9 thick); never hulled.
+    from oracles import raw_scene
     from zoo import voxel_solid
 
-    from cspace.errors import DegenerateError
+    from cspace.fcl_check import SceneOracle
 
     occ = np.zeros((3, 3, 1), dtype=bool)
     occ[:, 0, 0] = occ[0, :, 0] = True
     V, F = voxel_solid(occ, 1.0)
     box = np.array([[x, y, z] for x in (-.15, .15) for y in (-.15, .15) for z in (-.15, .15)])
-    with pytest.raises(DegenerateError, match="only if the robot could not fit inside"):
-        CSpaceObstacle.build((V * [0.5, 0.5, 1e-9], F), box * 1e-12)
+    plate, tiny = (V * [0.5, 0.5, 1e-9], F), box * 1e-12
+    co = CSpaceObstacle.build(plate, tiny)
+    assert co.kind == "union" and co.thin
+    inside = np.array([[0.2, 0.2, 5e-10], [1.2, 0.2, 2e-10], [0.2, 1.3, 8e-10]])
+    outside = np.array([[1.2, 1.2, 5e-10], [0.2, 0.2, 1e-3]])
+    oracle = SceneOracle(raw_scene(plate, (tiny, _box_faces(tiny))))
+    assert oracle.collides(inside).all() and co.contains(inside).all()
+    assert not oracle.collides(outside).any() and not co.contains(outside).any()
     # A panel modelled two-sided (each triangle twice, opposite windings) is a flat convex
     # robot: accepted, and FCL agrees.
     P = np.array([[0, 0, 0], [.6, 0, 0], [.6, .4, 0], [0, .4, 0]], dtype=np.float64)
