@@ -146,18 +146,10 @@ def write_dae(path: Path, bodies) -> Path:
     earlier body's instances that geometry again (a shared ``<geometry>``). The vertices are
     stored so that Assimp's placement ``Z_UP @ node_matrix @ v`` gives back the world
     vertices (to float32 rounding)."""
-    import collada
-    from collada import geometry, material, scene, source
+    from collada import geometry, scene, source
+    from test_meshfile import _doc  # one Collada document with one material
 
-    doc = collada.Collada()
-    doc.assetInfo.upaxis = "Z_UP"
-    doc.assetInfo.unitmeter = 1.0
-    doc.assetInfo.unitname = "meter"
-    doc.assetInfo.save()
-    effect = material.Effect("effect0", [], "phong", diffuse=(0.6, 0.6, 0.6))
-    mat = material.Material("material0", "mat", effect)
-    doc.effects.append(effect)
-    doc.materials.append(mat)
+    doc, mat = _doc("Z_UP", 1.0)
     geoms, nodes = {}, []
     for name, mesh, m in bodies:
         V, F = mesh
