@@ -886,14 +886,9 @@ def convex_within_bound(mesh, bend: float | None = None):
     m, n = len(faces), int(ints.shape[0])
     P = [tuple(int(c) for c in row) for row in ints.tolist()]
 
-    def sub(a, b):
-        return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
-
-    def cross(a, b):
-        return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
-
-    def dot(a, b):
-        return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+    from .arrangement import _cross3 as cross  # exact on Python-int tuples
+    from .arrangement import _dot3 as dot
+    from .arrangement import _sub as sub
 
     flipped = faces.copy()
     total = Fraction(0)  # the sum over rounds of the round's largest gap, grid steps
