@@ -109,10 +109,12 @@ class BodyModel:
     error : str
         Why the build failed ('' if it did not).
     changed : str
-        How modelling changed what the body means ('' when it did not): a closed body
-        modelled as its surface (its inside counts as free), or a bent convex body modelled by
-        its hull (within a stated excess, counted in ``error_bound``). Announced in the normal
-        output of ``cspace build``/``plan`` and in :meth:`SceneModel.explain` alike.
+        How modelling changed what the body means ('' when it did not): a closed body whose
+        snapped surface bounds no valid solid, modelled as its surface and the region it
+        encloses (non-zero winding number); a closed but inconsistently wound body modelled
+        as its surface (its inside counts as free); or a bent convex body modelled by its hull
+        (within a stated excess, counted in ``error_bound``). Announced in the normal output
+        of ``cspace build``/``plan`` and in :meth:`SceneModel.explain` alike.
     """
 
     name: str
