@@ -10,7 +10,7 @@ $(PY):
 	$(PYTHON) -m venv $(VENV)
 
 # Re-install (and rebuild the compiled kernels) when the package metadata or a kernel changes.
-$(STAMP): pyproject.toml setup.py Makefile $(wildcard cspace/_kernels/*.pyx) | $(PY)
+$(STAMP): pyproject.toml setup.py Makefile $(wildcard cspace/geometry/_kernels/*.pyx) | $(PY)
 	$(PY) -m pip install --upgrade pip
 	$(PY) -m pip install -e '.[dev,peers,bench]'
 	touch $(STAMP)

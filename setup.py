@@ -20,11 +20,11 @@ if sys.platform == "win32":
 else:
     FLAGS = ["-O3", "-ffp-contract=off"] + ([] if PORTABLE else ["-march=native"])
 
-KERNELS = ["arrangement", "meshquery", "planar", "trim"]  # cspace/_kernels/<name>.pyx accelerates cspace/<name>.py
+KERNELS = ["arrangement", "meshquery", "planar", "trim"]  # cspace/geometry/_kernels/<name>.pyx (see its __init__)
 
 setup(
     ext_modules=cythonize(
-        [Extension(f"cspace._kernels.{k}", [f"cspace/_kernels/{k}.pyx"],
+        [Extension(f"cspace.geometry._kernels.{k}", [f"cspace/geometry/_kernels/{k}.pyx"],
                    extra_compile_args=FLAGS) for k in KERNELS],
         language_level=3,
     ),

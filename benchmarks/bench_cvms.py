@@ -7,7 +7,7 @@ degenerate case) and with B rotated by a fixed generic rotation.
 
 Methods, each timed in this process on the same snapped operands:
 - ``cvms``: :func:`cspace.convex_minkowski_sum` (exact, polygon facets);
-- ``hull``: :func:`cspace.convex.hull_minkowski_sum`, the exact hull of all sums (Qhull
+- ``hull``: :func:`cspace.minkowski.cvms.hull_minkowski_sum`, the exact hull of all sums (Qhull
   candidate planes certified with exact predicates; same exact output as cvms);
 - ``qhull``: scipy's Qhull on the float sums alone (not exact, triangles only), for scale;
 - ``manifold``: manifold3d's ``minkowski_sum`` (float, if the ``peers`` extra is installed).
@@ -31,8 +31,9 @@ import trimesh
 from scipy.spatial import ConvexHull
 
 import cspace
-from cspace.convex import ConvexPolytope, convex_minkowski_sum, hull_minkowski_sum
-from cspace.exact import Grid
+from cspace.mesh.convex import ConvexPolytope
+from cspace.minkowski.cvms import convex_minkowski_sum, hull_minkowski_sum
+from cspace.geometry.exact import Grid
 
 try:
     import manifold3d

@@ -411,7 +411,7 @@ def main() -> None:
         "farthest such sample's distance from the true C-obstacle (must stay within the stated "
         "bound for cspace). Samples: "
         f"{n}, half on the reference boundary moved by ±10^U(-12,-1) of the scene size.",
-        "- *cspace*: `CSpaceObstacle.build` (outward rounding: `cspace.margin`). "
+        "- *cspace*: `CSpaceObstacle.build` (outward rounding: `cspace.cobstacle.margin`). "
         "*conservative=False*: the exact C-obstacle of the snapped input, no growth (two-sided). "
         "Volume error: of the stored C-obstacle (exact volume of its float surface or polytope) "
         "against the reference's exact volume; '–' where it is a union of several.",

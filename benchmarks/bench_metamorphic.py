@@ -6,7 +6,7 @@ random (shifts up to 10^6 in random directions, scales by powers of two and non-
 factors, random rotations, permuted bodies and triangles), modelled by
 :func:`cspace.model_scene`, and its membership answers at ``--samples`` translations (a
 third uniform, two thirds near contact, drawn from the raw meshes) are judged by
-:class:`cspace.fcl_check.SceneOracle` on the moved scene's raw meshes.
+:class:`cspace.check.oracle.SceneOracle` on the moved scene's raw meshes.
 
 Usage: ``python benchmarks/bench_metamorphic.py [--moves N] [--samples N] [--out PATH]``.
 Writes (replaces) the section ``## Metamorphic sweep`` of
@@ -33,7 +33,7 @@ import metamorphic as mm  # noqa: E402
 
 import cspace  # noqa: E402
 from cspace import model_scene  # noqa: E402
-from cspace.fcl_check import SceneOracle  # noqa: E402
+from cspace.check.oracle import SceneOracle  # noqa: E402
 
 REPORT = ROOT / "benchmarks" / "reports" / "hard_cases.md"
 HEADING = "## Metamorphic sweep"
@@ -84,7 +84,7 @@ def report(rows: list[dict], seconds: float, moves: int, n: int, buggy: list[dic
         "Each case (one per construction, `tests/metamorphic.py`) moved at random "
         f"{moves} times: shifts up to 10^6 in random directions, scales 1, 2^-5, 2^7, 3.7, "
         "0.013 and 1000/3, random rotations, bodies and triangles permuted. The oracle is "
-        "`cspace.fcl_check.SceneOracle` on the moved scene's raw meshes (FCL's broad phase "
+        "`cspace.check.oracle.SceneOracle` on the moved scene's raw meshes (FCL's broad phase "
         "and BVHs, winding numbers per connected component): nothing of the C-space. *false "
         "collision beyond the bound*: FCL's distance larger than the model's `error_bound` "
         "(plus FCL's float band); *worst*: the farthest false collision over the bound.",

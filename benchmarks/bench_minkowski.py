@@ -1,4 +1,4 @@
-"""Benchmark: the exact Minkowski sum A ⊕ B (NCC-CVMS, ``cspace.trim.minkowski_sum``) against
+"""Benchmark: the exact Minkowski sum A ⊕ B (NCC-CVMS, ``cspace.minkowski.sum.minkowski_sum``) against
 manifold3d's ``Manifold.minkowski_sum`` on the same snapped operands, one run each.
 
 Cases (issue #4's suite): torus (2304 triangles) ⊕ icosphere (320 facets), torus ⊕ box,
@@ -75,7 +75,7 @@ def operands(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         build, bp = fixed[name]
         v, f = build()
         return v, f, bp
-    from cspace.mesh import ClosedMesh
+    from cspace.mesh.closed import ClosedMesh
 
     m = ClosedMesh.load(SHARED / zoo.SHARED_CLOSED_MESHES[a])
     return m.vertices, m.faces, zoo.scaled_robots(float(np.ptp(m.vertices, axis=0).max()))[b]
@@ -98,9 +98,9 @@ def child(tool: str, name: str, warm: bool = False) -> dict:
     if warm:
         child(tool, WARMUP_CASE if name != WARMUP_CASE else "l_shape ⊕ hull20")
 
-    from cspace.convex import ConvexPolytope
-    from cspace.exact import Grid
-    from cspace.mesh import ClosedMesh
+    from cspace.mesh.convex import ConvexPolytope
+    from cspace.geometry.exact import Grid
+    from cspace.mesh.closed import ClosedMesh
 
     v, f, b = operands(name)
     grid = Grid.for_points(v, b)
@@ -108,7 +108,7 @@ def child(tool: str, name: str, warm: bool = False) -> dict:
     B = ConvexPolytope.from_points(b, grid=grid, name="B")
     out: dict = {"tool": tool, "case": name, "a_tris": int(len(A.faces)), "b_facets": int(B.n_facets)}
     if tool == "cspace":
-        from cspace.trim import minkowski_sum
+        from cspace.minkowski.sum import minkowski_sum
 
         t = time.perf_counter()
         S = minkowski_sum(A, B)

@@ -27,8 +27,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))  # the problem generators are the tests' own
 
 from cspace import load_scene, model_scene  # noqa: E402
-from cspace.fcl_check import path_collisions  # noqa: E402
-from cspace.ompl_plugin import plan  # noqa: E402
+from cspace.check.cross_check import path_collisions  # noqa: E402
+from cspace.planning.plan import plan  # noqa: E402
 
 BEGIN = "<!-- bench_ompl_app: begin -->"
 END = "<!-- bench_ompl_app: end -->"
@@ -39,7 +39,7 @@ def problems(tmp: Path) -> dict:
     import test_robot_parts as rp
     from zoo import l_shape, voxel_solid
 
-    from cspace.scene import Scene
+    from cspace.scene.scene import Scene
 
     out = {"U round a post (Z_UP .dae, unit 0.5)": load_scene(t._u_around_post(tmp))}
     wall = rp._box((0.4, 3.0, 1.0), centre=(0.0, -0.8, 0.0))

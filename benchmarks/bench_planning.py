@@ -5,7 +5,7 @@
   loaded from the disk cache), on the shipped scenes and the shared-data scenes.
 - Throughput: seconds per state-validity call (``CSpaceValidityChecker.isValid`` vs an
   ``ob.StateValidityChecker`` calling FCL on the scene's raw meshes as loaded: a
-  ``cspace.fcl_check.SceneOracle`` per body behind an AABB broad phase, nothing of the
+  ``cspace.check.oracle.SceneOracle`` per body behind an AABB broad phase, nothing of the
   C-space) on uniform states of each scene, and per exact ``checkMotion`` call. The FCL
   column includes the oracle's containment test (numpy winding numbers of a body's solid
   components): on fcl-env, one triangle-soup body with 27 closed parts, that dominates.
@@ -42,9 +42,10 @@ from pathlib import Path
 import numpy as np
 
 import cspace
-from cspace.fcl_check import SceneOracle
-from cspace.model import model_scene
-from cspace.ompl_plugin import _classes, narrow_passage_samples, plan
+from cspace.check.oracle import SceneOracle
+from cspace.scene.model import model_scene
+from cspace.planning.ompl_plugin import _classes, narrow_passage_samples
+from cspace.planning.plan import plan
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))  # zoo: the shared test scenes
@@ -117,7 +118,7 @@ def _fcl_checker_class():
 def _setup(cs, bounds, checker_kind):
     from ompl import base as ob
 
-    from cspace.ompl_plugin import state_space
+    from cspace.planning.ompl_plugin import state_space
 
     space = state_space(bounds)
     si = ob.SpaceInformation(space)
@@ -228,8 +229,8 @@ def turning_problems() -> dict:
     space)`` (the scenes of ``tests/test_turning.py``, from ``tests/zoo.py``)."""
     from zoo import rod_and_holed_wall, thin_walled
 
-    from cspace.ompl_plugin import default_slices
-    from cspace.turning import Orientations
+    from cspace.planning.plan import default_slices
+    from cspace.planning.orientations import Orientations
 
     piano = load(ROOT / "scenes" / "piano.toml")
     thin = thin_walled(piano, 0.005)
@@ -246,8 +247,8 @@ TURN_TIME = {"piano": 5.0, "piano, 5 mm wall": 5.0, "rod through a hole": 20.0}
 def turning_section() -> list[str]:
     from scipy.spatial.transform import Rotation
 
-    from cspace.fcl_check import pose_path_collisions
-    from cspace.ompl_plugin import plan_sampled
+    from cspace.check.cross_check import pose_path_collisions
+    from cspace.planning.plan import plan_sampled
 
     load0 = os.getloadavg()
     lines = [f"## Planning with turns ({len(TURN_SEEDS)} seeds, RRTConnect)", "",

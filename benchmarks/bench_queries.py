@@ -39,9 +39,9 @@ sys.path.insert(0, str(ROOT / "tests"))
 import fcl  # noqa: E402
 
 import zoo  # noqa: E402
-from cspace.fcl_check import FclOracle, fcl_convex  # noqa: E402
-from cspace.mesh import ClosedMesh  # noqa: E402
-from cspace.obstacle import CSpaceObstacle  # noqa: E402
+from cspace.check.fcl import FclOracle, fcl_convex  # noqa: E402
+from cspace.mesh.closed import ClosedMesh  # noqa: E402
+from cspace.cobstacle.obstacle import CSpaceObstacle  # noqa: E402
 
 SHARED = ROOT.parent / "shared" / "data"
 BIG = "trap"  # 3212 triangles, 12848 after one subdivision

@@ -3,8 +3,8 @@
 The world: ``N`` obstacle bodies in a cube whose side grows as ``N^(1/3)`` (density fixed):
 random boxes, and every 50th body a small non-convex solid (the L-shape of ``tests/zoo.py``,
 NCC-CVMS). The robot: a 0.3 x 0.15 x 0.1 box turning about z in ``S`` slices
-(:meth:`cspace.turning.Slices.about`). Every configuration builds all ``N x S`` body-slices
-with :func:`cspace.scale.build_slices` into an empty cache folder (so every C-obstacle is built
+(:meth:`cspace.planning.orientations.Slices.about`). Every configuration builds all ``N x S`` body-slices
+with :func:`cspace.planning.scale.build_slices` into an empty cache folder (so every C-obstacle is built
 and written once):
 
 - **1 process**: no executor (this process models and builds);
@@ -60,7 +60,7 @@ def synthetic_world(n: int, seed: int = 0):
     import trimesh
     import zoo
 
-    from cspace.scene import Body, Scene
+    from cspace.scene.scene import Body, Scene
 
     rng = np.random.default_rng(seed)
     side = 10.0 * (n / 1000) ** (1 / 3)
@@ -88,7 +88,7 @@ def _cache_size(folder: Path) -> tuple[int, int]:
 
 
 def _run(scene, slices, make_executor, label: str, cache: Path) -> dict:
-    from cspace.scale import build_slices
+    from cspace.planning.scale import build_slices
 
     load0 = os.getloadavg()
     cpu0 = time.process_time()  # this process's CPU (all its threads): the caller's share
@@ -127,8 +127,8 @@ def _agree(rows: list, scene, n_queries: int = 2000) -> bool:
 
 
 def measure(n: int, n_slices: int) -> dict:
-    from cspace.scale import executor_for
-    from cspace.turning import Slices
+    from cspace.planning.scale import executor_for
+    from cspace.planning.orientations import Slices
 
     scene = synthetic_world(n)
     slices = Slices.about(n_slices)
@@ -170,7 +170,7 @@ def report(results: list, quick: bool, note: str) -> str:
         lines += [note, ""]
     lines += ["A synthetic world of N bodies (random boxes; every 50th a small non-convex "
               "L-shape built by NCC-CVMS) and a 0.3 x 0.15 x 0.1 box robot turning about z, "
-              "built with `cspace.scale.build_slices` into an empty cache folder per "
+              "built with `cspace.planning.scale.build_slices` into an empty cache folder per "
               "configuration. *Build* is wall time from the first slice to the last C-space; "
               "*start* is the executor's start-up (processes, cluster), not included. "
               "*Load* is `os.getloadavg()` (1 min) before and after: this machine is shared, "

@@ -26,9 +26,9 @@ Check methods (one table per scene, chart ``speed_vs_error_checks.png``): state 
 and motion validation for a planner on short motions near the obstacles:
 
 - *cspace, N bits*: ``CSpace.contains`` and the exact continuous ``CSpace.segment_free`` (what
-  ``cspace.ompl_plugin``'s checker and motion validator call), batched;
+  ``cspace.planning.ompl_plugin``'s checker and motion validator call), batched;
 - *FCL, discrete r*: ``fcl.collide`` per state on the raw float input (a
-  ``cspace.fcl_check.FclOracle`` per obstacle body against the robot mesh: solid semantics,
+  ``cspace.check.fcl.FclOracle`` per obstacle body against the robot mesh: solid semantics,
   behind a bounding-box broad phase; nothing of the C-space), a motion valid when every
   state sampled at spacing ``r × S`` (r = 0.1 ... 0.0001; both ends included) is free;
 - *voxels, h = S/k*: one look-up per state; a motion valid when every state sampled at spacing
@@ -37,7 +37,7 @@ and motion validation for a planner on short motions near the obstacles:
 Errors, against an exact answer:
 
 - Truth for a state q: the exact rational reference of ``tests/hard.py`` (``VoxelCase``,
-  ``TiltCase``) where there is one; otherwise FCL (``cspace.fcl_check.FclOracle`` on the float
+  ``TiltCase``) where there is one; otherwise FCL (``cspace.check.fcl.FclOracle`` on the float
   input: collide, and distance where free). A point within ``BAND × S`` of the boundary
   (FCL's distance where FCL says free, the finest cspace C-obstacle's signed distance where it
   says collision) is undecidable and excluded; the report gives how many.
@@ -108,7 +108,8 @@ import zoo  # noqa: E402
 
 import cspace  # noqa: E402
 from cspace import CSpace, CSpaceObstacle, Grid  # noqa: E402
-from cspace.fcl_check import FclOracle, _near_surface  # noqa: E402
+from cspace.check.fcl import FclOracle
+from cspace.check.cross_check import _near_surface  # noqa: E402
 
 REPORTS = ROOT / "benchmarks" / "reports"
 SHARED = ROOT.parent / "shared" / "data"
@@ -368,7 +369,7 @@ def construction_inputs(quick: bool) -> list[Input]:
         path = SHARED / zoo.SHARED_CLOSED_MESHES[mesh]
         if not path.exists():
             continue
-        from cspace.mesh import ClosedMesh
+        from cspace.mesh.closed import ClosedMesh
 
         m = ClosedMesh.load(path)
         # writable copies: manifold3d's binding rejects read-only arrays
@@ -659,7 +660,7 @@ def check_scenes(quick: bool) -> list[CheckScene]:
     singles = [("L bracket ⊕ box (hard.VoxelCase)", L.vertices, L.faces, L.robot, L)]
     path = SHARED / zoo.SHARED_CLOSED_MESHES["bunny-128"]
     if not quick and path.exists():
-        from cspace.mesh import ClosedMesh
+        from cspace.mesh.closed import ClosedMesh
 
         m = ClosedMesh.load(path)
         # writable copies: manifold3d's binding rejects read-only arrays

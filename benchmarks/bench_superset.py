@@ -33,10 +33,10 @@ import zoo  # noqa: E402
 from oracles import FclSolid, winding_number  # noqa: E402
 
 import cspace  # noqa: E402
-from cspace.convex import ConvexPolytope  # noqa: E402
-from cspace.exact import Grid  # noqa: E402
-from cspace.mesh import ClosedMesh  # noqa: E402
-from cspace.superset import minkowski_superset  # noqa: E402
+from cspace.mesh.convex import ConvexPolytope  # noqa: E402
+from cspace.geometry.exact import Grid  # noqa: E402
+from cspace.mesh.closed import ClosedMesh  # noqa: E402
+from cspace.minkowski.superset import minkowski_superset  # noqa: E402
 
 try:
     import manifold3d

@@ -3,7 +3,7 @@
 A robot R (any mesh, translating at a fixed orientation) meets an obstacle O exactly
 when its reference point lies in the C-obstacle ``O ⊕ (-R)``. cspace computes these
 Minkowski sums exactly: inputs are snapped to a stated dyadic grid and every decision is an
-exact predicate (:mod:`cspace.exact`).
+exact predicate (:mod:`cspace.geometry.exact`).
 
 Public API
 ----------
@@ -19,30 +19,38 @@ Public API
   polyhedron is closed pieces meeting at non-manifold edges or vertices.
 - :class:`CSpaceObstacle`, :class:`CSpace` — C-obstacles and exact queries over translations
   (``contains``, ``signed_distance``, ``segment_free``, ``first_contact``). FCL cross-checks:
-  :mod:`cspace.fcl_check`.
+  :mod:`cspace.check`.
 - :func:`load_scene` → :class:`Scene` — scene files: our TOML, OMPL.app ``.cfg``, Parasol
   ``.env``/``.query``.
 - :func:`model_scene` → :class:`SceneModel` — what a scene needs: bodies split, duplicates
   dropped, each body convex / solid / surface / dropped with its reason, C-obstacles built
-  through the disk cache (:mod:`cspace.cache`).
+  through the disk cache (:mod:`cspace.scene.cache`).
 - the errors of :mod:`cspace.errors`.
+
+The package's layers, bottom up (imports point down only; ``docs/architecture.md``):
+:mod:`cspace.geometry` (exact kernel) ← :mod:`cspace.mesh` (what a body is) ←
+:mod:`cspace.minkowski` (CVMS, NCC-CVMS) ← :mod:`cspace.cobstacle` (C-obstacles and queries) ←
+:mod:`cspace.scene` (scene files, the scene model, the cache) ← :mod:`cspace.check` (FCL oracle),
+:mod:`cspace.viz` (drawing) ← :mod:`cspace.planning` (OMPL, turning, scale-out) ← :mod:`cspace.cli`.
 
 Drawing lives in :mod:`cspace.viz` (meshcat ``SceneView``, offline HTML, screenshots); it
 imports meshcat only when used.
 """
 
-from .convex import FACET_KINDS, ConvexPolytope, MinkowskiSum, convex_minkowski_sum
 from . import errors
+from ._version import __version__
 from .errors import *  # noqa: F403 (the error classes are public)
-from .exact import Grid
-from .mesh import ClosedMesh, as_mesh
-from .model import SceneModel, model_scene
-from .obstacle import CSpace, CSpaceObstacle
-from .scene import Body, Scene, load_scene
-from .superset import SUPERSET_KINDS, Superset, minkowski_superset
-from .trim import SumPolyhedron, SumUnion, minkowski_sum
-
-__version__ = "0.1.0"
+from .geometry.exact import Grid
+from .mesh.closed import ClosedMesh, as_mesh
+from .mesh.convex import ConvexPolytope
+from .minkowski.cvms import FACET_KINDS, MinkowskiSum, convex_minkowski_sum
+from .minkowski.polyhedron import SumPolyhedron, SumUnion
+from .minkowski.sum import minkowski_sum
+from .minkowski.superset import SUPERSET_KINDS, Superset, minkowski_superset
+from .cobstacle.obstacle import CSpaceObstacle
+from .scene.files import load_scene
+from .scene.model import CSpace, SceneModel, model_scene
+from .scene.scene import Body, Scene
 
 __all__ = [
     "__version__",

@@ -8,22 +8,22 @@
   genus, non-convex) and a convex shape B (hulled), with holes and non-manifold contacts
   reported; ``--reflect-b`` as above; per-stage times with ``--stats``; ``--workers N``
   processes for the large stages.
-- ``cspace check SCENE`` — :func:`cspace.fcl_check.cross_check` of the scene's C-obstacles
+- ``cspace check SCENE`` — :func:`cspace.check.cross_check.cross_check` of the scene's C-obstacles
   against FCL (membership and distance on random translations).
-- ``cspace build SCENE`` — :func:`cspace.model.model_scene`: model the scene (which bodies
+- ``cspace build SCENE`` — :func:`cspace.scene.model.model_scene`: model the scene (which bodies
   are convex, solid, surface or dropped, and why: ``--explain``) and build the C-obstacles
-  through the disk cache (:mod:`cspace.cache`; ``--no-cache``); progress on stderr
+  through the disk cache (:mod:`cspace.scene.cache`; ``--no-cache``); progress on stderr
   (``--quiet``); ``-o`` writes the C-obstacle meshes. ``--workers N`` builds in N processes,
-  ``--scheduler tcp://host:8786`` on a Dask cluster (:func:`cspace.scale.executor_for`).
-- ``cspace plan SCENE`` — the same modelling, then :func:`cspace.ompl_plugin.plan`: an OMPL
+  ``--scheduler tcp://host:8786`` on a Dask cluster (:func:`cspace.planning.scale.executor_for`).
+- ``cspace plan SCENE`` — the same modelling, then :func:`cspace.planning.plan.plan`: an OMPL
   planner with the exact validity checker and motion validator; the path is re-proved
   exactly and written out. ``--explain`` prints the model first. ``--slices N`` (turns about
   one axis) or ``--orientations N`` (free flying) let the robot turn, every translation and
-  turn in place certified (:func:`cspace.ompl_plugin.plan_turning`); a scene whose goal
+  turn in place certified (:func:`cspace.planning.plan.plan_turning`); a scene whose goal
   orientation differs from the start's is planned that way by default (36 slices;
   ``--no-turns`` keeps the start's). ``--workers`` / ``--scheduler`` build through an
   executor, as for ``build``.
-- ``cspace view SCENE`` — :func:`cspace.viz.draw_scene`: an offline HTML page of a scene
+- ``cspace view SCENE`` — :func:`cspace.viz.scene_view.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``.
 """
 
@@ -40,8 +40,8 @@ from .output import MESH_FORMATS, write_atomic
 def _operands(args: argparse.Namespace, a_points):
     """The grid, and B (hulled, optionally reflected), for the subcommands taking A and B files."""
 
-    from .convex import ConvexPolytope
-    from .exact import Grid
+    from .mesh.convex import ConvexPolytope
+    from .geometry.exact import Grid
 
     b = _load_points(args.b)
     if args.reflect_b is not None:  # B is the robot: the grid of the C-obstacle A ⊕ (c - B)
@@ -56,7 +56,7 @@ def _operands(args: argparse.Namespace, a_points):
 
 def _closed_operands(args: argparse.Namespace):
     """A (a validated closed mesh), the grid and B for the subcommands on a closed mesh A."""
-    from .mesh import ClosedMesh
+    from .mesh.closed import ClosedMesh
 
     A0 = ClosedMesh.load(args.a)
     grid, B = _operands(args, A0.vertices)
@@ -65,7 +65,7 @@ def _closed_operands(args: argparse.Namespace):
 
 def _load_points(path: str):
     """The vertices of a mesh file (the frame the file means), or a SceneError naming it."""
-    from .meshfile import read_mesh_file
+    from .mesh.files import read_mesh_file
 
     return read_mesh_file(path, f"mesh {path!r}").vertices
 
@@ -86,7 +86,8 @@ def _timed(fn, *operands, **options):
 def _convex_sum(args: argparse.Namespace) -> int:
     # Heavy imports here so that `cspace --help` stays fast.
 
-    from .convex import FACET_KINDS, ConvexPolytope, convex_minkowski_sum
+    from .minkowski.cvms import FACET_KINDS, convex_minkowski_sum
+    from .mesh.convex import ConvexPolytope
 
     out = _out(args.output, MESH_FORMATS, "-o")
     a = _load_points(args.a)
@@ -106,7 +107,7 @@ def _convex_sum(args: argparse.Namespace) -> int:
 
 
 def _sum(args: argparse.Namespace) -> int:
-    from .trim import minkowski_sum
+    from .minkowski.sum import minkowski_sum
 
     out = _out(args.output, MESH_FORMATS, "-o")
     A, grid, B = _closed_operands(args)
@@ -136,7 +137,7 @@ def _sum(args: argparse.Namespace) -> int:
 def _superset(args: argparse.Namespace) -> int:
     import trimesh
 
-    from .superset import SUPERSET_KINDS, minkowski_superset
+    from .minkowski.superset import SUPERSET_KINDS, minkowski_superset
 
     out = _out(args.output, MESH_FORMATS, "-o")
     A, grid, B = _closed_operands(args)
@@ -156,9 +157,9 @@ def _superset(args: argparse.Namespace) -> int:
 
 
 def _check(args: argparse.Namespace) -> int:
-    from .fcl_check import cross_check
-    from .obstacle import CSpace
-    from .scene import load_scene
+    from .check.cross_check import cross_check
+    from .scene.model import CSpace
+    from .scene.files import load_scene
 
     scene = load_scene(args.scene)
     cs = CSpace.from_scene(scene, robot_hull=args.robot_hull)
@@ -215,7 +216,7 @@ class _Progress:
 def _executor(args: argparse.Namespace):
     """The executor ``--scheduler`` / ``--workers`` name (None: build here)."""
     if getattr(args, "scheduler", None) or getattr(args, "workers", None):
-        from .scale import executor_for
+        from .planning.scale import executor_for
 
         return executor_for(args.scheduler, args.workers)
     return None
@@ -224,8 +225,8 @@ def _executor(args: argparse.Namespace):
 def _model(args: argparse.Namespace, scene=None):
     """Load the scene (unless given) and model it (build its C-obstacles, through the cache
     unless --no-cache)."""
-    from .model import model_scene
-    from .scene import load_scene
+    from .scene.model import model_scene
+    from .scene.files import load_scene
 
     scene = load_scene(args.scene) if scene is None else scene
     cache = None if args.no_cache else (args.cache_dir or True)
@@ -288,12 +289,12 @@ def _build(args: argparse.Namespace) -> int:
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .ompl_plugin import plan
+    from .planning.plan import plan
 
     path_out = _out(args.output, ("txt", "csv", "npy", "path"), "-o")
     result_out = _out(args.result, ("json",), "--result")
     html_out = _out(args.html, ("html",), "--html")
-    from .scene import load_scene
+    from .scene.files import load_scene
 
     scene = load_scene(args.scene)
     turn = not np.array_equal(scene.goal_rotation, scene.start_rotation)
@@ -319,7 +320,7 @@ def _plan(args: argparse.Namespace) -> int:
           f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
     fcl = None
     if args.fcl_check and r.solved:
-        from .fcl_check import path_collisions
+        from .check.cross_check import path_collisions
 
         bad, n = path_collisions(cs, r.path, scene=scene, robot_hull=args.robot_hull)
         fcl = {"colliding_samples": int(len(bad)), "samples": n}
@@ -370,7 +371,7 @@ def _finish(result, result_out, html_out, scene, path) -> int:
         write_atomic(result_out, lambda p: p.write_text(json.dumps(result, indent=1)))
         print(f"wrote {result_out}")
     if html_out:
-        from .viz import SceneView, draw_scene
+        from .viz.scene_view import SceneView, draw_scene
 
         view = SceneView()
         draw_scene(view, scene, path=path)
@@ -416,8 +417,8 @@ def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_ou
     import numpy as np
 
     from .errors import InvalidArgumentError
-    from .ompl_plugin import default_slices, plan_turning
-    from .turning import Orientations
+    from .planning.plan import default_slices, plan_turning
+    from .planning.orientations import Orientations
 
     if args.slices is not None and args.orientations is not None:
         raise InvalidArgumentError("--slices and --orientations are alternatives: give one")
@@ -446,7 +447,7 @@ def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_ou
               f"C-spaces, {r.built['turns']} of {r.built['of'][1]} turns'")
     fcl = None
     if args.fcl_check and r.solved:
-        from .fcl_check import pose_path_collisions
+        from .check.cross_check import pose_path_collisions
 
         size = float(np.linalg.norm(np.ptp(np.asarray(scene.bounds), axis=0))) or 1.0
         rel = [slices.rotation(k) for k in r.slices]
@@ -478,8 +479,9 @@ def _view(args: argparse.Namespace) -> int:
 
     import numpy as np
 
-    from .scene import load_scene
-    from .viz import SceneView, draw_scene, screenshot
+    from .scene.files import load_scene
+    from .viz.scene_view import SceneView, draw_scene
+    from .viz.browser import screenshot
 
     _out(args.output or f"{Path(args.scene).stem}.html", ("html",), "-o")
     _out(args.screenshot, ("png",), "--screenshot")

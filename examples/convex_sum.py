@@ -19,8 +19,8 @@ import numpy as np
 import trimesh
 
 import cspace
-from cspace import exact
-from cspace.convex import hull_minkowski_sum
+from cspace.geometry import exact
+from cspace.minkowski.cvms import hull_minkowski_sum
 
 ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
 ap.add_argument("--out", type=Path, default=Path("out"))

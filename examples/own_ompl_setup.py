@@ -16,7 +16,7 @@ import numpy as np
 from ompl import base as ob, geometric as og, util as ou
 
 import cspace
-from cspace.ompl_plugin import CSpaceMotionValidator, CSpaceValidityChecker, state_space
+from cspace.planning.ompl_plugin import CSpaceMotionValidator, CSpaceValidityChecker, state_space
 
 ROOT = Path(__file__).resolve().parents[1]
 

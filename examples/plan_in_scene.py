@@ -21,10 +21,11 @@ from pathlib import Path
 import numpy as np
 
 import cspace
-from cspace.fcl_check import path_collisions
-from cspace.model import model_scene
-from cspace.ompl_plugin import plan, verify_path
-from cspace.viz import SceneView, draw_scene
+from cspace.check.cross_check import path_collisions
+from cspace.scene.model import model_scene
+from cspace.planning.plan import plan
+from cspace.planning.ompl_plugin import verify_path
+from cspace.viz.scene_view import SceneView, draw_scene
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -20,8 +20,8 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import cspace
-from cspace.fcl_check import pose_path_collisions
-from cspace.ompl_plugin import plan
+from cspace.check.cross_check import pose_path_collisions
+from cspace.planning.plan import plan
 
 ROOT = Path(__file__).resolve().parents[1]
 

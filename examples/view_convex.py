@@ -22,7 +22,8 @@ import numpy as np
 import trimesh
 
 import cspace
-from cspace.viz import SceneView, screenshot
+from cspace.viz.scene_view import SceneView
+from cspace.viz.browser import screenshot
 
 REFERENCE = np.array([0.1, 0.0, 0.0])  # the robot's reference point, in its own frame
 PATH = np.array([

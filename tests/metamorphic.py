@@ -5,7 +5,7 @@ Shared by ``tests/test_metamorphic.py`` (a small grid in ``make test``, a random
 ``make test-slow``) and ``benchmarks/bench_metamorphic.py`` (the counts in
 ``benchmarks/reports/hard_cases.md``).
 
-The oracle is :class:`cspace.fcl_check.SceneOracle` on the transformed scene's raw float
+The oracle is :class:`cspace.check.oracle.SceneOracle` on the transformed scene's raw float
 meshes: FCL's own broad phase and BVHs, containment by winding numbers per connected
 component. Nothing of the C-space (grids, snapped integers, boxes, pieces) reaches it; the
 C-space only chooses where samples are *not* drawn (nowhere: samples come from the raw
@@ -34,7 +34,7 @@ from scipy.spatial.transform import Rotation
 from test_robot_parts import _box, _open, _u_robot
 from zoo import l_shape, torus
 
-from cspace.scene import Body, Scene
+from cspace.scene.scene import Body, Scene
 
 Mesh = tuple  # (vertices (n, 3) float64, faces (m, 3) int64)
 
@@ -76,7 +76,7 @@ POST = _box((0.3, 0.3, 2.0))
 SMALL_BOX = _box((0.5, 0.3, 0.4))
 OPEN_BOX = _open(_box((1.0, 1.0, 1.0)))
 
-#: One case per construction (``cspace.pairs.CONSTRUCTIONS``), plus robot parts, a robot
+#: One case per construction (``cspace.cobstacle.pairs.CONSTRUCTIONS``), plus robot parts, a robot
 #: far from its own frame's origin, and a scene of several bodies.
 CASES = {c.name: c for c in [
     Case("CVMS", (_box((1.0, 1.0, 1.0)),), SMALL_BOX),
@@ -235,7 +235,7 @@ def judge(ours: np.ndarray, Q: np.ndarray, oracle, error_bound: float) -> Verdic
 def shifted_piece_boxes():
     """Re-introduce the bug of issue #27 while inside: triangle-pair boxes shifted by the
     grid's origin (added twice). A check that passes with it is a check that cannot fail."""
-    import cspace.pairs as pairs
+    import cspace.cobstacle.pairs as pairs
 
     init = pairs._PairsCO.__init__
 

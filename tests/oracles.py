@@ -10,12 +10,12 @@
   within a band of the C-obstacle boundary.
 - :func:`raw_mesh`, :func:`raw_fcl_oracle`, :func:`raw_scene`: FCL oracles from the *raw
   float input a test gave* ``CSpaceObstacle.build`` (never ``co.obstacle`` / ``co.robot``,
-  which are cspace's snapped copies): an :class:`cspace.fcl_check.FclOracle` on the raw
-  arrays, or a :class:`cspace.Scene` of them for :class:`cspace.fcl_check.SceneOracle`
+  which are cspace's snapped copies): an :class:`cspace.check.fcl.FclOracle` on the raw
+  arrays, or a :class:`cspace.Scene` of them for :class:`cspace.check.oracle.SceneOracle`
   (``cross_check(co, scene=raw_scene(...))``).
 
 Everything is float64. The winding number and the ``fcl.Convex`` builder are
-:mod:`cspace.fcl_check`'s (one implementation, tested here against known answers).
+:mod:`cspace.check`'s (one implementation, tested here against known answers).
 """
 
 from __future__ import annotations
@@ -25,8 +25,8 @@ from typing import NamedTuple
 import fcl
 import numpy as np
 
-from cspace.fcl_check import fcl_convex as _convex
-from cspace.fcl_check import winding_number
+from cspace.check.fcl import fcl_convex as _convex
+from cspace.check.fcl import winding_number
 
 __all__ = [
     "winding_number",
@@ -322,7 +322,7 @@ def voxel_intersection_euler(occupancy, robot_vertices, translation, *, size=1.0
 def _grid_ints(a: np.ndarray, b: np.ndarray):
     """The two operands as cspace grid integers (each on its grid of ``Grid.for_operands``,
     as ``minkowski_sum`` snaps them), checking they already lie on those grids."""
-    from cspace.exact import Grid
+    from cspace.geometry.exact import Grid
 
     grids = Grid.for_operands(a, b)
     out = []
@@ -352,9 +352,9 @@ def raw_mesh(operand) -> tuple[np.ndarray, np.ndarray]:
 
 
 def raw_fcl_oracle(obstacle, robot, reference_point=(0.0, 0.0, 0.0), **kw):
-    """:class:`cspace.fcl_check.FclOracle` on the raw operands (see :func:`raw_mesh`), the
+    """:class:`cspace.check.fcl.FclOracle` on the raw operands (see :func:`raw_mesh`), the
     robot at ``q`` occupying ``robot - reference_point + q``; ``kw`` as FclOracle's."""
-    from cspace.fcl_check import FclOracle
+    from cspace.check.fcl import FclOracle
 
     (OV, OF), (RV, RF) = raw_mesh(obstacle), raw_mesh(robot)
     return FclOracle(OV, OF, RV, RF, reference_point, **kw)
@@ -362,10 +362,10 @@ def raw_fcl_oracle(obstacle, robot, reference_point=(0.0, 0.0, 0.0), **kw):
 
 def raw_scene(obstacle, robot, reference_point=(0.0, 0.0, 0.0), bounds=None):
     """A :class:`cspace.Scene` of the raw operands (one obstacle body or a list of them), for
-    :class:`cspace.fcl_check.SceneOracle` and ``cross_check(co, scene=...)``: the oracle's
+    :class:`cspace.check.oracle.SceneOracle` and ``cross_check(co, scene=...)``: the oracle's
     own solid/surface rule on the raw meshes. ``bounds`` default: the raw C-obstacle's box
     grown by 10% (start and goal at its corners; unused by the oracle)."""
-    from cspace.scene import Body, Scene
+    from cspace.scene.scene import Body, Scene
 
     bodies = obstacle if isinstance(obstacle, list) else [obstacle]
     meshes = [raw_mesh(b) for b in bodies]
@@ -399,10 +399,10 @@ def _convex_quads(ints: np.ndarray, faces: np.ndarray) -> list[np.ndarray]:
     """Vertex index sets of convex planar patches covering the faces: pairs of triangles
     sharing an edge, exactly coplanar, whose union is a convex quadrilateral; the rest alone.
 
-    Exact (cspace.exact predicates on the grid integers). Each patch's convex hull equals
+    Exact (cspace.geometry.exact predicates on the grid integers). Each patch's convex hull equals
     the union of its triangles, so ``hull(patch ⊕ B)`` is ``∪ (t ⊕ B)`` over its triangles.
     """
-    from cspace import exact
+    from cspace.geometry import exact
 
     m = len(faces)
     # Directed edge (u, v) of face f at corner k; its twin is (v, u).

@@ -218,7 +218,7 @@ def _robot_file(folder: Path, mesh: Mesh, offset, rotvec_deg,
     """The robot's file: ``mesh`` (designed about the origin) moved by ``offset`` in the world
     frame, stored under a node matrix; returns the path and OMPL.app's centre of it (as
     cspace reads it: the problem's definition, used to write start and goal)."""
-    from cspace.meshfile import read_mesh_file
+    from cspace.mesh.files import read_mesh_file
 
     V, F = mesh
     path = write_dae(folder / "robot.dae", [("robot", (V + offset, F),

@@ -1,4 +1,4 @@
-"""Hypothesis strategies for the exact kernel (cspace.exact) and its callers.
+"""Hypothesis strategies for the exact kernel (cspace.geometry.exact) and its callers.
 
 Integer strategies draw grid coordinates the way the library produces them:
 
@@ -64,7 +64,7 @@ __all__ = [
 LIMIT = 2**26
 #: Coordinates of a Minkowski sum of two snapped points satisfy ``|k| <= SUM_LIMIT``.
 SUM_LIMIT = 2**27
-#: Largest magnitude accepted by the predicates (``_MAX_INT - 1`` in cspace.exact).
+#: Largest magnitude accepted by the predicates (``_MAX_INT - 1`` in cspace.geometry.exact).
 HUGE_LIMIT = 2**61 - 1
 
 

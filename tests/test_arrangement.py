@@ -1,6 +1,6 @@
 """Steps 4–5 of NCC-CVMS: candidate pairs and exact triangle–triangle intersection.
 
-The reference is written independently of :mod:`cspace.arrangement`: the first triangle is
+The reference is written independently of :mod:`cspace.geometry.tritri`: the first triangle is
 clipped, with exact rational arithmetic (``fractions.Fraction``), by the half-spaces and
 planes that define the second one (a zero-area triangle is a segment: two planes through its
 line and two half-spaces), which gives the intersection ``X`` as a convex point set. Its
@@ -21,7 +21,7 @@ import trimesh
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from cspace.arrangement import (
+from cspace.geometry.tritri import (
     COPLANAR_OVERLAP,
     COPLANAR_TOUCH,
     DISJOINT,
@@ -33,18 +33,16 @@ from cspace.arrangement import (
     SHARED_VERTEX,
     TRITRI_CLASSES,
     VERTEX,
-    BoxSweep,
     TriTriResult,
-    box_pairs,
-    candidate_pairs,
-    endpoint_coordinates,
     intersect_pairs,
 )
-from cspace.convex import ConvexPolytope
+from cspace.geometry.boxes import BoxSweep, box_pairs, candidate_pairs
+from cspace.geometry.endpoints import endpoint_coordinates
+from cspace.mesh.convex import ConvexPolytope
 from cspace.errors import GridRangeError
-from cspace.exact import Grid
-from cspace.mesh import ClosedMesh
-from cspace.superset import minkowski_superset
+from cspace.geometry.exact import Grid
+from cspace.mesh.closed import ClosedMesh
+from cspace.minkowski.superset import minkowski_superset
 
 # --------------------------------------------------------------------------------------
 # exact reference (Fractions)

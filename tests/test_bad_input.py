@@ -203,8 +203,8 @@ def folded_box():
 
 def test_self_intersecting_obstacle_is_named_not_built(tmp_path):
     from cspace.errors import SelfIntersectionError
-    from cspace.scene import Body, Scene
-    from cspace.trim import self_intersections
+    from cspace.scene.scene import Body, Scene
+    from cspace.mesh.self_intersection import self_intersections
 
     V, F = folded_box()
     assert len(self_intersections(cspace.as_mesh((V, F)))) > 0

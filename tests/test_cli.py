@@ -194,7 +194,7 @@ def test_one_progress_style_for_builds_and_sums(monkeypatch, capsys):
     # body reports its NCC-CVMS stages while it is built (no silent long body).
     from cspace import minkowski_sum, model_scene
     from cspace.cli import _Progress
-    from cspace.scene import Body, Scene
+    from cspace.scene.scene import Body, Scene
 
     from zoo import l_shape
 

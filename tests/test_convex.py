@@ -14,14 +14,9 @@ from hypothesis import given
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from cspace import exact
-from cspace.convex import (
-    FACET_KINDS,
-    ConvexPolytope,
-    _certify,
-    convex_minkowski_sum,
-    hull_minkowski_sum,
-)
+from cspace.geometry import exact
+from cspace.minkowski.cvms import FACET_KINDS, convex_minkowski_sum, hull_minkowski_sum
+from cspace.mesh.convex import ConvexPolytope, _certify
 from cspace.errors import (
     DegenerateError,
     EmptyMeshError,
@@ -30,7 +25,7 @@ from cspace.errors import (
     NotConvexError,
     OpenMeshError,
 )
-from cspace.exact import Grid
+from cspace.geometry.exact import Grid
 
 CUBE = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=np.float64)
 TET = np.array([[1, 1, 1], [1, -1, -1], [-1, 1, -1], [-1, -1, 1]], dtype=np.float64)

@@ -1,4 +1,4 @@
-"""Properties of the exact kernel, cspace.exact.
+"""Properties of the exact kernel, cspace.geometry.exact.
 
 Every sign is compared with a reference evaluated in Python ``int`` (or ``fractions.Fraction``
 for the grid and for the symbolic perturbation, checked against an exact rational rotation),
@@ -20,7 +20,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from cspace.errors import ExactnessError, GridRangeError, NonFiniteError
-from cspace.exact import (
+from cspace.geometry.exact import (
     Grid,
     Perturbation,
     cross,

@@ -17,9 +17,11 @@ from zoo import grate_occupancy, stairs_occupancy
 from scipy.spatial import ConvexHull
 
 from cspace import ClosedMesh, CSpaceObstacle, Grid, minkowski_sum, model_scene
-from cspace.fcl_check import FclOracle, cross_check
-from cspace.margin import Margin, snap_deviation
-from cspace.scene import Body, Scene
+from cspace.check.fcl import FclOracle
+from cspace.check.cross_check import cross_check
+from cspace.cobstacle.margin import Margin
+from cspace.geometry.snapping import snap_deviation
+from cspace.scene.scene import Body, Scene
 
 FAST_ANGLES = GAP_ANGLES[:12]
 
@@ -308,7 +310,7 @@ def test_a_flat_mesh_is_its_hull_only_when_it_is_convex():
     # surface (the plate is 1e-9 thick); never hulled.
     from zoo import voxel_solid
 
-    from cspace.fcl_check import SceneOracle
+    from cspace.check.oracle import SceneOracle
 
     occ = np.zeros((3, 3, 1), dtype=bool)
     occ[:, 0, 0] = occ[0, :, 0] = True

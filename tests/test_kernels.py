@@ -1,4 +1,4 @@
-"""The compiled kernels (:mod:`cspace._kernels`) against their pure-Python references.
+"""The compiled kernels (:mod:`cspace.geometry._kernels`) against their pure-Python references.
 
 Each compiled kernel must give *identical* outputs (not close ones) to the reference beside
 the code that calls it, on random, near-degenerate (queries exactly on vertices, edges and
@@ -12,10 +12,15 @@ import numpy as np
 import pytest
 from zoo import comb, l_shape, random_rotation, star, torus
 
-from cspace import meshquery as ref
-from cspace import planar, trim
-from cspace._kernels import meshquery as compiled
-from cspace._kernels import planar as compiled_planar
+from cspace.geometry._kernels import meshquery as compiled
+from cspace.geometry._kernels import planar as compiled_planar
+from cspace.mesh import query_reference as ref
+from cspace.mesh.query import MeshCO
+from cspace.mesh.self_intersection import (_undecided_pairs, _undecided_pairs_compiled,
+                                           _undecided_pairs_np)
+from cspace.minkowski import plane_arrangement, triangulation
+from cspace.geometry.homogeneous import _hnorm, _hpoint
+from cspace.minkowski.sum import minkowski_sum
 
 MESHES = {
     "torus": lambda: torus(sections=12, ring=8),
@@ -25,7 +30,7 @@ MESHES = {
 }
 
 
-def _queries(co: ref.MeshCO, n: int, seed: int) -> np.ndarray:
+def _queries(co: MeshCO, n: int, seed: int) -> np.ndarray:
     """Uniform points, vertices, edge midpoints, face centroids, and points a few ulps off
     them: the inputs where the filters cannot decide."""
     rng = np.random.default_rng(seed)
@@ -40,7 +45,7 @@ def _queries(co: ref.MeshCO, n: int, seed: int) -> np.ndarray:
 @pytest.fixture(scope="module", params=list(MESHES))
 def mesh(request):
     V, F = MESHES[request.param]()
-    return ref.MeshCO(V, F, name=request.param)
+    return MeshCO(V, F, name=request.param)
 
 
 def test_cells_are_identical(mesh):
@@ -109,10 +114,10 @@ def test_compiled_queries_are_the_meshes_answers(mesh):
 
 @pytest.mark.parametrize("name", list(MESHES))
 def test_rounding_check_filter_is_identical(name):
-    """cspace._kernels.trim.undecided_pairs against the reference on a mesh's box-overlapping
+    """cspace.geometry._kernels.trim.undecided_pairs against the reference on a mesh's box-overlapping
     triangle pairs, its vertices moved by a few ulps (near-coplanar neighbours), a random
     half of them marked moved."""
-    from cspace.arrangement import box_pairs
+    from cspace.geometry.boxes import box_pairs
 
     V, F = MESHES[name]()
     rng = np.random.default_rng(7)
@@ -122,14 +127,14 @@ def test_rounding_check_filter_is_identical(name):
     hi = np.ceil(P.max(axis=1) * 64).astype(np.int64)
     pairs = np.ascontiguousarray(box_pairs(lo, hi), dtype=np.int64)
     moved = rng.random(len(V)) < 0.5
-    a = trim._undecided_pairs_compiled(V, F, pairs, moved)
-    b = trim._undecided_pairs(V, F, pairs, moved)
+    a = _undecided_pairs_compiled(V, F, pairs, moved)
+    b = _undecided_pairs(V, F, pairs, moved)
     assert len(pairs) > 100 and a.dtype == b.dtype == np.bool_
-    assert np.array_equal(a, b) and np.array_equal(a, trim._undecided_pairs_np(V, F, pairs, moved))
+    assert np.array_equal(a, b) and np.array_equal(a, _undecided_pairs_np(V, F, pairs, moved))
 
 
 # --------------------------------------------------------------------------------------------
-# per-plane arrangements (cspace._kernels.planar)
+# per-plane arrangements (cspace.geometry._kernels.planar)
 
 _CORE_FIELDS = ("order", "vertex_labels", "edges", "edge_labels", "origin", "isolated", "nxt",
                 "cycles", "cyc_of", "signs", "comp")
@@ -137,9 +142,9 @@ _CORE_FIELDS = ("order", "vertex_labels", "edges", "edge_labels", "origin", "iso
 
 def _same_core(segs: list, labels: list | None = None) -> tuple:
     """Both arrangement cores on one input; every field identical (compared by name)."""
-    segs = [(planar._hpoint(p), planar._hpoint(q)) for p, q in segs]
+    segs = [(_hpoint(p), _hpoint(q)) for p, q in segs]
     labels = list(range(len(segs))) if labels is None else list(labels)
-    a = planar._arrangement_core(segs, labels)
+    a = plane_arrangement._arrangement_core(segs, labels)
     b = compiled_planar.arrangement_core(segs, labels)
     for name, x, y in zip(_CORE_FIELDS, a, b):
         assert x == y, f"{name} differs on {len(segs)} segments"
@@ -147,8 +152,9 @@ def _same_core(segs: list, labels: list | None = None) -> tuple:
 
 
 def _spy_kernel(monkeypatch, name: str) -> list:
-    """Make :mod:`cspace.planar` call compiled kernel ``name`` through a recorder: the list
-    it returns fills with the (copied) arguments of every call."""
+    """Make the module that calls compiled planar kernel ``name``
+    (:mod:`cspace.minkowski.plane_arrangement` or :mod:`cspace.minkowski.triangulation`) call it
+    through a recorder: the list it returns fills with the (copied) arguments of every call."""
     seen = []
     real = getattr(compiled_planar, name)
 
@@ -162,21 +168,22 @@ def _spy_kernel(monkeypatch, name: str) -> list:
 
     spy = Spy()
     setattr(spy, name, record)
-    monkeypatch.setattr(planar, "_compiled", spy)
+    caller = plane_arrangement if name == "arrangement_core" else triangulation
+    monkeypatch.setattr(caller, "_compiled", spy)
     return seen
 
 
 def _captured_arrangements(monkeypatch, cases) -> list:
     """The inputs of every per-plane arrangement of real Minkowski sums."""
-    from cspace.convex import ConvexPolytope
-    from cspace.exact import Grid
-    from cspace.mesh import ClosedMesh
+    from cspace.mesh.convex import ConvexPolytope
+    from cspace.geometry.exact import Grid
+    from cspace.mesh.closed import ClosedMesh
 
     seen = _spy_kernel(monkeypatch, "arrangement_core")
     for (v, f), b in cases:
         grid = Grid.for_points(v, b)
-        trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
-                           ConvexPolytope.from_points(b, grid=grid), workers=1)
+        minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                      ConvexPolytope.from_points(b, grid=grid), workers=1)
     monkeypatch.undo()
     return seen
 
@@ -223,7 +230,7 @@ def test_arrangement_core_is_identical_near_ties():
         segs.append(((0, 0, 1), (w + k, 1, w)))  # nearly the same direction, distinct
         segs.append(((1, 0, 1), (0, 1, 1)))
     _same_core(segs)
-    assert planar.Arrangement2D(segs)._L == 0  # no common scale
+    assert plane_arrangement.Arrangement2D(segs)._L == 0  # no common scale
     _same_core([((0, 0, 1), (7, 3, 1)), ((0, 3, 1), (7, 0, 1)), ((14, 6, 2), (21, 9, 3))])
 
 
@@ -252,14 +259,14 @@ def test_import_compiles_nothing_and_loads_no_graph_library():
             "heavy = [m for m in ('numba', 'llvmlite', 'scipy.sparse', 'Cython') "
             "if m in sys.modules]\n"
             "assert not heavy, heavy\n"
-            "from cspace._kernels import meshquery, planar, trim\n")
+            "from cspace.geometry._kernels import meshquery, planar, trim\n")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          timeout=120)
     assert out.returncode == 0, out.stderr
 
 
 # --------------------------------------------------------------------------------------------
-# triangulation steps (cspace._kernels.planar.straight_runs / clip_simple)
+# triangulation steps (cspace.geometry._kernels.planar.straight_runs / clip_simple)
 
 
 def _same_triangulation_steps(H: list, rings: list) -> None:
@@ -271,12 +278,12 @@ def _same_triangulation_steps(H: list, rings: list) -> None:
             uses[v] = uses.get(v, 0) + 1
     for ring in rings:
         r1, r2 = {}, {}
-        a = planar._straight_runs(ring, H, r1, uses)
+        a = triangulation._straight_runs(ring, H, r1, uses)
         b = compiled_planar.straight_runs(ring, H, r2, uses)
         assert a == b and r1 == r2
         if a[0] and len(set(a[0])) == len(a[0]):
             P = [H[v] for v in a[0]]
-            assert planar._clip_simple(P, a[0]) == compiled_planar.clip_simple(P, a[0])
+            assert triangulation._clip_simple(P, a[0]) == compiled_planar.clip_simple(P, a[0])
 
 
 def test_triangulation_steps_are_identical_on_minkowski_sums(monkeypatch):
@@ -285,22 +292,22 @@ def test_triangulation_steps_are_identical_on_minkowski_sums(monkeypatch):
     from zoo import icosphere_points
 
     seen = []
-    real = planar.triangulate_rings
+    real = triangulation.triangulate_rings
 
     def spy(H, rings):
         seen.append((H, [list(r) for r in rings]))
         return real(H, rings)
 
-    monkeypatch.setattr(planar, "triangulate_rings", spy)
+    monkeypatch.setattr(triangulation, "triangulate_rings", spy)
     ico = icosphere_points(1, radius=0.3)
     for (v, f), b in [(star(), ico), (comb(3, 2), ico), (torus(sections=12, ring=8), ico)]:
-        from cspace.convex import ConvexPolytope
-        from cspace.exact import Grid
-        from cspace.mesh import ClosedMesh
+        from cspace.mesh.convex import ConvexPolytope
+        from cspace.geometry.exact import Grid
+        from cspace.mesh.closed import ClosedMesh
 
         grid = Grid.for_points(v, b)
-        trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
-                           ConvexPolytope.from_points(b, grid=grid), workers=1)
+        minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                      ConvexPolytope.from_points(b, grid=grid), workers=1)
     monkeypatch.undo()
     assert len(seen) > 100
     for H, rings in seen:
@@ -325,7 +332,7 @@ def test_triangulation_steps_are_identical_on_degenerate_polygons(seed):
             ring.append(((p[0] + q[0]) // 2, (p[1] + q[1]) // 2))
     uniq = list(dict.fromkeys(ring))
     for scale, w, shift in ((1, 1, 0), (2**40 + 3, 1, 0), (7, 2**61 + 1, 0), (1, 1, 2**60)):
-        H = [planar._hnorm(x * scale + shift * w, y * scale + shift * w, w) for x, y in uniq]
+        H = [_hnorm(x * scale + shift * w, y * scale + shift * w, w) for x, y in uniq]
         ids = [uniq.index(p) for p in ring]
         _same_triangulation_steps(H, [ids])
         _same_triangulation_steps(H, [ids[::-1]])
@@ -334,26 +341,26 @@ def test_triangulation_steps_are_identical_on_degenerate_polygons(seed):
 def test_general_ear_clipping_is_identical(monkeypatch):
     """Every polygon the general ear clipping gets in three sums (faces with holes bridged
     in: repeated vertices) and the degenerate lattice polygons, run by both."""
-    from cspace.convex import ConvexPolytope
-    from cspace.exact import Grid
-    from cspace.mesh import ClosedMesh
+    from cspace.mesh.convex import ConvexPolytope
+    from cspace.geometry.exact import Grid
+    from cspace.mesh.closed import ClosedMesh
     from zoo import box_points, icosphere_points
 
     seen = _spy_kernel(monkeypatch, "clip_general")
     for (v, f), b in [(comb(3, 2), box_points(0.5, 0.5, 0.5)), (comb(4, 3), icosphere_points(1, radius=0.3)),
                       (star(), icosphere_points(1, radius=0.3))]:
         grid = Grid.for_points(v, b)
-        trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
-                           ConvexPolytope.from_points(b, grid=grid), workers=1)
+        minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                      ConvexPolytope.from_points(b, grid=grid), workers=1)
     monkeypatch.undo()
     assert any(len(set(ids)) < len(ids) for _, ids in seen)  # holes were bridged in
     for P, ids in seen:
-        assert compiled_planar.clip_general(P, ids) == planar._clip_general(P, ids)
+        assert compiled_planar.clip_general(P, ids) == triangulation._clip_general(P, ids)
     # a square with a square hole, bridged by hand, at huge scales (Python-integer path)
     for s, w in ((1, 1), (2**40 + 1, 1), (3, 2**61 + 1)):
         pts = [(0, 0), (8, 0), (8, 8), (0, 8), (2, 2), (2, 6), (6, 6), (6, 2)]
-        H = [planar._hnorm(x * s, y * s, w) for x, y in pts]
+        H = [_hnorm(x * s, y * s, w) for x, y in pts]
         ring = [0, 1, 2, 3, 0, 4, 5, 6, 7, 4]  # outer, bridge 0 -> 4, hole clockwise, back
         P = [H[k] for k in ring]
-        assert compiled_planar.clip_general(P, ring) == planar._clip_general(P, ring)
-        assert len(planar._clip_general(P, ring)) == 8
+        assert compiled_planar.clip_general(P, ring) == triangulation._clip_general(P, ring)
+        assert len(triangulation._clip_general(P, ring)) == 8

@@ -1,5 +1,5 @@
-"""The compiled triangle-pair stage (:mod:`cspace._kernels.arrangement`) against its numpy
-references in :mod:`cspace.arrangement`.
+"""The compiled triangle-pair stage (:mod:`cspace.geometry._kernels.arrangement`) against its numpy
+references in :mod:`cspace.geometry.tritri`.
 
 The compiled box sweep, pair classification and endpoint coordinates must give *identical*
 outputs (the same arrays, the same tuples, the same floats bit for bit) to
@@ -22,27 +22,28 @@ import pytest
 from test_arrangement import FAMILIES, soup
 from zoo import box_points, comb, icosphere_points, star, torus
 
-from cspace import arrangement as arr
-from cspace import trim
-from cspace._kernels import arrangement as compiled
-from cspace.convex import ConvexPolytope
-from cspace.exact import Grid
-from cspace.mesh import ClosedMesh
-from cspace.superset import minkowski_superset
+from cspace.geometry import boxes, endpoints, tritri
+from cspace.minkowski import intersections
+from cspace.minkowski.sum import minkowski_sum
+from cspace.geometry._kernels import arrangement as compiled
+from cspace.mesh.convex import ConvexPolytope
+from cspace.geometry.exact import Grid
+from cspace.mesh.closed import ClosedMesh
+from cspace.minkowski.superset import minkowski_superset
 
 
-def _same(ints, faces, pairs) -> arr.TriTriResult:
+def _same(ints, faces, pairs) -> tritri.TriTriResult:
     """Assert the compiled stage equals the reference on these pairs; the compiled result."""
-    got = arr.intersect_pairs(ints, faces, pairs)
-    want = arr._intersect_pairs_reference(ints, faces, pairs)
+    got = tritri.intersect_pairs(ints, faces, pairs)
+    want = tritri._intersect_pairs_reference(ints, faces, pairs)
     for name in ("pairs", "cls", "kind", "u", "v", "plane"):
         a, b = getattr(got, name), getattr(want, name)
         assert a.dtype == b.dtype and a.shape == b.shape, name
         diff = a != b
         bad = np.flatnonzero(diff.any(axis=1) if diff.ndim > 1 else diff)
         assert not bad.size, (name, pairs[bad[:3]].tolist(), ints[faces[pairs[bad[0]]]].tolist())
-    ex, approx = arr.endpoint_coordinates(ints, faces, got)
-    ex_ref, approx_ref = arr._endpoint_coordinates_reference(ints, faces, want)
+    ex, approx = endpoints.endpoint_coordinates(ints, faces, got)
+    ex_ref, approx_ref = endpoints._endpoint_coordinates_reference(ints, faces, want)
     assert ex.tolist() == ex_ref.tolist()
     assert approx.tobytes() == approx_ref.tobytes()  # bit for bit, NaNs included
     return got
@@ -84,21 +85,21 @@ def _mapped(rng, ints, big: int):
 
 def test_codes_are_the_modules():
     for name, code in compiled.CODES.items():
-        assert getattr(arr, name) == code, name
+        assert getattr(tritri, name) == code, name
 
 
 @pytest.mark.parametrize("seed", range(6))
 def test_random_soups_are_identical(seed):
     rng = np.random.default_rng(seed)
-    counts = np.zeros(len(arr.TRITRI_CLASSES), dtype=np.int64)
+    counts = np.zeros(len(tritri.TRITRI_CLASSES), dtype=np.int64)
     for k in range(12):
         ints, faces = _random_soup(rng, 40, lim=1 + k % 3, planes=k % 2 == 1)
-        pairs = arr.candidate_pairs(ints, faces)
+        pairs = boxes.candidate_pairs(ints, faces)
         counts += np.bincount(_same(ints, faces, pairs).cls, minlength=len(counts))
         if k % 3 == 0:  # also every ordered pair, including those whose boxes miss
             i, j = np.nonzero(~np.eye(len(faces), dtype=bool))
             _same(ints, faces, np.stack([i, j], axis=1))
-    assert (counts > 0).all(), dict(zip(arr.TRITRI_CLASSES, counts))  # every class is tested
+    assert (counts > 0).all(), dict(zip(tritri.TRITRI_CLASSES, counts))  # every class is tested
 
 
 @pytest.mark.parametrize("seed", range(4))
@@ -108,9 +109,9 @@ def test_large_mapped_soups_are_identical(seed):
     for k in range(6):
         ints, faces = _random_soup(rng, 30, lim=1 + k % 2, planes=k % 2 == 0)
         big = _mapped(rng, ints, 2**9)
-        pairs = arr.candidate_pairs(big, faces)
+        pairs = boxes.candidate_pairs(big, faces)
         # The map keeps every incidence: the classes are the small soup's.
-        small = arr.intersect_pairs(ints, faces, pairs)
+        small = tritri.intersect_pairs(ints, faces, pairs)
         assert np.array_equal(_same(big, faces, pairs).cls, small.cls)
 
 
@@ -141,11 +142,11 @@ def test_exact_where_doubles_fail():
             wrong += np.sign(naive) != np.sign(di)
         ints, faces = soup([a, b, c], B)
         res = _same(ints, faces, np.array([[0, 1], [1, 0]]))
-        seen.add(arr.TRITRI_CLASSES[res.cls[0]])
+        seen.add(tritri.TRITRI_CLASSES[res.cls[0]])
         if all(x > 0 for x in d) or all(x < 0 for x in d):
-            assert (res.cls == arr.DISJOINT).all()
+            assert (res.cls == tritri.DISJOINT).all()
         if not any(d):
-            assert res.cls[0] in (arr.COPLANAR_TOUCH, arr.SHARED_EDGE, arr.COPLANAR_OVERLAP)
+            assert res.cls[0] in (tritri.COPLANAR_TOUCH, tritri.SHARED_EDGE, tritri.COPLANAR_OVERLAP)
     assert {"disjoint", "point", "shared_vertex", "shared_edge"} <= seen, seen
     assert wrong >= 3 * 5**3 * 4 // 5 // 2, wrong  # doubles get most nonzero sides wrong
 
@@ -187,7 +188,7 @@ ZOO = {
 def test_zoo_supersets_are_identical(name):
     ints, faces = ZOO[name]()
     C = ints[faces]
-    sweep = arr.BoxSweep(C.min(axis=1), C.max(axis=1))
+    sweep = boxes.BoxSweep(C.min(axis=1), C.max(axis=1))
     pairs = sweep.pairs()
     assert np.array_equal(pairs, sweep._pairs_reference())
     for shares in (2, 5):
@@ -205,14 +206,14 @@ def test_minkowski_sum_pairs_are_identical(monkeypatch):
         seen.append(_same(ints, faces, pairs))
         return real(ints, faces, pairs)
 
-    real = trim._cut_pieces
-    monkeypatch.setattr(trim, "_cut_pieces", spy)
+    real = intersections._cut_pieces
+    monkeypatch.setattr(intersections, "_cut_pieces", spy)
     v, f = star()
     b = icosphere_points(1, 0.3)
     grid = Grid.for_points(v, b)
-    trim.minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
-                       ConvexPolytope.from_points(b, grid=grid), workers=1)
-    assert seen and sum(int((r.cls == arr.SEGMENT).sum()) for r in seen) > 100
+    minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                  ConvexPolytope.from_points(b, grid=grid), workers=1)
+    assert seen and sum(int((r.cls == tritri.SEGMENT).sum()) for r in seen) > 100
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -222,18 +223,18 @@ def test_box_sweep_is_identical(seed):
     for t, lim in [(0, 3), (1, 3), (2, 3), (300, 3), (300, 40), (2000, 2**28)]:
         lo = rng.integers(-lim, lim + 1, size=(t, 3))
         hi = lo + rng.integers(0, max(2, lim // 4), size=(t, 3))
-        sweep = arr.BoxSweep(lo, hi)
+        sweep = boxes.BoxSweep(lo, hi)
         for shares in (1, 3):
             for k in range(shares):
                 got, want = sweep.pairs(k, shares), sweep._pairs_reference(k, shares, chunk=97)
                 assert got.dtype == want.dtype == np.int64 and np.array_equal(got, want)
-        assert np.array_equal(arr.box_pairs(lo, hi), sweep._pairs_reference())
+        assert np.array_equal(boxes.box_pairs(lo, hi), sweep._pairs_reference())
 
 
 def test_empty_inputs():
     ints = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     faces = np.array([[0, 1, 2]])
     _same(ints, faces, np.zeros((0, 2), dtype=np.int64))
-    res = arr.intersect_pairs(ints, faces, np.zeros((0, 2), dtype=np.int64))
-    ex, approx = arr.endpoint_coordinates(ints, faces, res)
+    res = tritri.intersect_pairs(ints, faces, np.zeros((0, 2), dtype=np.int64))
+    ex, approx = endpoints.endpoint_coordinates(ints, faces, res)
     assert ex.shape == (0, 2) and approx.shape == (0, 2, 3)

@@ -1,5 +1,5 @@
-"""The rounding check's compiled kernels (:mod:`cspace._kernels.trim`) against their
-references in :mod:`cspace.trim`: identical outputs (bit for bit), on random, near-degenerate
+"""The rounding check's compiled kernels (:mod:`cspace.geometry._kernels.trim`) against their
+references in :mod:`cspace.minkowski.ncc_cvms`: identical outputs (bit for bit), on random, near-degenerate
 and zoo inputs, with every fast path and every fallback exercised.
 
 - ``to_float`` / ``_to_float``: float64 coordinates of exact homogeneous grid points;
@@ -16,9 +16,11 @@ import numpy as np
 import pytest
 from zoo import comb, icosphere_points, star, torus
 
-from cspace import trim
-from cspace._kernels import trim as compiled
-from cspace.exact import Grid
+from cspace.geometry import boxes
+from cspace.mesh import self_intersection
+from cspace.minkowski import output, rounding
+from cspace.geometry._kernels import trim as compiled
+from cspace.geometry.exact import Grid
 from cspace.workers import can_fork
 
 KEPT, MOVED, LEFT = 0, 1, 2  # the states of compiled.moved_points
@@ -81,16 +83,16 @@ def _same_bits(a: np.ndarray, b: np.ndarray) -> bool:
 def test_to_float_is_identical(seed, grid):
     pts = _points(seed)
     with np.errstate(all="ignore"):
-        want = trim._to_float(pts, grid)
+        want = output._to_float(pts, grid)
     V, left = compiled.to_float(pts, tuple(grid.origin), grid.exponent)
     assert not left.any()
-    assert _same_bits(V, want) and _same_bits(trim._to_float_compiled(pts, grid), want)
+    assert _same_bits(V, want) and _same_bits(output._to_float_compiled(pts, grid), want)
     # points of other types (numpy ints, lists) are left to the reference, which agrees
     small = [p for p in pts if max(abs(c) for c in p) < 2**30][:20]
     odd = [tuple(np.int64(c) for c in p) if k % 2 else list(p) for k, p in enumerate(small)]
     V, left = compiled.to_float(odd, tuple(grid.origin), grid.exponent)
-    assert left.all() and _same_bits(trim._to_float_compiled(odd, grid), trim._to_float(odd, grid))
-    assert _same_bits(trim._to_float_compiled([], grid), trim._to_float([], grid))
+    assert left.all() and _same_bits(output._to_float_compiled(odd, grid), output._to_float(odd, grid))
+    assert _same_bits(output._to_float_compiled([], grid), output._to_float([], grid))
 
 
 @pytest.mark.parametrize("seed", range(3))
@@ -100,7 +102,7 @@ def test_moved_is_identical(seed, grid):
     move) and on rows far off (scaled by powers of two, other points' rows, mirrored): the compiled answer, with the reference deciding what it leaves, is the
     reference's; and each of the kernel's paths decides some points."""
     pts = _points(seed)
-    V = trim._to_float(pts, grid)
+    V = output._to_float(pts, grid)
     rng = np.random.default_rng(seed)
     off = V.copy()
     rows = rng.random(len(V)) < 0.3
@@ -112,15 +114,15 @@ def test_moved_is_identical(seed, grid):
     for W in (V, off, far):
         finite = np.isfinite(W).all(axis=1)  # the reference cannot take an infinity
         P, W = [p for p, f in zip(pts, finite) if f], W[finite]
-        want = trim._moved(P, W, grid)
-        assert np.array_equal(trim._moved_compiled(P, W, grid), want)
+        want = rounding._moved(P, W, grid)
+        assert np.array_equal(rounding._moved_compiled(P, W, grid), want)
         state = compiled.moved_points(P, tuple(grid.origin), grid.exponent, W)
         decided = state != LEFT
         assert np.array_equal(state[decided] == MOVED, want[decided])
         states.append(state)
     state = np.concatenate(states)
     assert (state == KEPT).sum() > 20 and (state == MOVED).sum() > 20 and (state == LEFT).any()
-    assert trim._moved_compiled([], np.zeros((0, 3)), grid).shape == (0,)
+    assert rounding._moved_compiled([], np.zeros((0, 3)), grid).shape == (0,)
 
 
 def test_moved_paths_each_decide():
@@ -128,10 +130,10 @@ def test_moved_paths_each_decide():
     ways decided), beyond int64 moved (modulo 2**64) and kept (left to the reference)."""
     g = Grid(-10, (0, 0, 0))
     pts = [(3, -5, 7, 1), (1, 2, 3, 3), (3 * 2**62, 0, 0, 3 * 2**62), (2**70 + 1, 0, 0, 2**70)]
-    V = trim._to_float(pts, g)
+    V = output._to_float(pts, g)
     state = compiled.moved_points(pts, (0, 0, 0), -10, V)
     assert state.tolist() == [KEPT, MOVED, LEFT, MOVED]
-    assert trim._moved(pts, V, g).tolist() == [False, True, False, True]
+    assert rounding._moved(pts, V, g).tolist() == [False, True, False, True]
     # a row off by one ulp, or by a sign, is moved on every path
     W = -V
     W[0, 0] = np.nextafter(V[0, 0], 0.0)
@@ -147,7 +149,7 @@ def test_triangle_boxes_are_identical(seed):
     T = rng.integers(0, len(V), (200, 3)).astype(np.int64)
     for e in (-25, -10, 0, 4):
         lo, hi, ok = compiled.triangle_boxes(V, T, e)
-        rlo, rhi = trim._triangle_boxes(V, T, e)
+        rlo, rhi = self_intersection._triangle_boxes(V, T, e)
         assert ok and np.array_equal(lo, rlo) and np.array_equal(hi, rhi)
     # a coordinate the cast cannot take, or not finite: the reference decides
     for bad in (1e30, np.nan, np.inf):
@@ -155,7 +157,7 @@ def test_triangle_boxes_are_identical(seed):
         W[T[7, 1], 2] = bad
         assert not compiled.triangle_boxes(W, T, -25)[2]
         with np.errstate(all="ignore"):
-            a, b = trim._triangle_boxes_compiled(W, T, -25), trim._triangle_boxes(W, T, -25)
+            a, b = self_intersection._triangle_boxes_compiled(W, T, -25), self_intersection._triangle_boxes(W, T, -25)
         assert np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
     assert compiled.triangle_boxes(V, np.zeros((0, 3), np.int64), -25)[0].shape == (0, 3)
 
@@ -182,17 +184,17 @@ def test_improper_pairs_are_every_improper_pair(seed, monkeypatch):
     tested on all vertices' integers; in pair order; forked over two processes alike."""
     V, T, moved = _soup(seed)
     grid = Grid(-20, (0, 0, 0))  # box_pairs takes |k| < 2**29
-    Vi, Tl = trim._common_integers(V), T.tolist()
+    Vi, Tl = self_intersection._common_integers(V), T.tolist()
     want = [(a, b) for a in range(len(T)) for b in range(a + 1, len(T))
-            if moved[T[[a, b]]].any() and trim._improper(Vi, Tl[a], Tl[b])]
-    got, used = trim._improper_pairs(V, T, grid, moved)
+            if moved[T[[a, b]]].any() and self_intersection._improper(Vi, Tl[a], Tl[b])]
+    got, used = self_intersection._improper_pairs(V, T, grid, moved)
     assert got.dtype == np.int64 and got.tolist() == [list(p) for p in want] and used == 1
     assert len(want) > 20
     if can_fork():
-        monkeypatch.setattr(trim, "_PARALLEL_CHECK", 1)
-        two, used = trim._improper_pairs(V, T, grid, moved, workers=2)
+        monkeypatch.setattr(self_intersection, "_PARALLEL_CHECK", 1)
+        two, used = self_intersection._improper_pairs(V, T, grid, moved, workers=2)
         assert used == 2 and np.array_equal(two, got)
-    none, _ = trim._improper_pairs(V, T, grid, np.zeros(len(V), dtype=bool))
+    none, _ = self_intersection._improper_pairs(V, T, grid, np.zeros(len(V), dtype=bool))
     assert none.shape == (0, 2)
 
 
@@ -250,10 +252,10 @@ def test_nonmanifold_is_identical(seed):
         cases.append((F, len(V)))
         cases.append((np.concatenate([F, F[rng.integers(0, len(F), 4)]]), len(V)))  # doubled
     for F, n in cases:
-        a, b = trim._nonmanifold(F, n), _nonmanifold_reference(F, n)
+        a, b = output._nonmanifold(F, n), _nonmanifold_reference(F, n)
         assert all(np.array_equal(x, y) and x.dtype == y.dtype for x, y in zip(a, b))
     F, n = cases[0]
-    edges, vertices = trim._nonmanifold(F, n)
+    edges, vertices = output._nonmanifold(F, n)
     assert len(edges) and len(vertices)
 
 
@@ -261,21 +263,21 @@ def test_rounding_check_on_a_sum(monkeypatch):
     """On a real Minkowski sum's output (star + icosphere): the compiled conversion, moved
     points and boxes are the references', and the exact test on the pairs' own vertices
     agrees with all vertices' integers on every box pair with a moved vertex."""
-    from cspace.trim import minkowski_sum
+    from cspace.minkowski.sum import minkowski_sum
 
     S = minkowski_sum(star(), icosphere_points(1, radius=0.3), workers=1)
     points, V, T, grid = S.points_exact, S.vertices, S.faces, S.grid
-    assert _same_bits(V, trim._to_float(points, grid))
-    moved = trim._moved(points, V, grid)
-    assert np.array_equal(trim._moved_compiled(points, V, grid), moved) and moved.any()
-    lo, hi = trim._triangle_boxes(V, T, grid.exponent)
-    lo2, hi2 = trim._triangle_boxes_compiled(V, T, grid.exponent)
+    assert _same_bits(V, output._to_float(points, grid))
+    moved = rounding._moved(points, V, grid)
+    assert np.array_equal(rounding._moved_compiled(points, V, grid), moved) and moved.any()
+    lo, hi = self_intersection._triangle_boxes(V, T, grid.exponent)
+    lo2, hi2 = self_intersection._triangle_boxes_compiled(V, T, grid.exponent)
     assert np.array_equal(lo, lo2) and np.array_equal(hi, hi2)
-    monkeypatch.setattr(trim, "_undecided_pairs_compiled",
+    monkeypatch.setattr(self_intersection, "_undecided_pairs_compiled",
                         lambda V, T, ps, mv: mv[T[ps]].any(axis=(1, 2)))
-    pairs = trim.box_pairs(lo, hi)
+    pairs = boxes.box_pairs(lo, hi)
     pairs = pairs[moved[T[pairs]].any(axis=(1, 2))]
-    Vi, Tl = trim._common_integers(V), T.tolist()
-    want = [(a, b) for a, b in pairs.tolist() if trim._improper(Vi, Tl[a], Tl[b])]
-    got, _ = trim._improper_pairs(V, T, grid, moved)
+    Vi, Tl = self_intersection._common_integers(V), T.tolist()
+    want = [(a, b) for a, b in pairs.tolist() if self_intersection._improper(Vi, Tl[a], Tl[b])]
+    got, _ = self_intersection._improper_pairs(V, T, grid, moved)
     assert len(pairs) > 1000 and got.tolist() == [list(p) for p in want]

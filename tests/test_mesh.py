@@ -18,8 +18,9 @@ from cspace.errors import (
     NonManifoldError,
     OpenMeshError,
 )
-from cspace.exact import Grid
-from cspace.mesh import ClosedMesh, _volume6, as_mesh
+from cspace.geometry.exact import Grid
+from cspace.mesh.closed import ClosedMesh, as_mesh
+from cspace.mesh.validate import _volume6
 
 # -- helpers ----------------------------------------------------------------------------------
 

@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from cspace.errors import SceneError
-from cspace.meshfile import UP_AXIS_MATRICES, read_mesh_file
+from cspace.mesh.files import UP_AXIS_MATRICES, read_mesh_file
 
 collada = pytest.importorskip("collada")  # a core dependency: present on every install
 from collada import geometry, material, scene, source  # noqa: E402

@@ -1,4 +1,4 @@
-"""Exact queries on closed-mesh C-obstacles (cspace.meshquery, ``kind='mesh'``).
+"""Exact queries on closed-mesh C-obstacles (cspace.mesh.query, ``kind='mesh'``).
 
 - exactness against the convex engine: the triangulated surface of a convex C-obstacle gives
   the same answer as its exact facet planes on every query (points exactly at vertices, on
@@ -12,7 +12,7 @@
   plate that OMPL's discrete motion validator (1% resolution) steps over;
 - C-obstacles of non-convex obstacles built by ``minkowski_sum`` (zoo and shared meshes with a
   box and a small hull robot) against FCL on the raw float operands the test built from
-  (:class:`cspace.fcl_check.SceneOracle` of them; robot mesh vs obstacle mesh): no false
+  (:class:`cspace.check.oracle.SceneOracle` of them; robot mesh vs obstacle mesh): no false
   free, false collisions within the C-obstacle's ``error_bound``.
 """
 
@@ -27,11 +27,13 @@ import numpy as np
 import pytest
 
 import zoo
-from cspace.convex import ConvexPolytope
+from cspace.mesh.convex import ConvexPolytope
 from cspace.errors import InvalidMeshError, NonFiniteError, NotConvexError, OpenMeshError
-from cspace.fcl_check import FclOracle, _near_surface, cross_check, winding_number
-from cspace.mesh import ClosedMesh
-from cspace.obstacle import CSpace, CSpaceObstacle
+from cspace.check.fcl import FclOracle, winding_number
+from cspace.check.cross_check import _near_surface, cross_check
+from cspace.mesh.closed import ClosedMesh
+from cspace.scene.model import CSpace
+from cspace.cobstacle.obstacle import CSpaceObstacle
 from oracles import raw_mesh, raw_scene  # tests/ is on sys.path
 
 # A point-sized robot for using a mesh directly as a C-obstacle with FCL: a tetrahedron of
@@ -420,7 +422,7 @@ def test_thin_plate_caught_where_ompl_discrete_validation_misses():
     steps over it, the exact check does not."""
     from ompl import base as ob
 
-    from cspace.ompl_plugin import CSpaceValidityChecker, state_space
+    from cspace.planning.ompl_plugin import CSpaceValidityChecker, state_space
 
     occ = np.zeros((3, 1, 1), dtype=bool)
     occ[0] = occ[2] = True

@@ -1,6 +1,6 @@
 """Metamorphic tests (issue #27): every construction, the scene moved far from the origin,
 scaled (dyadic and not), rotated and permuted, against an oracle that shares nothing with
-cspace (:class:`cspace.fcl_check.SceneOracle` on the raw meshes). See ``tests/metamorphic.py``.
+cspace (:class:`cspace.check.oracle.SceneOracle` on the raw meshes). See ``tests/metamorphic.py``.
 
 ``make test`` runs a fixed grid (each construction under each kind of move); ``make
 test-slow`` a randomized sweep, turning slices and turns, the cache round trip and a Dask
@@ -19,11 +19,12 @@ from metamorphic import (CASES, GRID_MOVES, Case, Move, judge, moved_scene, rand
 from scipy.spatial.transform import Rotation
 
 from cspace import model_scene
-from cspace.fcl_check import SceneOracle
-from cspace.scene import Body
-from cspace.turning import Slices, TurningCSpace
+from cspace.check.oracle import SceneOracle
+from cspace.scene.scene import Body
+from cspace.planning.orientations import Slices
+from cspace.planning.turning import TurningCSpace
 
-#: Which construction each case must get as given (the pairings of cspace.pairs).
+#: Which construction each case must get as given (the pairings of cspace.cobstacle.pairs).
 EXPECTED = {
     "CVMS": {"CVMS"},
     "NCC-CVMS": {"NCC-CVMS"},
@@ -71,7 +72,7 @@ def _check(case, move, n=150, seed=0, segments=None, **kw):
 
 
 def test_every_construction_is_covered():
-    from cspace.pairs import CONSTRUCTIONS
+    from cspace.cobstacle.pairs import CONSTRUCTIONS
 
     covered = set().union(*EXPECTED.values())
     assert covered == set(CONSTRUCTIONS), set(CONSTRUCTIONS) - covered
@@ -153,7 +154,7 @@ def test_cache_round_trip_moved(name, tmp_path):
 @pytest.mark.slow
 def test_dask_build_moved():
     pytest.importorskip("distributed")
-    from cspace.scale import executor_for
+    from cspace.planning.scale import executor_for
 
     with executor_for("local", 2) as ex:
         for move in random_moves(3, seed=5):

@@ -1,4 +1,4 @@
-"""Scene modelling (cspace.model), surface C-obstacles (cspace.surface), the disk cache.
+"""Scene modelling (cspace.scene.model), surface C-obstacles (cspace.cobstacle.surface), the disk cache.
 
 Real checks only: classifications are compared with independent inspections of the meshes
 (trimesh watertightness and convexity, float bounding boxes with a margin), surface
@@ -15,11 +15,11 @@ import pytest
 import trimesh
 
 from cspace import CSpace, CSpaceObstacle, load_scene
-from cspace.cache import COCache, cache_dir
+from cspace.scene.cache import COCache, cache_dir
 from cspace.errors import BuildError
-from cspace.fcl_check import SceneOracle
-from cspace.model import model_scene
-from cspace.scene import Body, Scene
+from cspace.check.oracle import SceneOracle
+from cspace.scene.model import model_scene
+from cspace.scene.scene import Body, Scene
 
 from zoo import hollow_box, torus  # tests/ is on sys.path (rootdir conftest)
 
@@ -408,7 +408,7 @@ def test_fcl_environment_builds_and_agrees_with_fcl(shared_data):
     assert [o.kind for o in cs.obstacles].count("surface") == 1
     # FCL with each body's semantics: fcl.Convex solids for the convex parts, plain mesh
     # collision for the open ones; membership and distance on uniform and near-surface points.
-    from cspace.fcl_check import cross_check
+    from cspace.check.cross_check import cross_check
 
     r = cross_check(cs, n=800, seed=2, band=1e-9)
     assert 100 < r["n_inside"] < 750
@@ -429,7 +429,7 @@ def test_parasol_solid_builds_and_agrees_with_fcl(shared_data, tmp_path, rel):
     (b,) = m.bodies
     assert b.kind == "solid" and not b.error and b.co.kind == "mesh"
     cs = m.cspace()
-    from cspace.fcl_check import cross_check
+    from cspace.check.cross_check import cross_check
 
     r = cross_check(cs, n=4000, seed=0, band=1e-9)
     assert r["n_disagree"] == 0, r["disagreements"][:5]
@@ -452,7 +452,7 @@ def test_fcl_environment_exact_robot(shared_data, tmp_path):
     m = model_scene(fcl_env_scene(shared_data), cache=tmp_path / "cache")
     assert sorted(p.kind for p in m.robot_parts) == ["convex"] * 2 + ["surface"] * 4
     cs = m.cspace()
-    from cspace.fcl_check import cross_check
+    from cspace.check.cross_check import cross_check
 
     r = cross_check(cs, n=2000, seed=2, band=1e-9)
     assert r["n_disagree"] == 0, r["disagreements"][:5]
@@ -512,6 +512,6 @@ def test_boxes_touching_along_an_edge_or_at_a_vertex_are_two_solids():
 def test_surface_distance_with_no_candidates_left():
     # _by_piece on no rows yielded a piece of an empty array (IndexError): a surface
     # C-obstacle queried where every nearer box has been ruled out.
-    from cspace.surface import _UnionCO
+    from cspace.cobstacle.surface import _UnionCO
 
     assert list(_UnionCO._by_piece(np.zeros(0, np.int64), np.zeros(0, np.int64))) == []

@@ -1,6 +1,6 @@
 """C-space obstacles (convex path): exact queries, edge cases, and FCL cross-checks.
 
-- shipped scenes: :func:`cspace.fcl_check.cross_check` on 10^4 samples, zero membership
+- shipped scenes: :func:`cspace.check.cross_check.cross_check` on 10^4 samples, zero membership
   disagreements outside a 1e-9 band and distance errors below 1e-9 x scene size;
 - exactness: points exactly on facets and at vertices are inside, one ulp out is outside,
   segments in a facet plane or grazing a vertex touch (not free), zero-length segments,
@@ -21,11 +21,14 @@ import pytest
 from scipy.spatial import ConvexHull
 
 from cspace import load_scene
-from cspace.convex import ConvexPolytope, hull_minkowski_sum
+from cspace.mesh.convex import ConvexPolytope
+from cspace.minkowski.cvms import hull_minkowski_sum
 from cspace.errors import DegenerateError, NonFiniteError
-from cspace.fcl_check import FclOracle, cross_check
-from cspace.obstacle import CSpace, CSpaceObstacle
-from cspace.scene import Body, Scene
+from cspace.check.fcl import FclOracle
+from cspace.check.cross_check import cross_check
+from cspace.scene.model import CSpace
+from cspace.cobstacle.obstacle import CSpaceObstacle
+from cspace.scene.scene import Body, Scene
 from oracles import raw_fcl_oracle, raw_mesh, raw_scene  # tests/ is on sys.path
 
 SCENES = sorted((Path(__file__).resolve().parents[1] / "scenes").glob("*.toml"))
@@ -483,7 +486,7 @@ def test_flat_convex_operands_against_fcl(case):
     # (the flat one a surface, the other a solid) agrees.
     import trimesh
 
-    from cspace.fcl_check import cross_check
+    from cspace.check.cross_check import cross_check
 
     box = trimesh.creation.box((1.0, 1.0, 1.0)).vertices
     flat = {"panel robot": [[0, 0, 0], [0.6, 0, 0], [0.6, 0.4, 0], [0, 0.4, 0]],

@@ -18,8 +18,8 @@ from test_meshfile import _doc, _geometry, _instance, _write  # tests/ is on sys
 from test_robot_parts import _box, _u_robot
 
 from cspace import load_scene, model_scene
-from cspace.fcl_check import SceneOracle
-from cspace.meshfile import read_mesh_file
+from cspace.check.oracle import SceneOracle
+from cspace.mesh.files import read_mesh_file
 
 collada = pytest.importorskip("collada")
 from collada import scene as cs  # noqa: E402

@@ -3,7 +3,7 @@
 No mocks: every run plans with OMPL 2.0.1 on a shipped scene, and every returned path (exact
 or approximate) is re-checked exactly (``segment_free``) and with FCL sampled along each
 segment at 1e-3 of the scene size, on the raw scene meshes as loaded
-(:class:`cspace.fcl_check.SceneOracle`; nothing of the C-space).
+(:class:`cspace.check.oracle.SceneOracle`; nothing of the C-space).
 """
 
 from __future__ import annotations
@@ -18,8 +18,9 @@ pytest.importorskip("ompl")
 pytest.importorskip("fcl")
 
 import cspace  # noqa: E402
-from cspace.fcl_check import path_collisions  # noqa: E402
-from cspace.ompl_plugin import plan, planner_names, verify_path  # noqa: E402
+from cspace.check.cross_check import path_collisions  # noqa: E402
+from cspace.planning.plan import plan
+from cspace.planning.ompl_plugin import planner_names, verify_path  # noqa: E402
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
@@ -40,7 +41,7 @@ MUST_SOLVE = {"comb": 0.7}  # fraction of runs per scene
 
 class _Fcl:
     """FCL re-check of a path on the raw scene, sampled along every segment
-    (cspace.fcl_check.path_collisions of the Scene: SceneOracle)."""
+    (cspace.check.cross_check.path_collisions of the Scene: SceneOracle)."""
 
     def __init__(self, scene: cspace.Scene):
         self.scene = scene
@@ -140,14 +141,14 @@ def test_window_discrete_validation_clips_exact_does_not(scenes, capsys):
 def _si(cs, bounds):
     from ompl import base as ob
 
-    from cspace.ompl_plugin import state_space
+    from cspace.planning.ompl_plugin import state_space
 
     space = state_space(bounds)
     return ob.SpaceInformation(space)
 
 
 def test_checker_and_motion_validator_return_bools(scenes):
-    from cspace.ompl_plugin import CSpaceMotionValidator, CSpaceValidityChecker
+    from cspace.planning.ompl_plugin import CSpaceMotionValidator, CSpaceValidityChecker
 
     s, cs, _ = scenes["window"]
     si = _si(cs, s.bounds)
@@ -222,7 +223,7 @@ def test_unknown_planner_and_motion(scenes):
 
 
 def test_plan_on_a_scene_builds_through_the_cache(tmp_path):
-    from cspace.cache import COCache
+    from cspace.scene.cache import COCache
 
     s = cspace.load_scene(SCENES / "comb.toml")
     cache = COCache(tmp_path)
@@ -233,7 +234,7 @@ def test_plan_on_a_scene_builds_through_the_cache(tmp_path):
 
 
 def test_narrow_passage_samples_are_free_and_in_a_gap(scenes):
-    from cspace.ompl_plugin import narrow_passage_samples
+    from cspace.planning.ompl_plugin import narrow_passage_samples
 
     s, cs, _ = scenes["window"]
     P = narrow_passage_samples(cs, s.bounds, seed=0)

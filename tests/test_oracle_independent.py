@@ -1,6 +1,6 @@
 """The FCL oracle shares nothing with the code it checks (issue #27, item 3).
 
-- :class:`cspace.fcl_check.SceneOracle` against brute-force truth on hand-made scenes of
+- :class:`cspace.check.oracle.SceneOracle` against brute-force truth on hand-made scenes of
   axis-aligned boxes (closed boxes are solids, open boxes are surfaces; two closed sets of
   boxes and rectangles meet iff their intervals overlap on every axis): a robot whose second
   component sits inside a closed body, a body component inside a closed robot, an open box
@@ -19,8 +19,10 @@ import trimesh
 
 from cspace import CSpace
 from cspace.cli import main
-from cspace.fcl_check import PoseCollider, SceneOracle, cross_check, path_collisions
-from cspace.scene import Body, Scene, load_scene
+from cspace.check.cross_check import PoseCollider, cross_check, path_collisions
+from cspace.check.oracle import SceneOracle
+from cspace.scene.scene import Body, Scene
+from cspace.scene.files import load_scene
 
 # --------------------------------------------------------------------------------------
 # hand-made boxes with brute-force truth
@@ -137,7 +139,7 @@ def test_open_cup_enclosing_the_robot_is_a_surface(offset):
     q = off + [1.5, 1.5, 1.5]
     assert not orc.collides(q[None])[0]  # in the cup, touching nothing
     # a winding test would have said "inside": the cup's five faces cover 5/6 of the sphere
-    from cspace.fcl_check import winding_number
+    from cspace.check.fcl import winding_number
 
     V, F = orc.bodies[0].V, orc.bodies[0].F
     assert winding_number(V, F, (q + 0.5)[None])[0] > 0.5
@@ -222,8 +224,8 @@ def _write_scene(tmp_path):
 def shifted_boxes(monkeypatch):
     """The old bug: the pieces' boxes converted by the grid that adds its origin (S already
     holds it), so every box sits one grid origin away from its piece."""
-    import cspace.pairs as pairs
-    from cspace.surface import _CellGrid
+    import cspace.cobstacle.pairs as pairs
+    from cspace.cobstacle.surface import _CellGrid
 
     original = pairs._PairsCO.__init__
 
@@ -245,7 +247,7 @@ AROUND = [[247.5, 150.0, -300.0], [247.5, 152.2, -300.0], [252.5, 152.2, -300.0]
 
 
 def _uses_triangle_pairs(cs):
-    import cspace.pairs as pairs
+    import cspace.cobstacle.pairs as pairs
 
     return any(isinstance(getattr(o, "_impl", None), pairs._PairsCO) for o in cs.obstacles)
 

@@ -1,4 +1,4 @@
-"""Tests of cspace.planar: exact planar arrangements and net polygon coverage."""
+"""Tests of cspace.minkowski.plane_arrangement: exact planar arrangements and net polygon coverage."""
 
 from __future__ import annotations
 
@@ -8,18 +8,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from cspace.planar import (
-    Arrangement2D,
-    merge_coplanar,
+from cspace.minkowski.plane_arrangement import Arrangement2D
+from cspace.minkowski.coverage import merge_coplanar, polygon_coverage, sampled_coverage
+from cspace.geometry.homogeneous import (
     point_on_segment,
-    polygon_coverage,
     project_homogeneous,
-    sampled_coverage,
     to_point,
-    triangulate_face,
     winding_number,
-    _strip_spikes,
 )
+from cspace.minkowski.triangulation import triangulate_face, _strip_spikes
 
 
 def _signed_area(points) -> Fr:
@@ -281,7 +278,7 @@ def test_random_segments(segs):
 @given(st.lists(seg, min_size=2, max_size=12))
 def test_sweep_finds_the_pairs_of_the_double_loop(segs):
     """The sort-and-sweep used for many segments gives the same arrangement."""
-    import cspace.planar as planar
+    import cspace.minkowski.plane_arrangement as planar
 
     slow = Arrangement2D(segs)
     old = planar._SWEEP_FROM

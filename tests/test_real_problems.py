@@ -9,7 +9,7 @@ planned through the command line (``cspace plan X.cfg --seed S --time T --fcl-ch
 --result out.json``), and every path the test gets is re-checked twice, independently of
 the C-obstacles that produced it:
 
-* by cspace's FCL oracle, :func:`cspace.fcl_check.pose_path_collisions` (the robot's raw mesh
+* by cspace's FCL oracle, :func:`cspace.check.cross_check.pose_path_collisions` (the robot's raw mesh
   at poses along every translation and turn);
 * by :class:`RawFcl`, this file's own check: python-fcl BVHs of each body as *trimesh* reads
   the Collada files (node matrices applied by trimesh, the Z_UP turn applied here), never
@@ -51,7 +51,7 @@ from scipy.spatial.transform import Rotation
 import real_problems as rp
 from cspace import load_scene, model_scene
 from cspace.cli import main as cli_main
-from cspace.fcl_check import path_collisions, pose_path_collisions
+from cspace.check.cross_check import path_collisions, pose_path_collisions
 
 fcl = pytest.importorskip("fcl")
 trimesh = pytest.importorskip("trimesh")
@@ -369,8 +369,8 @@ def test_slot_wall_blocks_the_start_orientation(slot_wall):
     turned = Rotation.from_rotvec([np.pi / 2, 0, 0]).as_matrix()
     axis = np.array([[x0, 150.0, -300.0] for x0 in np.arange(lo[0], hi[0] + 1, 5.0)])
     assert not any(oracle.collides(turned, q) for q in axis)
-    from cspace.ompl_plugin import default_slices
-    from cspace.turning import TurningCSpace
+    from cspace.planning.plan import default_slices
+    from cspace.planning.turning import TurningCSpace
 
     tcs = TurningCSpace(scene, default_slices(scene, 4))
     assert all(tcs.state_free(q, 1) for q in axis)
@@ -382,8 +382,8 @@ def test_slot_wall_states_agree_with_raw_fcl(slot_wall):
     states, 150 near the slot and 30 pairs 1e-3 either side of FCL's contact boundary, per
     orientation; and 40 short motions near the slot at the start orientation."""
     p, scene, _ = slot_wall
-    from cspace.ompl_plugin import default_slices
-    from cspace.turning import TurningCSpace
+    from cspace.planning.plan import default_slices
+    from cspace.planning.turning import TurningCSpace
 
     m = model_scene(scene, cache=False)
     cs = m.cspace()
@@ -561,7 +561,7 @@ def test_thin_wall_straight_motion_collides(thin_wall):
     assert not cs.segment_free(scene.start, scene.goal)
     t = cs.first_contact(scene.start, scene.goal)
     assert 0.0 < t < 1.0
-    from cspace import ompl_plugin
+    from cspace.planning import ompl_plugin
     from ompl import base as ob
 
     si = ob.SpaceInformation(ompl_plugin.state_space(scene.bounds))

@@ -14,11 +14,12 @@ import trimesh
 from zoo import l_shape, voxel_solid
 
 from cspace import model_scene
-from cspace.fcl_check import SceneOracle, cross_check, path_collisions
-from cspace.ompl_plugin import plan
-from cspace.pairs import pair_construction, triangle_pair_pieces
-from cspace.scene import Body, Scene
-from cspace.surface import SurfaceObstacle
+from cspace.check.oracle import SceneOracle
+from cspace.check.cross_check import cross_check, path_collisions
+from cspace.planning.plan import plan
+from cspace.cobstacle.pairs import pair_construction, triangle_pair_pieces
+from cspace.scene.scene import Body, Scene
+from cspace.cobstacle.surface import SurfaceObstacle
 
 
 def _u_robot(size=0.5):

@@ -21,14 +21,15 @@ import trimesh
 from cspace import CSpace, load_scene
 from cspace.cli import main as cli
 from cspace.errors import BuildError, InvalidArgumentError, MissingDependencyError
-from cspace.model import model_scene
-from cspace.scale import build_slices, executor_for
+from cspace.scene.model import model_scene
+from cspace.planning.scale import build_slices, executor_for
 
 # A Dask client leaves a thread in this process and spawned pools a resource tracker: after
 # every other test (conftest), so that the fork tests see neither.
 pytestmark = pytest.mark.last
-from cspace.scene import Body, Scene
-from cspace.turning import Slices, TurningCSpace
+from cspace.scene.scene import Body, Scene
+from cspace.planning.orientations import Slices
+from cspace.planning.turning import TurningCSpace
 from zoo import l_shape  # tests/ is on sys.path (rootdir conftest)
 
 distributed = pytest.importorskip("distributed")
@@ -203,8 +204,8 @@ def test_cli_build_on_the_cluster(client, capsys):
 
 
 def test_the_default_path_never_imports_dask():
-    code = ("import sys, cspace, cspace.cli, cspace.scale\n"
-            "from cspace.model import model_scene\n"
+    code = ("import sys, cspace, cspace.cli, cspace.planning.scale\n"
+            "from cspace.scene.model import model_scene\n"
             f"model_scene(cspace.load_scene({str(ROOT / 'scenes' / 'window.toml')!r})).cspace()\n"
             "assert 'distributed' not in sys.modules and 'dask' not in sys.modules\n")
     proc = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,

@@ -14,10 +14,12 @@ import numpy as np
 import pytest
 import trimesh
 
-import cspace.meshfile as meshfile
-import cspace.scene as scene_module
+import cspace.mesh.files as meshfile
+import cspace.scene.files as scene_module
 from cspace import ConvexPolytope, convex_minkowski_sum
-from cspace.scene import Body, Scene, SceneError, load_scene
+from cspace.scene.scene import Body, Scene
+from cspace.errors import SceneError
+from cspace.scene.files import load_scene
 
 from zoo import l_shape  # tests/ is on sys.path (rootdir conftest)
 

@@ -5,7 +5,7 @@ fallback may change its meaning silently.
   two tilted blocks): it takes the non-convex path or raises a named error;
 - a convex body that snapping bent (a rotated box, prism, icosphere far from the origin) is
   still convex, built from its hull, with the hull's excess proved and counted in
-  ``error_bound`` (:func:`cspace.convex.convex_within_bound`).
+  ``error_bound`` (:func:`cspace.mesh.convex.convex_within_bound`).
 """
 
 import numpy as np
@@ -14,9 +14,9 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 import cspace
-from cspace.convex import ConvexPolytope, convex_within_bound
+from cspace.mesh.convex import ConvexPolytope, convex_within_bound
 from cspace.errors import DegenerateError, NotConvexError
-from cspace.mesh import as_mesh
+from cspace.mesh.closed import as_mesh
 
 ROBOT = cspace.ConvexPolytope.from_points(trimesh.creation.icosphere(1, radius=0.1).vertices)
 
@@ -121,7 +121,7 @@ def test_rotated_convex_bodies_stay_convex_with_an_honest_bound(shape):
         bent += P.excess > 0
         assert P.excess <= 4 * e
         # the hull holds the snapped body (every snapped vertex is on or in it, exactly)
-        side = cspace.exact.plane_side_matrix(
+        side = cspace.geometry.exact.plane_side_matrix(
             mesh.ints, P.ints[P.facet_indices[P.facet_offsets[:-1]]], P.normals)
         assert (side <= 0).all()
         # it lies within the snapping bound of the true body (convex: dist to it is convex,

@@ -3,7 +3,7 @@ through scenes.
 
 - a closed body whose snapped triangles include zero-area ones (caps: three collinear grid
   corners; needles: two corners welded) is repaired exactly, keeping its point set, and stays
-  a solid (:func:`cspace.mesh._repair_degenerate`);
+  a solid (:func:`cspace.mesh.closed._repair_degenerate`);
 - nesting (cavity or separate body) is decided exactly in ``ClosedMesh`` as in scenes;
 - solids sharing an edge or a vertex in one mesh are a union in ``minkowski_sum`` too;
 - a hull standing for a bent body counts its excess in ``CSpaceObstacle.error_bound``.
@@ -15,7 +15,7 @@ import trimesh
 from scipy.spatial.transform import Rotation
 
 import cspace
-from cspace.convex import ConvexPolytope
+from cspace.mesh.convex import ConvexPolytope
 
 ROBOT_MESH = trimesh.creation.icosphere(1, radius=0.1)
 ROBOT = ConvexPolytope.from_points(ROBOT_MESH.vertices)
@@ -134,7 +134,7 @@ def _capped_l(scale=25.0, at=FAR):
 
 
 def _scene(obstacles, robot, reference_point, half=120.0):
-    from cspace.scene import Body, Scene
+    from cspace.scene.scene import Body, Scene
 
     lo, hi = FAR - half, FAR + half
     bodies = tuple(Body(name, V, F, "test") for name, (V, F) in obstacles.items())
@@ -154,8 +154,8 @@ def _near_surfaces(scene, n, seed):
 
 @pytest.mark.parametrize("robot", ["ball", "L"])
 def test_capped_bodies_stay_solid_in_a_scene_and_agree_with_fcl(robot):
-    from cspace.fcl_check import SceneOracle
-    from cspace.model import model_scene
+    from cspace.check.oracle import SceneOracle
+    from cspace.scene.model import model_scene
 
     obstacles = {"box": _capped_box(), "L": _capped_l(at=FAR + (-110, 60, 0))}
     if robot == "ball":
@@ -194,7 +194,7 @@ def test_capped_meshes_through_the_api():
 
 
 # ---------------------------------------------------------------------------------------
-# 2. nesting decided exactly in the API as in scenes (cspace.components.nested_pairs)
+# 2. nesting decided exactly in the API as in scenes (cspace.mesh.components.nested_pairs)
 
 
 def _l_and_inverted_box(centre):
@@ -219,8 +219,8 @@ def test_an_inside_out_box_in_the_notch_of_an_l_is_a_body_not_a_dropped_cavity()
     co = cspace.CSpaceObstacle.build(A, ROBOT)
     assert co.contains([2.0, 2.0, 0.5]) and not co.contains([1.6, 1.6, 0.5])
     # the scene answers the same
-    from cspace.model import model_scene
-    from cspace.scene import Body, Scene
+    from cspace.scene.model import model_scene
+    from cspace.scene.scene import Body, Scene
 
     robot = Body("robot", ROBOT_MESH.vertices, ROBOT_MESH.faces, "test")
     scene = Scene("notch", None, (Body("w", *A, "test"),), robot, np.zeros(3),

@@ -13,12 +13,13 @@ import numpy as np
 import pytest
 import trimesh
 
-from cspace import exact
-from cspace.convex import ConvexPolytope, convex_minkowski_sum
+from cspace.geometry import exact
+from cspace.mesh.convex import ConvexPolytope
+from cspace.minkowski.cvms import convex_minkowski_sum
 from cspace.errors import DegenerateError
-from cspace.exact import Grid
-from cspace.mesh import ClosedMesh
-from cspace.superset import SUPERSET_KINDS, minkowski_superset
+from cspace.geometry.exact import Grid
+from cspace.mesh.closed import ClosedMesh
+from cspace.minkowski.superset import SUPERSET_KINDS, minkowski_superset
 
 
 def operands(Av, Af, Bpts, name="A"):

@@ -1,4 +1,4 @@
-"""cspace.trim.minkowski_sum (NCC-CVMS): the exact sum A ⊕ B against independent references.
+"""cspace.minkowski.sum.minkowski_sum (NCC-CVMS): the exact sum A ⊕ B against independent references.
 
 Per suite case (zoo shapes, the paper's special cases, shared-data meshes in slow tests):
 
@@ -31,13 +31,15 @@ import pytest
 
 import oracles
 import zoo
-from cspace.convex import ConvexPolytope, convex_minkowski_sum
+from cspace.mesh.convex import ConvexPolytope
+from cspace.minkowski.cvms import convex_minkowski_sum
 from cspace.errors import NonFiniteError, NotConvexError, OpenMeshError
-from cspace.exact import Grid
-from cspace.fcl_check import winding_number
-from cspace.mesh import ClosedMesh
-from cspace.superset import minkowski_superset
-from cspace.trim import SumPolyhedron, minkowski_sum
+from cspace.geometry.exact import Grid
+from cspace.check.fcl import winding_number
+from cspace.mesh.closed import ClosedMesh
+from cspace.minkowski.superset import minkowski_superset
+from cspace.minkowski.polyhedron import SumPolyhedron
+from cspace.minkowski.sum import minkowski_sum
 from oracles import FclSolid
 
 igl = pytest.importorskip("igl", reason="libigl (the peers extra) gives the reference volumes and distances")
@@ -475,31 +477,31 @@ def test_volume_sign_filter_is_the_exact_sign(scale):
     sign of the exact sum: closed boxes both ways, and surfaces of zero volume (a flat
     double-sided square; a box with one corner moved by 1 / scale of a unit along a face),
     where the filter cannot decide and the exact sum must."""
-    from cspace import trim
+    from cspace.minkowski import polyhedron
 
     cube = np.array([[0, 0, 0], [2, 0, 0], [2, 3, 0], [0, 3, 0],
                      [0, 0, 5], [2, 0, 5], [2, 3, 5], [0, 3, 5]])
     faces = np.array([[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
                       [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]])
     pts = [(int(x) * scale, int(y) * scale, int(z) * scale, scale + 2) for x, y, z in cube]
-    assert trim._volume_sign(pts, faces) == 1 == np.sign(trim._six_volume(pts, faces))
-    assert trim._volume_sign(pts, faces[:, ::-1]) == -1
+    assert polyhedron._volume_sign(pts, faces) == 1 == np.sign(polyhedron._six_volume(pts, faces))
+    assert polyhedron._volume_sign(pts, faces[:, ::-1]) == -1
     flat = np.array([[0, 1, 2], [0, 2, 3], [0, 2, 1], [0, 3, 2]])
-    assert trim._volume_sign(pts, flat) == 0
+    assert polyhedron._volume_sign(pts, flat) == 0
     # the top corner moved by 1 / scale inwards along the top face: still positive volume,
     # a difference far below the filter's bound for large scales
     moved = list(pts)
     x, y, z, w = moved[6]
     moved[6] = (x * scale - 1, y * scale, z * scale, w * scale)
-    assert trim._volume_sign(moved, faces) == np.sign(trim._six_volume(moved, faces)) == 1
-    assert trim._volume_sign(moved, faces[:, ::-1]) == -1
+    assert polyhedron._volume_sign(moved, faces) == np.sign(polyhedron._six_volume(moved, faces)) == 1
+    assert polyhedron._volume_sign(moved, faces[:, ::-1]) == -1
     # two copies of the box, one of them turned inside out: zero volume, exact path
     twice = np.vstack([faces, faces[:, ::-1]])
-    assert trim._volume_sign(pts, twice) == 0
+    assert polyhedron._volume_sign(pts, twice) == 0
     # a unit tetrahedron 2**35 grid units from the origin: its triple products are about
     # 2**105 and cancel to 1 (six times its volume); the float sum is noise of about 2**52
     o = 2**35 * scale
     tet = [(o, o, o, 1), (o + 1, o, o, 1), (o, o + 1, o, 1), (o, o, o + 1, 1)]
     tf = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-    assert trim._six_volume(tet, tf) == 1
-    assert trim._volume_sign(tet, tf) == 1 and trim._volume_sign(tet, tf[:, ::-1]) == -1
+    assert polyhedron._six_volume(tet, tf) == 1
+    assert polyhedron._volume_sign(tet, tf) == 1 and polyhedron._volume_sign(tet, tf[:, ::-1]) == -1

@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 from zoo import box_points, genus3, voxel_solid
 
-from cspace.trim import _improper, minkowski_sum
+from cspace.mesh.self_intersection import _improper
+from cspace.minkowski.sum import minkowski_sum
 
 
 def _closed_and_oriented(r) -> None:
@@ -107,8 +108,12 @@ def test_rounding_filter_never_drops_an_improper_pair(seed):
     """The float filters of the rounding check (compiled and numpy) only set aside pairs the
     exact test finds proper: random triangles on a few points (shared vertices and edges, coplanar
     and crossing pairs, points a few ulps off a plane)."""
-    from cspace.trim import (_common_integers, _undecided_pairs, _undecided_pairs_compiled,
-                             _undecided_pairs_np)
+    from cspace.mesh.self_intersection import (
+        _common_integers,
+        _undecided_pairs,
+        _undecided_pairs_compiled,
+        _undecided_pairs_np,
+    )
 
     rng = np.random.default_rng(seed)
     pool = rng.integers(0, 4, size=(14, 3)).astype(np.float64)
@@ -139,7 +144,7 @@ def test_provenance_matches_the_facet_normals():
     from zoo import torus
 
     from cspace import SUPERSET_KINDS, ConvexPolytope
-    from cspace.superset import minkowski_superset
+    from cspace.minkowski.superset import minkowski_superset
 
     V, F = torus(sections=16, ring=8)
     B = box_points(0.3, 0.2, 0.25)
@@ -198,10 +203,10 @@ def test_forked_arrangements_give_the_same_sum(monkeypatch):
     in this process."""
     from zoo import icosphere_points, torus
 
-    import cspace.trim as T
+    from cspace.minkowski import arrangements, intersections
 
-    monkeypatch.setattr(T, "_PARALLEL_OVERLAPS", 0)  # the pairs fork only on huge builds
-    monkeypatch.setattr(T, "_PARALLEL_FROM", 0)  # and the arrangements from more work
+    monkeypatch.setattr(intersections, "_PARALLEL_OVERLAPS", 0)  # the pairs fork only on huge builds
+    monkeypatch.setattr(arrangements, "_PARALLEL_FROM", 0)  # and the arrangements from more work
     V, F = torus()
     B = icosphere_points(2, radius=0.3)  # 51700 candidate pairs, 2300 arrangements
     one = minkowski_sum((V, F), B, workers=1)
@@ -221,19 +226,20 @@ def test_rounding_check_in_two_processes_matches_one(monkeypatch):
     box pair with a moved vertex is left by the filter and reported, so the lists are long.)"""
     from zoo import icosphere_points, star
 
-    import cspace.trim as T
+    from cspace.mesh import self_intersection
+    from cspace.minkowski import ncc_cvms
 
     seen = {}
-    real = T._rounding_check
+    real = ncc_cvms._rounding_check
 
     def capture(out, V, grid, workers=1):
         seen["args"] = (out, V, grid)
         return real(out, V, grid, workers)
 
-    monkeypatch.setattr(T, "_rounding_check", capture)
+    monkeypatch.setattr(ncc_cvms, "_rounding_check", capture)  # where the driver looks it up
     minkowski_sum(star(), icosphere_points(2, radius=0.3), workers=1)
-    monkeypatch.setattr(T, "_improper", lambda V, s, t: True)
-    monkeypatch.setattr(T, "_undecided_pairs_compiled",
+    monkeypatch.setattr(self_intersection, "_improper", lambda V, s, t: True)
+    monkeypatch.setattr(self_intersection, "_undecided_pairs_compiled",
                         lambda V, F, ps, moved: moved[F[ps]].any(axis=(1, 2)))
     one, n1, _ = real(*seen["args"], 1)
     two, n2, _ = real(*seen["args"], 2)
@@ -244,8 +250,10 @@ def test_rounding_check_in_two_processes_matches_one(monkeypatch):
 def _edge_incidences(A, B):
     """The sub-facet complex of A ⊕ B's superset, with its incidences grouped by edge
     (``order[start[e]: start[e] + counts[e]]``) and the oriented plane normals."""
-    from cspace.superset import minkowski_superset
-    from cspace.trim import _complex, _cuts, _plane_groups
+    from cspace.minkowski.superset import minkowski_superset
+    from cspace.minkowski.arrangements import _complex
+    from cspace.minkowski.intersections import _cuts
+    from cspace.minkowski.planes import _plane_groups
 
     S = minkowski_superset(A, B)
     planes = _plane_groups(S)
@@ -259,13 +267,14 @@ def _edge_incidences(A, B):
 
 def test_rounding_check_of_an_empty_output():
     """No triangles: nothing to check, in one process."""
-    import cspace.trim as T
-    from cspace.exact import Grid
+    from cspace.geometry.exact import Grid
+    from cspace.minkowski.output import _Output
+    from cspace.minkowski.rounding import _rounding_check
 
     z = np.zeros((0, 3), np.int64)
-    out = T._Output(points=[], faces=z, face_facet=z[:, 0], facet_superset=z[:, 0],
-                    shell=z[:, 0], shell_is_hole=np.zeros(0, bool))
-    bad, used, moved = T._rounding_check(out, np.zeros((0, 3)), Grid(exponent=-20), workers=2)
+    out = _Output(points=[], faces=z, face_facet=z[:, 0], facet_superset=z[:, 0],
+                  shell=z[:, 0], shell_is_hole=np.zeros(0, bool))
+    bad, used, moved = _rounding_check(out, np.zeros((0, 3)), Grid(exponent=-20), workers=2)
     assert bad.shape == (0, 2) and used == 1 and moved.shape == (0,)
 
 
@@ -274,7 +283,7 @@ def test_crossing_order_matches_the_angular_sort():
     exact angular sort (up to where the cycle starts), and it applies to most such edges."""
     from zoo import icosphere_points, torus
 
-    from cspace.trim import _angular_order, _crossing_order, _edge_direction
+    from cspace.minkowski.traversal import _angular_order, _crossing_order, _edge_direction
 
     B = icosphere_points(1, radius=0.3)
     cx, planes, order, counts, start, normal = _edge_incidences(torus(), B)
@@ -301,8 +310,10 @@ def test_one_facet_planes_match_the_sampled_coverage(robot, monkeypatch):
     coverage (with its area certificate), on every such plane."""
     from zoo import icosphere_points, star
 
-    from cspace.superset import minkowski_superset
-    from cspace.trim import _cuts, _plane_groups, _PlaneJobs
+    from cspace.minkowski.superset import minkowski_superset
+    from cspace.minkowski.intersections import _cuts
+    from cspace.minkowski.planes import _plane_groups
+    from cspace.minkowski.arrangements import _PlaneJobs
 
     B = box_points(0.3, 0.25, 0.2) if robot == "box" else icosphere_points(1, radius=0.3)
     S = minkowski_superset(star(), B)
@@ -337,7 +348,7 @@ def test_crossing_orders_at_once_match_one_by_one():
     one-sign order of each, and the filter decides nearly all of them."""
     from zoo import icosphere_points, star
 
-    from cspace.trim import _crossing_order, _crossing_orders
+    from cspace.minkowski.traversal import _crossing_order, _crossing_orders
 
     B = icosphere_points(1, radius=0.3)
     cx, planes, order, counts, start, normal = _edge_incidences(star(), B)
@@ -356,8 +367,11 @@ def test_lone_triangle_sub_facets_get_their_centroid():
     is their exact centroid (on their plane, strictly inside)."""
     from zoo import torus
 
-    from cspace.superset import minkowski_superset
-    from cspace.trim import _complex, _cuts, _face_point, _plane_groups, _PlaneJobs
+    from cspace.minkowski.superset import minkowski_superset
+    from cspace.minkowski.arrangements import _complex, _PlaneJobs
+    from cspace.minkowski.intersections import _cuts
+    from cspace.minkowski.membership import _face_point
+    from cspace.minkowski.planes import _plane_groups
 
     S = minkowski_superset(torus(), box_points(0.3, 0.25, 0.2))
     planes = _plane_groups(S)
@@ -381,12 +395,15 @@ def test_plain_sub_facets_get_the_point_their_arrangement_would_give(monkeypatch
     inner point."""
     from zoo import icosphere_points, star
 
-    import cspace.trim as T
-    from cspace.superset import minkowski_superset
+    from cspace.minkowski import arrangements as T
+    from cspace.minkowski.intersections import _cuts
+    from cspace.minkowski.membership import _face_point
+    from cspace.minkowski.planes import _plane_groups
+    from cspace.minkowski.superset import minkowski_superset
 
     S = minkowski_superset(star(), icosphere_points(1, radius=0.3))
-    planes = T._plane_groups(S)
-    cuts = T._cuts(S.ints, planes)
+    planes = _plane_groups(S)
+    cuts = _cuts(S.ints, planes)
     lazy, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
     monkeypatch.setattr(T, "plain_interior", lambda arr, f: False)
     eager, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
@@ -394,7 +411,7 @@ def test_plain_sub_facets_get_the_point_their_arrangement_would_give(monkeypatch
     made = [f for f in range(len(lazy.face_plane))
             if lazy.face_point[f] is None and eager.face_point[f] is not None]
     assert len(made) > 500
-    assert all(T._face_point(lazy, f) == eager.face_point[f] for f in made)
+    assert all(_face_point(lazy, f) == eager.face_point[f] for f in made)
 
 
 def test_triangles_made_when_asked_are_the_arrangements_own(monkeypatch):
@@ -403,13 +420,16 @@ def test_triangles_made_when_asked_are_the_arrangements_own(monkeypatch):
     vertex, as triangulating in the arrangement."""
     from zoo import icosphere_points, star
 
-    import cspace.trim as T
-    from cspace.planar import face_triangles
-    from cspace.superset import minkowski_superset
+    from cspace.minkowski import arrangements as T
+    from cspace.minkowski.intersections import _cuts
+    from cspace.minkowski.membership import _face_tris
+    from cspace.minkowski.planes import _plane_groups
+    from cspace.minkowski.superset import minkowski_superset
+    from cspace.minkowski.triangulation import face_triangles
 
     S = minkowski_superset(star(), icosphere_points(1, radius=0.3))
-    planes = T._plane_groups(S)
-    cuts = T._cuts(S.ints, planes)
+    planes = _plane_groups(S)
+    cuts = _cuts(S.ints, planes)
     lazy, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
     monkeypatch.setattr(T, "known_triangles", face_triangles)
     eager, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
@@ -417,7 +437,7 @@ def test_triangles_made_when_asked_are_the_arrangements_own(monkeypatch):
     waiting = [f for f, t in enumerate(lazy.face_tris) if t is None]
     assert len(waiting) > 200
     assert all(lazy.face_rings[f] is not None for f in waiting)
-    assert [T._face_tris(lazy, f) for f in range(len(lazy.face_tris))] == eager.face_tris
+    assert [_face_tris(lazy, f) for f in range(len(lazy.face_tris))] == eager.face_tris
     assert all(lazy.face_rings[f] is None for f in waiting)  # made once
 
 

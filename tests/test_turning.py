@@ -20,11 +20,12 @@ from scipy.spatial import ConvexHull
 from scipy.spatial.transform import Rotation
 
 from cspace import InvalidArgumentError, load_scene
-from cspace.fcl_check import pose_path_collisions
-from cspace.ompl_plugin import default_slices, plan, plan_sampled
-from cspace.scene import Body
-from cspace.transform import axis_angle
-from cspace.turning import Slices, TurningCSpace, swept_points
+from cspace.check.cross_check import pose_path_collisions
+from cspace.planning.plan import default_slices, plan, plan_sampled
+from cspace.scene.scene import Body
+from cspace.geometry.transform import axis_angle
+from cspace.planning.orientations import Slices, swept_points
+from cspace.planning.turning import TurningCSpace
 from zoo import rod_and_holed_wall, thin_walled
 
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
@@ -233,7 +234,7 @@ def test_cfg_goal_orientation_is_reached(tmp_path):
 
 
 def test_orientations_are_linked_near_uniformly():
-    from cspace.turning import Orientations
+    from cspace.planning.orientations import Orientations
 
     goal = axis_angle((0.3, -1.0, 0.2), 2.5)
     O = Orientations.uniform(100, goal_rotation=goal)
@@ -259,7 +260,7 @@ def test_orientations_are_linked_near_uniformly():
 
 @pytest.mark.slow  # 8 s: make test-slow (the default run stays under 10 minutes)
 def test_a_free_flying_rod_tilts_through_a_hole():
-    from cspace.turning import Orientations
+    from cspace.planning.orientations import Orientations
 
     scene = rod_and_holed_wall()
     assert not plan(scene, slices=8, time=1.0, seed=1).solved  # turns about z do not help

@@ -28,7 +28,8 @@ import umsgpack
 
 import cspace
 from cspace import viz
-from cspace.superset import SUPERSET_KINDS, minkowski_superset
+from cspace.viz import scene_view
+from cspace.minkowski.superset import SUPERSET_KINDS, minkowski_superset
 
 SIZE = (1024, 768)
 # The example's own scene (examples/view_convex.py): the test draws exactly what users see.
@@ -84,7 +85,7 @@ SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
 def shipped_scene_view() -> viz.SceneView:
     """The shipped window scene with its exact C-obstacles and a path through the window."""
-    from cspace.scene import load_scene
+    from cspace.scene.files import load_scene
 
     scene = load_scene(SCENES / "window.toml")
     path = np.array([scene.start, (-0.8, 0.0, 1.5), (0.8, 0.0, 1.5), scene.goal])
@@ -181,17 +182,17 @@ def near(rgb, tol: float = 12.0) -> tuple[float, float]:
 
 N = 300  # pixels a drawing must cover (of 1024 x 768); the control must have none
 
-CO_HUE = near(viz.COBSTACLE_COLOR, 15.0)
+CO_HUE = near(scene_view.COBSTACLE_COLOR, 15.0)
 # The obstacle lies inside its C-obstacle, so it is only ever seen through it: grey-blue under
 # translucent crimson mixes to a violet between the two hues (215 deg and 339 deg).
-THROUGH_HUE = (hue_of(viz.OBSTACLE_COLOR) + 12.0, hue_of(viz.COBSTACLE_COLOR) - 15.0)
+THROUGH_HUE = (hue_of(scene_view.OBSTACLE_COLOR) + 12.0, hue_of(scene_view.COBSTACLE_COLOR) - 15.0)
 DEMO_COLOURS = {
     "C-obstacle (crimson, over white)": CO_HUE,
     "obstacle (seen through the C-obstacle)": THROUGH_HUE,
-    "path (dark green)": near(viz.PATH_COLOR),
-    "robot (orange)": near(viz.ROBOT_COLOR),
+    "path (dark green)": near(scene_view.PATH_COLOR),
+    "robot (orange)": near(scene_view.ROBOT_COLOR),
 }
-SUPERSET_COLOURS = {kind: near(viz.SUPERSET_COLORS[kind]) for kind in SUPERSET_KINDS}
+SUPERSET_COLOURS = {kind: near(scene_view.SUPERSET_COLORS[kind]) for kind in SUPERSET_KINDS}
 
 
 # --------------------------------------------------------------------------------------
@@ -292,7 +293,7 @@ def test_superset_nodes_split_faces_by_kind():
         (material,) = obj["materials"]
         n_corners = len(np.frombuffer(geometry["data"]["index"]["array"].data, dtype=np.uint32))
         assert n_corners == 3 * int((kinds == i).sum())
-        assert material["color"] == viz._hex(viz.SUPERSET_COLORS[kind])
+        assert material["color"] == scene_view._hex(scene_view.SUPERSET_COLORS[kind])
 
 
 def test_animation_keyframes_follow_the_path():
@@ -410,8 +411,8 @@ def test_bad_input_raises_value_error(call, message):
 
 
 def test_colours_are_documented_in_the_module_docstring():
-    doc = viz.__doc__
-    for rgb in [viz.OBSTACLE_COLOR, viz.ROBOT_COLOR, viz.COBSTACLE_COLOR, viz.PATH_COLOR,
-                *viz.SUPERSET_COLORS.values()]:
-        assert str(tuple(rgb)) in doc and f"#{viz._hex(rgb):06x}" in doc, rgb
-    assert viz.KINDS == SUPERSET_KINDS == cspace.FACET_KINDS
+    doc = scene_view.__doc__
+    for rgb in [scene_view.OBSTACLE_COLOR, scene_view.ROBOT_COLOR, scene_view.COBSTACLE_COLOR, scene_view.PATH_COLOR,
+                *scene_view.SUPERSET_COLORS.values()]:
+        assert str(tuple(rgb)) in doc and f"#{scene_view._hex(rgb):06x}" in doc, rgb
+    assert scene_view.KINDS == SUPERSET_KINDS == cspace.FACET_KINDS

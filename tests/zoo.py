@@ -834,7 +834,7 @@ def thin_walled(scene, thickness: float):
     """``scene`` (the piano's: walls across y = 0) with its walls ``thickness`` thick."""
     import dataclasses
 
-    from cspace.scene import Body
+    from cspace.scene.scene import Body
 
     bodies = []
     for b in scene.obstacles:
@@ -850,7 +850,7 @@ def rod_and_holed_wall():
     tilted along the hole's axis (a turn about x, not about z)."""
     import trimesh
 
-    from cspace.scene import Body, Scene
+    from cspace.scene.scene import Body, Scene
 
     def box(lo, hi, name):
         m = trimesh.creation.box(bounds=[lo, hi])

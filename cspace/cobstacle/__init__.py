@@ -1,0 +1,15 @@
+"""C-obstacles ``CO = O ⊕ (−R)`` and their exact queries over translations.
+
+- :mod:`.obstacle` — :class:`~cspace.cobstacle.obstacle.CSpaceObstacle`: one C-obstacle, built
+  once (convex, mesh, or grown mesh sum), queried many times;
+- :mod:`.convex` — the convex C-obstacle's queries; :mod:`.union` a union of engines, not built;
+- :mod:`.surface` — surface pieces for open bodies; :mod:`.pairs` — triangle pairs and
+  containment terms for a non-convex robot;
+- :mod:`.margin` — :class:`~cspace.cobstacle.margin.Margin`, the outward rounding that makes a
+  stored C-obstacle hold the true one (no false free).
+"""
+
+from .margin import Margin
+from .obstacle import CSpaceObstacle
+
+__all__ = ["CSpaceObstacle", "Margin"]

@@ -1,0 +1,32 @@
+"""Compiled exact kernels (Cython, built at install time). Each serves the modules named below,
+where its pure-Python reference lives (same name, leading underscore or ``_reference``):
+
+- ``arrangement`` — :mod:`cspace.geometry.boxes` (box sweep), :mod:`cspace.geometry.tritri`
+  (exact triangle-pair classes), :mod:`cspace.geometry.endpoints` (their endpoints);
+- ``meshquery`` — :mod:`cspace.mesh.query` (references in :mod:`cspace.mesh.query_reference`);
+- ``planar`` — :mod:`cspace.minkowski.plane_arrangement` (each plane's arrangement core),
+  :mod:`cspace.minkowski.triangulation`;
+- ``trim`` — :mod:`cspace.mesh.self_intersection` (undecided pairs, triangle boxes),
+  :mod:`cspace.minkowski.output` (float rounding) and :mod:`cspace.minkowski.rounding` (moved points).
+
+``tests/test_kernels.py`` and ``tests/test_kernels_intersections.py`` check that compiled and
+reference give identical outputs. The extensions are compiled with ``-ffp-contract=off``: no
+fused multiply-add, so every float operation rounds exactly as the reference's, and the
+filters' error bounds hold.
+"""
+
+import importlib
+from types import ModuleType
+
+
+def load(name: str) -> ModuleType:
+    """The compiled kernel ``cspace.geometry._kernels.<name>``, or an :class:`ImportError` saying how
+    to build it (an install that skipped the build step)."""
+    try:
+        return importlib.import_module(f"{__name__}.{name}")
+    except ImportError as exc:  # pragma: no cover - an install without its build step
+        raise ImportError(
+            f"cspace's compiled kernels ({__name__}.{name}) are missing: install cspace with "
+            "pip (`pip install -e .` in a checkout), which builds them with the system C "
+            f"compiler ({exc})"
+        ) from exc

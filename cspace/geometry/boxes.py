@@ -1,0 +1,147 @@
+"""Candidate pairs by bounding boxes: the sweep every triangle-pair search starts from.
+
+:class:`BoxSweep` sorts integer boxes along one axis once and reports overlapping pairs;
+:func:`box_pairs` and :func:`candidate_pairs` wrap it for one set or two (compiled sweep,
+pure-Python reference beside it). Only prunes: every decision is made afterwards, exactly.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._kernels import load
+from .tritri import _check_soup
+
+__all__ = ["candidate_pairs", "box_pairs", "BoxSweep"]
+
+
+# The box sweep, the pair classification and the endpoint coordinates run compiled
+# (cspace.geometry._kernels.arrangement); their numpy references are BoxSweep._pairs_reference,
+# _intersect_pairs_reference and _endpoint_coordinates_reference, which they match exactly.
+_compiled = load("arrangement")
+
+
+# Default bound on the number of expanded candidate pairs held at once (~8 int64 arrays).
+_CHUNK = 1 << 21
+
+
+# --------------------------------------------------------------------------------------
+# step 4: candidate pairs
+
+
+def candidate_pairs(ints, faces, *, chunk: int = _CHUNK) -> np.ndarray:
+    """All pairs of triangles whose closed axis-aligned integer bounding boxes intersect.
+
+    Sweep: triangles are sorted by their box minimum along the axis that yields the fewest
+    one-axis overlaps; each triangle's partners after it in that order form a contiguous run
+    (found by ``searchsorted`` of its box maximum). The runs are scanned and filtered by
+    the two other axes (compiled: :func:`cspace.geometry._kernels.arrangement.sweep_pairs`).
+
+    Parameters
+    ----------
+    ints : (n, 3) int64
+        Vertex positions in grid units.
+    faces : (t, 3) int64
+        Triangles as vertex labels.
+    chunk : int, default 2**21
+        The numpy reference sweep's bound on the one-axis overlaps expanded at once
+        (:meth:`BoxSweep._pairs_reference`); the compiled sweep holds only its output
+        (at most 48 bytes per pair while it collects and sorts them), so it does not use it.
+
+    Returns
+    -------
+    pairs : (k, 2) int64
+        Rows ``(i, j)`` with ``i < j``, sorted lexicographically, each unordered pair once.
+    """
+    ints, faces = _check_soup(ints, faces)
+    corners = ints[faces]
+    return box_pairs(corners.min(axis=1), corners.max(axis=1), chunk=chunk)
+
+
+def box_pairs(lo, hi, *, chunk: int = _CHUNK) -> np.ndarray:
+    """All pairs of closed integer boxes ``[lo_i, hi_i]`` that intersect (the sweep of
+    :func:`candidate_pairs`); ``lo, hi (t, 3)`` int64 with ``|k| < 2**29``. Rows ``(i, j)``,
+    ``i < j``, sorted, each unordered pair once."""
+    return BoxSweep(lo, hi).pairs(chunk=chunk)
+
+
+class BoxSweep:
+    """The sweep of :func:`box_pairs`, set up once (three sorts), so that its work can be
+    split: :meth:`pairs` expands one share of it. ``overlaps`` is its work, the number of
+    one-axis overlaps along the sweep axis."""
+
+    def __init__(self, lo, hi):
+        lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
+        t = self.t = len(lo)
+        self.overlaps = 0
+        if t < 2:
+            return
+        first = np.arange(1, t + 1)
+        sweeps = []
+        for ax in range(3):
+            order = np.argsort(lo[:, ax], kind="stable")
+            end = np.searchsorted(lo[order, ax], hi[order, ax], side="right")
+            count = end - first  # partners after position p: p+1 .. end-1 (end > p: lo <= hi)
+            sweeps.append((int(count.sum()), ax, order, count))
+        # Sweep along the most selective axis, filter by the next most selective first.
+        sweeps.sort(key=lambda s: s[0])
+        (self.overlaps, _, self.order, count), others = sweeps[0], [s[1] for s in sweeps[1:]]
+        # Coordinates fit int32 (|k| < 2**29): half the memory traffic of the gathers below.
+        self.itype = np.int32 if t < 2**31 else np.int64
+        self.los = [np.ascontiguousarray(lo[self.order, a], dtype=np.int32) for a in others]
+        self.his = [np.ascontiguousarray(hi[self.order, a], dtype=np.int32) for a in others]
+        self.count = count.astype(self.itype)
+        self.cum = np.cumsum(self.count, dtype=np.int64)
+        # Position of the first partner of each row, minus where its run starts in the chunk.
+        self.shift = np.arange(1, t + 1, dtype=np.int64) - (self.cum - self.count)
+
+    def _rows(self, share: int, shares: int) -> tuple[int, int]:
+        """The sweep rows ``[start, end)`` of share ``share`` of ``shares``."""
+        def row(k: int) -> int:  # first sweep row of share k
+            return int(np.searchsorted(self.cum, k * self.overlaps // shares, side="right"))
+
+        return (0 if share == 0 else row(share)), (self.t if share == shares - 1 else row(share + 1))
+
+    def pairs(self, share: int = 0, shares: int = 1, *, chunk: int = _CHUNK) -> np.ndarray:
+        """The intersecting pairs found from share ``share`` of ``shares`` (consecutive
+        sweep rows holding about ``overlaps / shares`` one-axis overlaps each): sorted rows
+        ``(i, j)``, ``i < j``, int64 ``(k, 2)``; the shares together give every pair once.
+
+        Compiled (:func:`cspace.geometry._kernels.arrangement.sweep_pairs`, the same pairs as
+        :meth:`_pairs_reference`); it holds only its output, so ``chunk`` (the reference's
+        memory bound) is not used."""
+        if self.overlaps == 0:
+            return np.zeros((0, 2), dtype=np.int64)
+        start, end = self._rows(share, shares)
+        (lo1, lo2), (hi1, hi2) = self.los, self.his
+        return _compiled.sweep_pairs(start, end, self.t, self.order, self.cum, lo1, hi1, lo2, hi2)
+
+    def _pairs_reference(self, share: int = 0, shares: int = 1, *, chunk: int = _CHUNK) -> np.ndarray:
+        """:meth:`pairs` in numpy (the reference): the one-axis overlaps are expanded in
+        chunks of at most ``chunk`` rows and filtered by the two other axes."""
+        if self.overlaps == 0:
+            return np.zeros((0, 2), dtype=np.int64)
+        count, cum, shift, itype = self.count, self.cum, self.shift, self.itype
+        start, end = self._rows(share, shares)
+        out = []
+        while start < end:
+            base = int(cum[start - 1]) if start else 0
+            stop = min(max(int(np.searchsorted(cum, base + chunk, side="right")), start + 1), end)
+            c = count[start:stop]
+            n = int(cum[stop - 1]) - base
+            if n:
+                rows = np.repeat(np.arange(start, stop, dtype=itype), c)
+                cols = np.arange(base, base + n, dtype=np.int64)
+                cols += np.repeat(shift[start:stop], c)
+                cols = cols.astype(itype, copy=False)
+                # Filter by one axis, compress, then the other: the second test sees few rows.
+                for lo_a, hi_a in zip(self.los, self.his):
+                    keep = np.flatnonzero((lo_a[cols] <= hi_a[rows]) & (lo_a[rows] <= hi_a[cols]))
+                    rows, cols = rows[keep], cols[keep]
+                i, j = self.order[rows], self.order[cols]
+                out.append(np.stack([np.minimum(i, j), np.maximum(i, j)], axis=1))
+            start = stop
+        if not out:
+            return np.zeros((0, 2), dtype=np.int64)
+        pairs = np.concatenate(out)
+        return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]

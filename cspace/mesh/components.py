@@ -1,0 +1,144 @@
+"""Weld, deduplicate and split triangle meshes into parts, exactly on a grid.
+
+Steps 1-3 of :func:`cspace.scene.model.model_scene` (see there), shared with
+:meth:`cspace.CSpaceObstacle.build`, which splits a non-manifold obstacle the same way:
+
+- :func:`weld_dedupe`: vertices welded by exact snapped position, collapsed triangles dropped,
+  repeated triangles (same three welded vertices) kept once, counted by winding.
+- :func:`split_parts`: connected parts across manifold edges (a non-manifold edge or vertex
+  separates the pieces meeting there); a closed part with a vertex inside another closed
+  part's solid (decided exactly) stays with it as a cavity.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InvalidMeshError
+from ..geometry.exact import Grid
+from ..geometry.graphs import component_labels
+
+__all__ = ["weld_dedupe", "edge_uses", "split_parts", "split_mesh", "nested_pairs"]
+
+
+def _parity(F: np.ndarray) -> np.ndarray:
+    """Permutation parity of each triple (equal parity on the same vertices: same winding)."""
+    inv = (F[:, 0] > F[:, 1]).astype(np.int8) + (F[:, 0] > F[:, 2]) + (F[:, 1] > F[:, 2])
+    return inv % 2
+
+
+def weld_dedupe(body, grid: Grid):
+    """Welded grid ints, deduplicated faces and the counts of steps 1-2."""
+    ints, inverse = np.unique(grid.snap(body.vertices), axis=0, return_inverse=True)
+    F = inverse.reshape(-1)[body.faces]
+    collapsed = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
+    F = F[~collapsed]
+    _, first, which = np.unique(np.sort(F, axis=1), axis=0, return_index=True,
+                                return_inverse=True)
+    which = which.reshape(-1)
+    keep = np.zeros(len(F), dtype=bool)
+    keep[first] = True
+    same = _parity(F) == _parity(F[first[which]])
+    counts = {"triangles": len(body.faces), "collapsed": int(collapsed.sum()),
+              "double_sided": int((~keep & ~same).sum()), "repeated": int((~keep & same).sum())}
+    return ints, F[np.sort(first)], counts
+
+
+def edge_uses(F: np.ndarray, n: int):
+    """Undirected edge key of each half-edge ``3 * face + corner``, and its use count."""
+    a, b = F.reshape(-1), F[:, [1, 2, 0]].reshape(-1)
+    key = np.minimum(a, b) * n + np.maximum(a, b)
+    _, inv, count = np.unique(key, return_inverse=True, return_counts=True)
+    return inv.reshape(-1), count
+
+
+def split_parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
+    """Face index arrays of the bodies of step 3, in order of their first face."""
+    m = len(F)
+    edge, count = edge_uses(F, len(ints))
+    face = np.repeat(np.arange(m), 3)
+    # Faces sharing a manifold edge (two faces): link each half-edge's face to the first face
+    # using that edge. A non-manifold edge (two boxes sharing an edge) links nothing, so such
+    # a mesh falls apart into its manifold pieces, each a solid when closed.
+    first = np.full(len(count), m, dtype=np.int64)
+    np.minimum.at(first, edge, face)
+    link = count[edge] == 2
+    ncomp, label = component_labels(m, face[link], first[edge][link])
+    boundary = np.zeros(ncomp, dtype=bool)
+    np.logical_or.at(boundary, label[face], count[edge] == 1)
+    # Closed components nested in another closed one's solid stay with it (a cavity).
+    closed = np.nonzero(~boundary)[0]
+    i, j = nested_pairs(ints, F, label, closed, closed)
+    _, group = component_labels(ncomp, i, j)
+    group = group[label]
+    firsts = np.full(group.max() + 1, m)
+    np.minimum.at(firsts, group, np.arange(m))
+    return [np.nonzero(group == g)[0] for g in np.argsort(firsts) if firsts[g] < m]
+
+
+def split_mesh(vertices, faces, grid: Grid) -> list[tuple[np.ndarray, np.ndarray]]:
+    """A mesh welded and split on ``grid`` as scenes split a body (:func:`weld_dedupe`,
+    :func:`split_parts`): one ``(float64 vertices on the grid, faces)`` per part. Closed
+    pieces meeting at non-manifold edges or vertices (two boxes sharing an edge) fall apart
+    here; :meth:`cspace.CSpaceObstacle.build` and :func:`cspace.minkowski_sum` answer such a
+    mesh as the union of its parts."""
+    from types import SimpleNamespace
+
+    ints, F, _ = weld_dedupe(SimpleNamespace(vertices=vertices, faces=faces), grid)
+    out = []
+    for part in split_parts(ints, F) if len(F) else []:
+        used, local = np.unique(F[part], return_inverse=True)
+        out.append((grid.to_float(ints[used]), local.reshape(-1, 3)))
+    return out
+
+
+def nested_pairs(ints: np.ndarray, F: np.ndarray, label: np.ndarray, outer, inner):
+    """Which closed components lie inside which others' solids, decided exactly: the one
+    definition of nesting, for scenes (:func:`split_parts`: a cavity stays with its solid)
+    and for :class:`cspace.mesh.closed.ClosedMesh` (an inward shell is a cavity only inside an
+    outward one's solid).
+
+    Parameters
+    ----------
+    ints : (n, 3) int64
+        Grid coordinates.
+    F : (m, 3) int64
+        Triangles.
+    label : (m,) int64
+        Component of each triangle.
+    outer, inner : array of int
+        Labels of the candidate enclosing components and of the candidate enclosed ones.
+
+    Returns
+    -------
+    a, b : (k,) int64
+        Pairs of labels ``a`` in ``outer``, ``b`` in ``inner``, ``a != b``, such that ``b``'s
+        box lies in ``a``'s and a vertex of ``b`` in ``a``'s solid (winding number from a
+        symbolically perturbed ray, boundary included: :class:`cspace.mesh.query.MeshCO`).
+        Closed shells that do not cross lie wholly inside or outside each other, so one
+        vertex decides. An ``a`` that is not an oriented 2-cycle keeps the boxes' verdict.
+    """
+    outer = np.asarray(outer, dtype=np.int64)
+    inner = np.asarray(inner, dtype=np.int64)
+    ncomp = int(label.max()) + 1 if len(label) else 0
+    lo = np.full((ncomp, 3), np.iinfo(np.int64).max)
+    hi = np.full((ncomp, 3), np.iinfo(np.int64).min)
+    corners = ints[F]  # (m, 3, 3)
+    np.minimum.at(lo, label, corners.min(axis=1))
+    np.maximum.at(hi, label, corners.max(axis=1))
+    fits = ((lo[outer, None] <= lo[None, inner]) & (hi[None, inner] <= hi[outer, None])).all(2)
+    fits &= outer[:, None] != inner[None, :]
+    i, j = np.nonzero(fits)
+    a, b = outer[i], inner[j]
+    keep = np.ones(len(a), dtype=bool)
+    for c in np.unique(a).tolist():
+        rows = np.nonzero(a == c)[0]
+        try:
+            from .query import MeshCO
+
+            solid = MeshCO(ints.astype(np.float64), F[label == c], name="part")
+        except InvalidMeshError:  # not an oriented 2-cycle: keep the boxes' verdict
+            continue
+        probes = np.array([ints[F[label == d][0, 0]] for d in b[rows].tolist()])
+        keep[rows] = solid.contains(probes.astype(np.float64))
+    return a[keep], b[keep]

@@ -1,0 +1,288 @@
+"""NCC-CVMS step 2: net signed coverage of oriented polygons in one plane.
+
+:func:`polygon_coverage` and :func:`sampled_coverage` give every face of an arrangement its
+signed multiplicity (coplanar conjoint facets merge, opposite conjoint ones cancel);
+:func:`merge_coplanar` merges a plane's polygons; :func:`pushed_inside` reads the coverage just
+inside an edge. Exact throughout (:mod:`cspace.geometry.homogeneous`).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+from math import gcd
+
+import numpy as np
+
+from ..geometry.homogeneous import _dot, _hdir, _hpoint, _hturn
+from .plane_arrangement import Arrangement2D
+from .triangulation import inner_point
+
+__all__ = [
+    "Coverage",
+    "MergeResult",
+    "polygon_coverage",
+    "sampled_coverage",
+    "pushed_inside",
+    "merge_coplanar",
+]
+
+
+# Up to this many polygons sampled_coverage filters them by boxes in plain Python.
+_FEW_POLYGONS = 16
+
+
+# --------------------------------------------------------------------------------------------
+# coverage of oriented polygons (step 2)
+# --------------------------------------------------------------------------------------------
+
+
+@dataclass
+class Coverage:
+    """Result of :func:`polygon_coverage`.
+
+    Attributes
+    ----------
+    arrangement : Arrangement2D
+        Arrangement of all polygon edges; edge labels are ``(polygon index, edge index)``.
+    coverage : list[int]
+        Net coverage of each bounded face (the unbounded face always has 0).
+    support : list[int]
+        Unsigned coverage of each bounded face: ``sum_i |weights[i] * winding(polygon_i)|``
+        for simple polygons; non-zero exactly where some polygon of non-zero weight covers
+        the face, even where opposite polygons cancel in :attr:`coverage`.
+    """
+
+    arrangement: Arrangement2D
+    coverage: list
+    support: list = None
+
+    def of(self, f: int) -> int:
+        return 0 if f < 0 else self.coverage[f]
+
+
+@dataclass
+class MergeResult:
+    """Result of :func:`merge_coplanar`.
+
+    Attributes
+    ----------
+    arrangement : Arrangement2D
+    faces : list[int]
+        Ids of the faces with non-zero net coverage.
+    signs : list[int]
+        ``sign(coverage)`` of each of them: +1 counter-clockwise (same orientation as the
+        plane's positive side), -1 clockwise.
+    coverage : list[int]
+        The net coverage of each of them.
+    boundary : list[tuple[int, int]]
+        The oriented boundary of the merged region: ``(half-edge id, sign)`` for each half-edge
+        whose left face has non-zero sign ``sign`` and whose right face has a different sign.
+        For sign +1 these half-edges run counter-clockwise around the region.
+    """
+
+    arrangement: Arrangement2D
+    faces: list
+    signs: list
+    coverage: list
+    boundary: list
+
+
+def _polygons(polygons, weights):
+    polys = [[_hpoint(p) for p in poly] for poly in polygons]
+    if weights is None:
+        weights = [1] * len(polys)
+    weights = [int(w) for w in weights]
+    if len(weights) != len(polys):
+        raise ValueError("weights must have one entry per polygon")
+    return polys, weights
+
+
+def polygon_coverage(polygons, weights=None, cuts=()) -> Coverage:
+    """Net signed coverage of oriented closed polygons in one plane.
+
+    Parameters
+    ----------
+    polygons : sequence of sequences of points
+        Each polygon is a closed polyline (last vertex joined to the first), vertices as
+        accepted by :func:`cspace.geometry.homogeneous.to_point`. Counter-clockwise polygons count positively. Simple
+        polygons are the intended input, but any closed polyline works (it counts by its winding
+        number); repeated consecutive vertices are ignored.
+    weights : sequence of int, optional
+        Integer weight per polygon (default 1).
+    cuts : sequence of (p, q), optional
+        Extra segments (zero-length ones are points) that split faces without changing any
+        coverage; their edge labels are ``(-1, k)`` for cut ``k``.
+
+    Returns
+    -------
+    Coverage
+        The arrangement of all polygon edges and, for each bounded face ``f``,
+        ``coverage[f] = sum_i weights[i] * winding(polygon_i, sample_f)``. This is constant on
+        each face. It is computed by propagation across edges from the unbounded face
+        (coverage 0): crossing a directed edge from its right to its left adds the weights of the
+        polygon edges covering it in the same direction and subtracts those in the opposite one.
+    """
+    polys, weights = _polygons(polygons, weights)
+    segs, labels, dirs = [], [], {}
+    turn = [_hturn(poly) for poly in polys]  # +1 counter-clockwise, -1 clockwise
+    for i, poly in enumerate(polys):
+        n = len(poly)
+        for j in range(n):
+            a, b = poly[j], poly[(j + 1) % n]
+            if a == b:
+                continue
+            segs.append((a, b))
+            labels.append((i, j))
+            dirs[(i, j)] = _hdir(a, b)
+    for k, (a, b) in enumerate(cuts):
+        segs.append((a, b))
+        labels.append((-1, k))
+    arr = Arrangement2D(segs, labels)
+    H = arr._H
+    nf = len(arr.faces)
+    adj = {}
+    for k, (u, v) in enumerate(arr.edges.tolist()):
+        d = _hdir(H[u], H[v])
+        delta = total = 0
+        for lab in arr.edge_labels[k]:
+            if lab[0] >= 0:
+                along = 1 if _dot(dirs[lab], d) > 0 else -1
+                w = weights[lab[0]]
+                delta += w * along
+                # entering the polygon (its inside is on the left: counter-clockwise and
+                # crossed along, or clockwise and crossed against) adds |w|
+                total += abs(w) * turn[lab[0]] * along
+        left, right = arr.edge_faces[k]
+        left, right = int(left), int(right)
+        adj.setdefault(right, []).append((left, delta, total))
+        adj.setdefault(left, []).append((right, -delta, -total))
+    cov = {-1: (0, 0)}
+    queue = deque([-1])
+    while queue:
+        f = queue.popleft()
+        c, a = cov[f]
+        for g, d, t in adj.get(f, ()):
+            if g not in cov:
+                cov[g] = (c + d, a + t)
+                queue.append(g)
+            elif cov[g] != (c + d, a + t):  # pragma: no cover - impossible for closed polylines
+                raise AssertionError("inconsistent coverage propagation")
+    return Coverage(arr, [cov[f][0] for f in range(nf)], [cov[f][1] for f in range(nf)])
+
+
+def _pushed_side(a, b, X: int, Y: int, W: int) -> int:
+    """Side of the point ``(X/W, Y/W) + eps * (1, eps)`` (eps -> 0+) of the directed line
+    ``a -> b`` (integer points, ``a != b``): +1 left, -1 right, never 0."""
+    ux, uy = b[0] - a[0], b[1] - a[1]
+    d = ux * (Y - a[1] * W) - uy * (X - a[0] * W)
+    if d:
+        return 1 if d > 0 else -1
+    # on the line: the push (1, eps) decides, first along x, then along y
+    return -1 if uy > 0 else (1 if uy < 0 else (1 if ux > 0 else -1))
+
+
+def pushed_inside(poly, turn: int, X: int, Y: int, W: int) -> bool:
+    """Is the point ``(X/W, Y/W) + eps * (1, eps)`` (eps -> 0+) inside the convex polygon
+    ``poly`` (integer points) of orientation ``turn`` (+1 counter-clockwise, -1 clockwise)?
+    Never on its boundary: the push decides."""
+    n = len(poly)
+    return all(_pushed_side(poly[k], poly[(k + 1) % n], X, Y, W) == turn for k in range(n))
+
+
+def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: bool = False) -> Coverage:
+    """Net and unsigned coverage of the faces of the arrangement of ``segments`` by convex
+    oriented polygons, read at one point per face.
+
+    Unlike :func:`polygon_coverage` the polygon edges are not in the arrangement, so its faces
+    are not cut by them. The result is right only when the coverage is constant on every
+    face, i.e. when ``segments`` contain every point where the net or the unsigned coverage
+    changes: the caller's invariant (:mod:`cspace.minkowski.ncc_cvms` derives it from the closedness of the
+    superset). It is certified in part: the integral of the coverage over the faces must equal
+    ``sum_i weights[i] * signed_area(polygon_i)``, else :class:`ValueError`.
+
+    Parameters
+    ----------
+    polygons : sequence of sequences of integer pairs
+        Convex polygons (counter-clockwise ones count positively), at least three distinct
+        vertices each, integer coordinates.
+    weights : sequence of int
+        Integer weight per polygon.
+    segments, labels, canonical
+        As for :class:`Arrangement2D`.
+
+    Returns
+    -------
+    Coverage
+        ``coverage[f] = sum_i weights[i] * winding(polygon_i, q_f)`` and ``support[f] =
+        sum_i |weights[i] * winding(polygon_i, q_f)|`` at ``q_f = sample_f + eps * (1, eps)``
+        (the push moves a sample lying on a polygon edge off it, into the face).
+    """
+    polys = [[(int(p[0]), int(p[1])) for p in poly] for poly in polygons]
+    weights = [int(w) for w in weights]
+    if len(weights) != len(polys):
+        raise ValueError("weights must have one entry per polygon")
+    arr = Arrangement2D(segments, labels, canonical=canonical)
+    turn, boxes, area2 = [], [], 0
+    for i, poly in enumerate(polys):
+        n = len(poly)
+        a2 = sum(poly[k][0] * poly[(k + 1) % n][1] - poly[k][1] * poly[(k + 1) % n][0] for k in range(n))
+        turn.append((a2 > 0) - (a2 < 0))
+        area2 += weights[i] * a2
+        xs, ys = [p[0] for p in poly], [p[1] for p in poly]
+        boxes.append((min(xs) - 1, max(xs) + 1, min(ys) - 1, max(ys) + 1))
+    box = np.array(boxes, dtype=np.float64).reshape(-1, 4) if len(polys) > _FEW_POLYGONS else None
+    nf = len(arr.faces)
+    coverage, support = [0] * nf, [0] * nf
+    num, den = 0, 1  # twice the integral of the coverage: num / den
+    for f, face in enumerate(arr.faces):
+        X, Y, w = inner_point(arr, f)
+        xf, yf = X / w, Y / w
+        # conservative box filter: floats are within an ulp; integer boxes, margin 1
+        if box is None:
+            near = [i for i, b in enumerate(boxes) if b[0] <= xf <= b[1] and b[2] <= yf <= b[3]]
+        else:
+            near = np.nonzero((box[:, 0] <= xf) & (xf <= box[:, 1])
+                              & (box[:, 2] <= yf) & (yf <= box[:, 3]))[0].tolist()
+        c = s = 0
+        for i in near:
+            if pushed_inside(polys[i], turn[i], X, Y, w):
+                c += weights[i] * turn[i]
+                s += abs(weights[i])
+        coverage[f], support[f] = c, s
+        if c:  # integral += c * face.area, as twice the areas over a growing denominator
+            n, d = arr._face_area2(face)
+            g = gcd(den, d)
+            num, den = num * (d // g) + c * n * (den // g), den * (d // g)
+    if num != area2 * den:
+        raise ValueError("the coverage is not constant on the faces: the segments miss a place "
+                         "where it changes")
+    return Coverage(arr, coverage, support)
+
+
+def merge_coplanar(polygons, weights=None) -> MergeResult:
+    """Union of coplanar same-orientation facets, cancellation of opposite ones.
+
+    Semantics: the plane is split into the faces of the arrangement of all polygon edges and
+    each face gets its net coverage ``c`` (see :func:`polygon_coverage`; with unit weights,
+    ``c = #(CCW polygons containing it) - #(CW polygons containing it)``). The result is the
+    set of faces with ``c != 0``, each oriented by ``sign(c)``. Hence overlapping facets with
+    the same orientation merge into their union (sign kept), a facet and an opposite one cancel
+    where they overlap (symmetric difference of opposite conjoint facets), and where more of one
+    orientation than the other overlap, the majority orientation survives. Edges and vertices
+    are measure-zero and not reported as regions; :attr:`MergeResult.boundary` gives the
+    region boundaries.
+    """
+    cov = polygon_coverage(polygons, weights)
+    arr = cov.arrangement
+    faces = [f for f, c in enumerate(cov.coverage) if c != 0]
+    signs = [1 if cov.coverage[f] > 0 else -1 for f in faces]
+    sign_of = {-1: 0}
+    for f, c in enumerate(cov.coverage):
+        sign_of[f] = (c > 0) - (c < 0)
+    boundary = []
+    for h, f in enumerate(arr.half_edge_face):
+        s = sign_of[f]
+        if s != 0 and sign_of[arr.half_edge_face[h ^ 1]] != s:
+            boundary.append((h, s))
+    return MergeResult(arr, faces, signs, [cov.coverage[f] for f in faces], boundary)

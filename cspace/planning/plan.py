@@ -1,0 +1,679 @@
+"""Planning: OMPL planners over the exact C-space, with and without turns.
+
+:func:`plan` (a fixed orientation), :func:`plan_turning` (orientation slices joined by
+certified turns, :mod:`cspace.planning.turning`) and :func:`plan_sampled` (SE(2)/SE(3) sampled,
+checked by FCL) return a :class:`PlanResult`: the path, whether it was solved, certified, and
+the timings. The OMPL glue (spaces, checkers, samplers) is :mod:`cspace.planning.ompl_plugin`.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import ArgumentTypeError, InvalidArgumentError
+from ..scene.model import CSpace
+from .ompl_plugin import (
+    _bounds,
+    _box_bounds,
+    _classes,
+    _in_bounds,
+    _ompl,
+    _pool_sampler,
+    _vec,
+    narrow_passage_samples,
+    planner_names,
+    state_space,
+    verify_path,
+)
+
+__all__ = [
+    "MOTIONS",
+    "plan_turning",
+    "default_slices",
+    "plan_sampled",
+    "SAMPLED_SPACES",
+    "PlanResult",
+    "plan",
+    "SAMPLERS",
+]
+
+
+MOTIONS = ("exact", "discrete")
+
+
+SAMPLERS = ("uniform", "narrow")
+
+
+# --------------------------------------------------------------------------------------
+# planning
+
+
+@dataclass(frozen=True)
+class PlanResult:
+    """Outcome of :func:`plan`.
+
+    Attributes
+    ----------
+    path : (n, 3) float64
+        The returned path (after simplification), ``(0, 3)`` if OMPL returned none.
+    solved : bool
+        OMPL found an exact solution *and* the path was re-proved valid exactly.
+    exact : bool
+        OMPL reported an exact (not approximate) solution.
+    valid : bool
+        The exact re-proof of ``path`` (:func:`verify_path`): every waypoint outside the
+        closed C-obstacles and in bounds, every segment ``segment_free``.
+    planner : str
+    motion : {'exact', 'discrete'}
+    time : float
+        Wall seconds for solve, simplification and re-proof.
+    solve_time : float
+        Wall seconds in ``solve()`` alone.
+    n_states : int
+        Waypoints in ``path``.
+    status : str
+        OMPL's ``PlannerStatus.asString()``.
+    state_checks, motion_checks : int
+        Python ``isValid`` / ``checkMotion`` calls (motion checks are 0 for ``'discrete'``:
+        OMPL's discrete validator calls ``isValid`` at each resolution step).
+    simplified : bool
+        Whether ``path`` is the simplified path (else the raw one; simplification is dropped
+        if its result fails the exact re-proof).
+    slices : (n,) int64 or None
+        For a turning robot (``plan(..., slices=...)``): the orientation slice of each
+        waypoint. Consecutive waypoints differ by a translation within one slice or by a
+        turn in place between neighbouring slices, each certified.
+    orientations : (n, 4) float64 or None
+        For a turning robot: each waypoint's orientation as a unit quaternion ``(x, y, z, w)``
+        (world frame, the scene's start rotation included).
+    built : dict or None
+        For a turning robot: ``{'slices': k, 'turns': t, 'of': (n slices, n turns)}``, the
+        C-spaces built (lazily, only those the planner entered) out of those there are.
+    """
+
+    path: np.ndarray
+    solved: bool
+    exact: bool
+    valid: bool
+    planner: str
+    motion: str
+    time: float
+    solve_time: float
+    n_states: int
+    status: str
+    state_checks: int
+    motion_checks: int
+    simplified: bool
+    slices: np.ndarray | None = None
+    orientations: np.ndarray | None = None
+    built: dict | None = None
+
+    @property
+    def length(self) -> float:
+        """Euclidean length of ``path``."""
+        return float(np.linalg.norm(np.diff(self.path, axis=0), axis=1).sum())
+
+
+def _as_cspace(scene_or_cspace, cache=None, robot_hull: bool = False):
+    if isinstance(scene_or_cspace, CSpace):
+        return scene_or_cspace, None
+    if hasattr(scene_or_cspace, "obstacles") and hasattr(scene_or_cspace, "robot"):
+        return (CSpace.from_scene(scene_or_cspace, cache=cache, robot_hull=robot_hull),
+                scene_or_cspace)
+    raise ArgumentTypeError(f"expected a Scene or a CSpace, got {type(scene_or_cspace).__name__}")
+
+
+def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
+    if q is None:
+        raise InvalidArgumentError(f"{what} is required when planning on a CSpace (no scene to take it from)")
+    a = np.array(q, dtype=np.float64)
+    if a.shape != (3,) or not np.isfinite(a).all():
+        raise InvalidArgumentError(f"{what} must be a finite (3,) translation, got {np.asarray(q).tolist()}")
+    if not _in_bounds(a, b)[0]:
+        raise InvalidArgumentError(f"{what} {a.tolist()} is outside the bounds {b.tolist()}")
+    hits = [i for i, o in enumerate(cspace.obstacles) if o.contains(a)]
+    if hits:
+        names = []
+        for i in hits:
+            o = cspace.obstacles[i].obstacle
+            names.append(repr(getattr(o, "name", None) or f"#{i}"))
+        raise InvalidArgumentError(
+            f"{what} {a.tolist()} is in collision (in the closed C-obstacle of "
+            f"{', '.join(names)}; touching counts)"
+        )
+    return a
+
+
+def _seed(ou, seed) -> None:
+    ou.setLogLevel(ou.LOG_ERROR)
+    if seed is not None:
+        # OMPL logs an error when seeds were already handed out, but still reseeds its seed
+        # generator, so the RNGs created from here on are reproducible.
+        ou.setLogLevel(ou.LOG_NONE)
+        ou.RNG.setSeed(int(seed))
+        ou.setLogLevel(ou.LOG_ERROR)
+
+
+def _solve(si, start, goal, *, planner: str, time: float, optimize: bool,
+           planner_range, simplify: bool, read, dim: int):
+    """Solve from ``start`` to ``goal`` on the set-up ``si``: each a list of state
+    coordinates, or a function that fills an allocated state.
+
+    Returns ``(status, exact, raw, simplified, solve_time)``: OMPL's status, whether the
+    solution is exact, the planner's states read by ``read`` into ``(n, dim)`` rows (none:
+    ``(0, dim)``), the simplified ones (None when not simplified) and the seconds in
+    ``solve()``.
+    """
+    ob, og, _ = _ompl()
+    s0, s1 = si.allocState(), si.allocState()
+    for state, value in ((s0, start), (s1, goal)):
+        if callable(value):
+            value(state)
+        else:
+            state[0:len(value)] = value
+    pdef = ob.ProblemDefinition(si)
+    pdef.setStartAndGoalStates(s0, s1)
+    objective = ob.PathLengthOptimizationObjective(si)
+    if not optimize:
+        objective.setCostThreshold(ob.Cost(float("inf")))
+    pdef.setOptimizationObjective(objective)
+    p = getattr(og, planner)(si)
+    if planner_range is not None and hasattr(p, "setRange"):
+        p.setRange(float(planner_range))
+    p.setProblemDefinition(pdef)
+    p.setup()
+    t0 = _time.perf_counter()
+    status = p.solve(float(time))
+    solve_time = _time.perf_counter() - t0
+    exact = status.getStatus() == ob.PlannerStatus.EXACT_SOLUTION
+    have = exact or status.getStatus() == ob.PlannerStatus.APPROXIMATE_SOLUTION
+    raw = np.zeros((0, dim))
+    simplified = None
+    if have:
+        path = pdef.getSolutionPath()
+        raw = np.array([read(x) for x in path.getStates()]).reshape(-1, dim)
+        if simplify and exact and len(raw) > 2:
+            og.PathSimplifier(si).simplify(path, min(1.0, time / 2.0))
+            simplified = np.array([read(x) for x in path.getStates()]).reshape(-1, dim)
+    return status, exact, raw, simplified, solve_time
+
+
+def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
+         time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
+         motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
+         planner_range: float | None = None, cache=None,
+         sampler: str = "uniform", robot_hull: bool = False, slices=None) -> PlanResult:
+    """Plan a collision-free translation with OMPL, checked exactly; with ``slices``, a
+    path that also turns the robot, every motion certified.
+
+    Parameters
+    ----------
+    scene_or_cspace : Scene or CSpace
+        A scene (its C-obstacles are modelled and built by :meth:`CSpace.from_scene`;
+        start, goal and bounds default to the scene's) or a built :class:`CSpace`.
+    start, goal : (3,) float64, optional
+        Reference-point translations; required for a CSpace.
+    planner : str, default 'RRTConnect'
+        A geometric planner bound in ``ompl.geometric`` (:func:`planner_names`).
+    time : float, default 1.0
+        Seconds for ``solve()`` (simplification gets ``min(1, time / 2)`` more).
+    seed : int, optional
+        ``ompl.util.RNG.setSeed(seed)`` before building the planner. Runs are then
+        reproducible for the same inputs and call order in a process (OMPL derives every
+        RNG from one global seed generator and logs an error if it already handed out seeds).
+    simplify : bool, default True
+        ``og.PathSimplifier.simplify`` (shortcutting; never B-spline smoothing).
+    bounds : (2, 3) float64, optional
+        Default the scene's bounds, else ``cspace.bounds``.
+    motion : {'exact', 'discrete'}, default 'exact'
+        ``'exact'`` installs :class:`CSpaceMotionValidator`; ``'discrete'`` keeps OMPL's
+        default discrete motion validator (states checked every ``resolution`` times the
+        space's maximum extent) — it can miss thin obstacles (for comparison only).
+    resolution : float, default 0.01
+        ``si.setStateValidityCheckingResolution`` for ``motion='discrete'``.
+    optimize : bool, default False
+        For optimizing planners (RRTstar, BITstar, ...): use the whole ``time`` to improve
+        path length. If False, the objective's cost threshold is infinite, so they stop at
+        the first solution.
+    planner_range : float, optional
+        ``planner.setRange`` for planners that have it.
+    cache : COCache, path, True, or None
+        For a scene: the disk cache its C-obstacles are built through
+        (:func:`cspace.scene.model.model_scene`); None: no cache.
+    sampler : {'uniform', 'narrow'}, default 'uniform'
+        The valid-state sampler of planners that draw valid states (PRM, PRMstar, ...):
+        OMPL's uniform one, or ``'narrow'``: half the samples from
+        :func:`narrow_passage_samples` (computed once, exact), half uniform. Planners that
+        sample unchecked states (RRT, RRTConnect, ...) ignore it.
+    robot_hull : bool, default False
+        For a scene: build against the robot's convex hull instead of its exact parts.
+    slices : int or cspace.planning.orientations.Slices, optional
+        Plan with turns (a scene only): over these orientation slices (an int ``n``: ``n``
+        equal steps about the axis of the scene's goal rotation relative to its start, z
+        when they are equal, plus the goal's angle). See :func:`plan_turning`.
+
+    Returns
+    -------
+    PlanResult
+        ``path`` is re-proved exactly (:func:`verify_path`) after OMPL returns it; ``solved``
+        requires an exact OMPL solution and a valid path. With ``slices``: also
+        ``slices``, ``orientations`` and ``built``.
+
+    Raises
+    ------
+    ValueError
+        Unknown planner or motion (the message lists the choices); start or goal outside the
+        bounds or in collision (the message says which and which obstacle).
+    """
+    ob, og, ou = _ompl()
+    names = planner_names()
+    if planner not in names:
+        raise InvalidArgumentError(f"{planner!r} is not a valid planner, must be one of {', '.join(names)}")
+    if sampler not in SAMPLERS:
+        raise InvalidArgumentError(f"{sampler!r} is not a valid sampler, must be one of "
+                         f"{', '.join(SAMPLERS)}")
+    if motion not in MOTIONS:
+        raise InvalidArgumentError(f"{motion!r} is not a valid motion, must be one of {', '.join(MOTIONS)}")
+    if not (time > 0):
+        raise InvalidArgumentError(f"time must be positive, got {time}")
+    if slices is not None:
+        if motion != "exact" or sampler != "uniform":
+            raise InvalidArgumentError("planning with turns takes motion='exact' and "
+                                       "sampler='uniform' only")
+        return plan_turning(scene_or_cspace, slices, start, goal, planner=planner, time=time,
+                            seed=seed, simplify=simplify, bounds=bounds, optimize=optimize,
+                            planner_range=planner_range, cache=cache, robot_hull=robot_hull)
+    cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull)
+    if bounds is None:
+        bounds = scene.bounds if scene is not None else cs.bounds
+    b = _bounds(bounds)
+    if scene is not None:
+        start = scene.start if start is None else start
+        goal = scene.goal if goal is None else goal
+    q0 = _endpoint(cs, start, b, "start")
+    q1 = _endpoint(cs, goal, b, "goal")
+
+    _seed(ou, seed)
+    space = state_space(b)
+    si = ob.SpaceInformation(space)
+    classes = _classes()
+    checker = classes["CSpaceValidityChecker"](si, cs, bounds=b)
+    si.setStateValidityChecker(checker)
+    mv = None
+    if motion == "exact":
+        mv = classes["CSpaceMotionValidator"](si, cs, checker)
+        si.setMotionValidator(mv)  # keep the Python reference (mv) alive until the end
+    else:
+        si.setStateValidityCheckingResolution(float(resolution))
+    samplers = []  # keep the Python samplers alive while OMPL uses them
+    if sampler == "narrow":
+        pool = narrow_passage_samples(cs, b, seed=seed)
+
+        def allocate(si_):
+            stream = None if seed is None else seed + len(samplers)
+            samplers.append(_pool_sampler(si_, pool, stream))
+            return samplers[-1]
+
+        si.setValidStateSamplerAllocator(allocate)
+    si.setup()
+
+    t0 = _time.perf_counter()
+    status, exact, raw, P, solve_time = _solve(
+        si, q0.tolist(), q1.tolist(), planner=planner, time=time, optimize=optimize,
+        planner_range=planner_range, simplify=simplify, read=_vec, dim=3)
+    P = raw if P is None else P
+    simplified = P is not raw
+    valid = False
+    if len(P):
+        valid = verify_path(cs, P, b)["valid"]
+        if simplified and not valid:
+            # Keep the planner's own path if shortcutting produced something we cannot prove.
+            raw_valid = verify_path(cs, raw, b)["valid"]
+            if raw_valid:
+                P, valid, simplified = raw, True, False
+    elapsed = _time.perf_counter() - t0
+    return PlanResult(
+        path=np.ascontiguousarray(P, dtype=np.float64).reshape(-1, 3),
+        solved=bool(exact and valid),
+        exact=bool(exact),
+        valid=bool(valid),
+        planner=planner,
+        motion=motion,
+        time=elapsed,
+        solve_time=solve_time,
+        n_states=int(len(P)),
+        status=status.asString(),
+        state_checks=int(checker.calls),
+        motion_checks=int(mv.calls) if mv is not None else 0,
+        simplified=simplified,
+    )
+
+
+# --------------------------------------------------------------------------------------
+# planning with turns
+
+
+def default_slices(scene, n: int):
+    """``n`` equal orientation steps about the axis of the scene's goal rotation relative to
+    its start, plus the goal's angle (:meth:`Slices.about`); about z when the two rotations
+    are the same matrix."""
+    from scipy.spatial.transform import Rotation
+
+    from .orientations import Slices
+
+    if np.array_equal(scene.goal_rotation, scene.start_rotation):
+        return Slices.about(n)
+    rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
+    rv = Rotation.from_matrix(rel).as_rotvec()
+    angle = float(np.linalg.norm(rv))
+    if angle == 0.0:  # a float product of distinct matrices can still round to the identity
+        return Slices.about(n)
+    return Slices.about(n, axis=rv / angle, goal_angle=angle)
+
+
+def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTConnect",
+                 time: float = 1.0, seed: int | None = None, simplify: bool = True,
+                 bounds=None, optimize: bool = False, planner_range: float | None = None,
+                 cache=None, robot_hull: bool = False, executor=None) -> PlanResult:
+    """Plan translations and turns in place over orientation slices, every motion certified.
+
+    A state is a position and an orientation of the set: for :class:`~cspace.planning.orientations.Slices`
+    (turns about one axis) the OMPL state is ``(x, y, z, s)`` with slice ``k`` at
+    ``s = k w`` (``w`` the arc a step of ``2 pi / n`` moves the robot's farthest point, so
+    turning and translating weigh alike) and ``round(s / w)`` its slice; for
+    :class:`~cspace.planning.orientations.Orientations` (free flying) it is an SE(3) state whose rotation
+    is snapped to the nearest orientation of the set. A state is valid when the robot at
+    that orientation is free there; a motion from ``(q0, k0)`` to ``(q1, k1)`` is the
+    translation at ``k0`` followed by the turn in place at ``q1`` through neighbouring
+    orientations to ``k1``, valid when each is certified free
+    (:meth:`cspace.planning.turning.TurningCSpace.motion_free`). Slices and turns are built when the
+    planner first enters them. The returned path is expanded to primitive motions and
+    re-proved (:meth:`~cspace.planning.turning.TurningCSpace.verify`).
+
+    Parameters are those of :func:`plan` (the start and goal orientations are the scene's);
+    ``slices`` is a :class:`~cspace.planning.orientations.Slices`, an
+    :class:`~cspace.planning.orientations.Orientations`, or a count (:func:`default_slices`). With an
+    ``executor`` (a process pool, a Dask cluster's: :func:`cspace.planning.scale.executor_for`) every
+    orientation's C-space is built through it before planning
+    (:meth:`~cspace.planning.turning.TurningCSpace.prebuild`), not counted in the planning time;
+    turns stay lazy.
+    """
+    from .orientations import Orientations, Slices
+    from .turning import TurningCSpace
+
+    ob, _, ou = _ompl()
+    if not (hasattr(scene, "obstacles") and hasattr(scene, "robot")):
+        raise ArgumentTypeError(f"planning with turns needs a Scene, got {type(scene).__name__}")
+    if not isinstance(slices, (Slices, Orientations)):
+        if isinstance(slices, bool) or not isinstance(slices, (int, np.integer)):
+            raise ArgumentTypeError("slices must be an int, a Slices or an Orientations, got "
+                                    f"{type(slices).__name__}")
+        slices = default_slices(scene, int(slices))
+    rel_goal = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
+    if not np.allclose(slices.rotation(slices.goal), rel_goal, rtol=0.0, atol=1e-9):
+        raise InvalidArgumentError("the orientation set's goal is not the scene's goal rotation "
+                                   "(relative to its start)")
+    b = _bounds(scene.bounds if bounds is None else bounds)
+    tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull)
+    tcs.bounds = b
+    if executor is not None:
+        tcs.prebuild(executor)
+    q0 = np.array(scene.start if start is None else start, dtype=np.float64)
+    q1 = np.array(scene.goal if goal is None else goal, dtype=np.float64)
+    for what, q, k in (("start", q0, 0), ("goal", q1, slices.goal)):
+        if q.shape != (3,) or not np.isfinite(q).all() or not tcs.in_bounds(q):
+            raise InvalidArgumentError(f"{what} {q.tolist()} is not a finite point inside the "
+                                       f"bounds {b.tolist()}")
+        if not tcs.state_free(q, k):
+            raise InvalidArgumentError(f"{what} {q.tolist()} is in collision at its orientation "
+                                       f"({slices.label(k)}; touching counts)")
+    n = len(slices)
+    space, start_state, goal_state, position, orientation_of = (
+        _yaw_space if isinstance(slices, Slices) else _flying_space)(scene, slices, b, q0, q1)
+    classes = _turning_classes()
+    _seed(ou, seed)
+    si = ob.SpaceInformation(space)
+    checker = classes["checker"](si, tcs, position, orientation_of)
+    si.setStateValidityChecker(checker)
+    mv = classes["motion"](si, tcs, position, orientation_of)
+    si.setMotionValidator(mv)
+    si.setup()
+
+    def read(state) -> np.ndarray:
+        return np.array([*position(state), orientation_of(state)], dtype=np.float64)
+
+    t0 = _time.perf_counter()
+    status, exact, raw, simp, solve_time = _solve(
+        si, start_state, goal_state, planner=planner, time=time, optimize=optimize,
+        planner_range=planner_range, simplify=simplify, read=read, dim=4)
+
+    chosen, valid, simplified = [], False, False
+    for P, is_simplified in ((simp, True), (raw, False)):
+        if P is None or not len(P):
+            continue
+        wp = tcs.expand([(p[:3], int(p[3])) for p in P])
+        if tcs.verify(wp):
+            chosen, valid, simplified = wp, True, is_simplified
+            break
+        if not chosen:
+            chosen = wp
+    elapsed = _time.perf_counter() - t0
+    ks = np.array([k for _, k in chosen], dtype=np.int64)
+    links = n if isinstance(slices, Slices) else sum(map(len, slices.links)) // 2
+    return PlanResult(
+        path=np.array([q for q, _ in chosen], dtype=np.float64).reshape(-1, 3),
+        solved=bool(exact and valid and chosen and np.array_equal(chosen[-1][0], q1)
+                    and chosen[-1][1] == slices.goal),
+        exact=bool(exact),
+        valid=bool(valid),
+        planner=planner,
+        motion="exact",
+        time=elapsed,
+        solve_time=solve_time,
+        n_states=len(chosen),
+        status=status.asString(),
+        state_checks=int(checker.calls),
+        motion_checks=int(mv.calls),
+        simplified=simplified,
+        slices=ks,
+        orientations=tcs.orientations(ks) if len(ks) else np.zeros((0, 4)),
+        built={"slices": len(tcs.built_slices), "turns": len(tcs.built_turns),
+               "of": (n, links)},
+    )
+
+
+def _yaw_space(scene, slices, b: np.ndarray, q0: np.ndarray, q1: np.ndarray):
+    """``(x, y, z, s)`` over turns about one axis: the space, start and goal coordinates,
+    and readers of a state's position and slice."""
+    ob = _ompl()[0]
+    n = len(slices)
+    reach = float(np.linalg.norm(scene.robot.vertices - scene.reference_point, axis=1).max())
+    w = max(reach, 1e-9 * float(np.ptp(b, axis=0).max())) * 2 * np.pi / n
+    space = ob.RealVectorStateSpace(4)
+    space.setBounds(_box_bounds(ob, [*b[0], -0.5 * w], [*b[1], (n - 0.5) * w]))
+
+    def position(state) -> tuple:
+        return (state[0], state[1], state[2])
+
+    def slice_of(state) -> int:
+        return int(np.floor(state[3] / w + 0.5)) % n
+
+    return (space, [*q0.tolist(), 0.0], [*q1.tolist(), slices.goal * w], position, slice_of)
+
+
+def _flying_space(scene, orientations, b: np.ndarray, q0: np.ndarray, q1: np.ndarray):
+    """SE(3) with rotations snapped to the nearest orientation of the set: the space, start
+    and goal fillers, and readers of a state's position and orientation index."""
+    from scipy.spatial.transform import Rotation
+
+    ob = _ompl()[0]
+    space = ob.SE3StateSpace()
+    space.setBounds(_box_bounds(ob, b[0], b[1]))
+
+    def filler(q, k):
+        rv = Rotation.from_matrix(orientations.rotation(k)).as_rotvec()
+        angle = float(np.linalg.norm(rv))
+
+        def fill(state):
+            state.setXYZ(*map(float, q))
+            if angle > 0:
+                state.rotation().setAxisAngle(*map(float, rv / angle), angle)
+            else:
+                state.rotation().setIdentity()
+        return fill
+
+    def position(state) -> tuple:
+        return (state.getX(), state.getY(), state.getZ())
+
+    def orientation_of(state) -> int:
+        r = state.rotation()
+        return orientations.nearest((r.x, r.y, r.z, r.w))
+
+    return space, filler(q0, 0), filler(q1, orientations.goal), position, orientation_of
+
+
+_TURNING: dict[str, type] = {}
+
+
+def _turning_classes() -> dict[str, type]:
+    if _TURNING:
+        return _TURNING
+    ob = _ompl()[0]
+
+    class TurningValidityChecker(ob.StateValidityChecker):
+        """A state is valid when the robot at its orientation (``orientation_of(state)``) is
+        free at its position (``position(state)``)."""
+
+        def __init__(self, si, tcs, position, orientation_of):
+            super().__init__(si)
+            self.tcs, self.position, self.orientation_of, self.calls = tcs, position, orientation_of, 0
+
+        def isValid(self, state) -> bool:
+            self.calls += 1
+            return bool(self.tcs.state_free(self.position(state), self.orientation_of(state)))
+
+    class TurningMotionValidator(ob.MotionValidator):
+        """A translation at the first state's orientation, then a turn in place to the
+        second's, each certified (:meth:`TurningCSpace.motion_free`)."""
+
+        def __init__(self, si, tcs, position, orientation_of):
+            super().__init__(si)
+            self.tcs, self.position, self.orientation_of, self.calls = tcs, position, orientation_of, 0
+
+        def checkMotion(self, s1, s2, *last_valid) -> bool:
+            self.calls += 1
+            return bool(self.tcs.motion_free(self.position(s1), self.orientation_of(s1),
+                                             self.position(s2), self.orientation_of(s2)))
+
+    _TURNING["checker"] = TurningValidityChecker
+    _TURNING["motion"] = TurningMotionValidator
+    return _TURNING
+
+
+# --------------------------------------------------------------------------------------
+# OMPL.app's way, for comparison: sampled poses, discrete motion checks
+
+SAMPLED_SPACES = ("SE2", "SE3")
+
+
+def plan_sampled(scene, *, space: str = "SE3", planner: str = "RRTConnect", time: float = 1.0,
+                 seed: int | None = None, resolution: float = 0.01,
+                 simplify: bool = True) -> PlanResult:
+    """Plan as OMPL.app does, for comparison: poses checked by FCL, motions by sampling.
+
+    The state is the robot's pose: ``'SE3'`` (position and a rotation relative to the start
+    orientation) or ``'SE2'`` (x, y and a turn about z; z stays the start's). A state is
+    valid when FCL finds the robot mesh at that pose free of every obstacle body (solid
+    semantics, :class:`cspace.check.cross_check.PoseCollider`); a motion is valid when OMPL's
+    default discrete validator finds the states every ``resolution`` times the space's
+    maximum extent valid. Nothing is proved between those states: a returned path can clip
+    a thin obstacle or a corner (:func:`cspace.check.cross_check.pose_path_collisions` finds out).
+
+    Returns a :class:`PlanResult` whose ``valid`` is only OMPL's discrete verdict, with
+    ``orientations`` (world frame quaternions ``(x, y, z, w)``).
+    """
+    from scipy.spatial.transform import Rotation
+
+    from ..check.cross_check import PoseCollider
+
+    ob, og, ou = _ompl()
+    if space not in SAMPLED_SPACES:
+        raise InvalidArgumentError(f"{space!r} is not a valid space, must be one of {', '.join(SAMPLED_SPACES)}")
+    if planner not in planner_names():
+        raise InvalidArgumentError(f"{planner!r} is not a valid planner")
+    b = _bounds(scene.bounds)
+    start_rot = np.asarray(scene.start_rotation, dtype=np.float64)
+    rel_goal = Rotation.from_matrix(np.asarray(scene.goal_rotation) @ start_rot.T)
+    collider = PoseCollider(scene)
+    z0 = float(scene.start[2])
+    if space == "SE3":
+        sp = ob.SE3StateSpace()
+        rb = _box_bounds(ob, b[0], b[1])
+    else:
+        if scene.start[2] != scene.goal[2]:
+            raise InvalidArgumentError("SE2 keeps z: the start and goal must share it")
+        rv = rel_goal.as_rotvec()
+        if abs(rv[0]) > 1e-12 or abs(rv[1]) > 1e-12:
+            raise InvalidArgumentError("SE2 turns about z: the goal rotation is not a turn about z")
+        sp = ob.SE2StateSpace()
+        rb = _box_bounds(ob, b[0, :2], b[1, :2])
+    sp.setBounds(rb)
+
+    def pose(state) -> tuple[np.ndarray, np.ndarray]:
+        if space == "SE3":
+            r = state.rotation()
+            R = Rotation.from_quat([r.x, r.y, r.z, r.w]).as_matrix()
+            return np.array([state.getX(), state.getY(), state.getZ()]), R
+        R = Rotation.from_euler("z", state.getYaw()).as_matrix()
+        return np.array([state.getX(), state.getY(), z0]), R
+
+    lo, hi = b[0], b[1]
+
+    def valid(state) -> bool:
+        q, R = pose(state)
+        if not ((lo <= q) & (q <= hi)).all():
+            return False
+        return not bool(collider.collides(R[None], q[None])[0])
+
+    def setter(q, rot):
+        def fill(state):
+            if space == "SE3":
+                state.setXYZ(*map(float, q))
+                angle = rot.magnitude()
+                if angle > 0:
+                    state.rotation().setAxisAngle(*map(float, rot.as_rotvec() / angle), float(angle))
+                else:
+                    state.rotation().setIdentity()
+            else:
+                state.setXY(float(q[0]), float(q[1]))
+                state.setYaw(float(rot.as_rotvec()[2]))
+        return fill
+
+    def read(state) -> np.ndarray:
+        q, R = pose(state)
+        return np.concatenate([q, R.ravel()])
+
+    _seed(ou, seed)
+    si = ob.SpaceInformation(sp)
+    si.setStateValidityChecker(valid)
+    si.setStateValidityCheckingResolution(float(resolution))
+    si.setup()
+    t0 = _time.perf_counter()
+    status, exact, raw, simp, solve_time = _solve(
+        si, setter(scene.start, Rotation.identity()), setter(scene.goal, rel_goal),
+        planner=planner, time=time, optimize=False, planner_range=None, simplify=simplify,
+        read=read, dim=12)
+    rows = (simp if simp is not None else raw) if exact else np.zeros((0, 12))
+    simplified = simp is not None and exact
+    poses = [(row[:3], row[3:].reshape(3, 3)) for row in rows]
+    P = np.array([q for q, _ in poses], dtype=np.float64).reshape(-1, 3)
+    R = np.array([r @ start_rot for _, r in poses]).reshape(-1, 3, 3)
+    return PlanResult(
+        path=P, solved=bool(exact), exact=bool(exact), valid=bool(exact), planner=planner,
+        motion=f"discrete {space}", time=_time.perf_counter() - t0, solve_time=solve_time,
+        n_states=len(P), status=status.asString(), state_checks=0, motion_checks=0,
+        simplified=simplified,
+        orientations=Rotation.from_matrix(R).as_quat() if len(R) else np.zeros((0, 4)))

@@ -1,0 +1,388 @@
+"""What each body of a scene becomes, and why: the classification rules.
+
+:class:`BodyModel` records one obstacle body's kind (``convex``, ``solid``, ``surface``,
+``dropped``; :data:`KINDS`) with its reason; :class:`RobotPart` and :class:`PairModel` the robot's
+parts and the pairs built between them. :func:`_classify` / :func:`_closed_kind` decide a body
+exactly (closed and valid → solid, convex within the stated bound → convex, a folded closed
+surface → surface plus what it encloses (:class:`Enclosing`), open → surface), and
+:func:`_without_far_parts` drops what lies beyond the planning bounds.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..cobstacle.obstacle import CSpaceObstacle
+from ..cobstacle.pairs import _meets
+from ..errors import InvalidMeshError
+from ..geometry.exact import Grid
+from ..geometry.graphs import component_labels
+from ..mesh.closed import ClosedMesh
+from ..mesh.components import edge_uses
+from ..mesh.convex import convex_within_bound
+
+__all__ = ["KINDS", "BodyModel", "RobotPart", "PairModel"]
+
+
+KINDS = ("convex", "solid", "surface", "dropped")
+
+
+@dataclass(eq=False)
+class BodyModel:
+    """One obstacle body of a scene after modelling.
+
+    Attributes
+    ----------
+    name : str
+        ``<scene body>`` or ``<scene body>#<k>`` when the scene body was split.
+    source : str
+        The scene body's name.
+    kind : {'convex', 'solid', 'surface', 'dropped'}
+    reason : str
+        Why this kind, in words.
+    vertices : (n, 3) float64
+        Welded, snapped vertices (world frame).
+    faces : (m, 3) int64
+        Deduplicated triangles of this body.
+    pieces : int
+        Surface: triangles whose piece can meet the bounds (built); else 0.
+    co : CSpaceObstacle or None
+        The built C-obstacle when the robot is one convex part (None if dropped, not built,
+        failed, or the robot has several parts: see ``pairs``).
+    pairs : list of PairModel
+        One per robot part: the construction it got and its C-obstacles.
+    seconds : float
+        Build (or cache load) time.
+    cache : {'hit', 'miss', 'off', ''}
+        '' when not built.
+    error : str
+        Why the build failed ('' if it did not).
+    changed : str
+        How modelling changed what the body means ('' when it did not): a closed body whose
+        snapped surface bounds no valid solid, modelled as its surface and the region it
+        encloses (non-zero winding number); a closed but inconsistently wound body modelled
+        as its surface (its inside counts as free); or a bent convex body modelled by its hull
+        (within a stated excess, counted in ``error_bound``). Announced in the normal output
+        of ``cspace build``/``plan`` and in :meth:`cspace.scene.model.SceneModel.explain` alike.
+    """
+
+    name: str
+    source: str
+    kind: str
+    reason: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    pieces: int = 0
+    co: CSpaceObstacle | None = None
+    pairs: list = field(default_factory=list)
+    seconds: float = 0.0
+    cache: str = ""
+    error: str = ""
+    changed: str = ""
+    _ints: np.ndarray | None = field(default=None, repr=False)
+    _solid: object = field(default=None, repr=False)
+    _keep: np.ndarray | None = field(default=None, repr=False)
+    _encloses: object = field(default=None, repr=False)  # Enclosing of a closed surface
+
+    @property
+    def cos(self) -> list:
+        """Every C-obstacle built for this body (over all robot parts)."""
+        return [co for p in self.pairs for co in p.cos]
+
+    def line(self) -> str:
+        """One report line: name, kind, sizes, reason, build time and cache."""
+        size = f"{len(self.faces)} triangles"
+        if self.co is not None:
+            size += f" -> CO {self.co.n_facets} facets"
+            if self.kind == "surface":
+                size += f" in {self.pieces} pieces"
+        built = ""
+        if self.cache:
+            built = f"; built in {self.seconds:.3f} s (cache {self.cache})"
+        if self.error:
+            built = f"; BUILD FAILED: {self.error}"
+        return f"{self.name}: {self.kind} ({size}): {self.reason}{built}"
+
+
+@dataclass(eq=False)
+class RobotPart:
+    """One part of the robot after modelling (robot frame, reference point not subtracted).
+
+    Attributes
+    ----------
+    name : str
+        ``<robot>`` or ``<robot>#<k>`` when the robot was split.
+    kind : {'convex', 'solid', 'surface'}
+    reason : str
+    ints : (n, 3) int64
+        Welded grid vertices (for ``solid``: the validated mesh's, oriented outwards).
+    faces : (m, 3) int64
+    grid : Grid
+    operand : ConvexPolytope, ClosedMesh, Enclosing or None
+        The exact operand: the polytope (convex), the closed mesh (solid), the closed 2-cycle
+        of a surface that encloses a region (:class:`Enclosing`) or none (open surface).
+    """
+
+    name: str
+    kind: str
+    reason: str
+    ints: np.ndarray
+    faces: np.ndarray
+    grid: Grid
+    operand: object = None
+
+    @property
+    def encloses(self):
+        """The :class:`Enclosing` cycle of a closed surface part, else None."""
+        return self.operand if isinstance(self.operand, Enclosing) else None
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """(n, 3) float64: the snapped vertices, exactly ``grid.to_float(ints)``."""
+        return self.grid.to_float(self.ints)
+
+    def line(self) -> str:
+        return f"{self.name}: {self.kind} ({len(self.faces)} triangles): {self.reason}"
+
+
+@dataclass(eq=False)
+class PairModel:
+    """An (obstacle body, robot part) pair: its construction and C-obstacles.
+
+    Attributes
+    ----------
+    part : str
+        The robot part's name.
+    construction : str
+        A key of :data:`cspace.cobstacle.pairs.CONSTRUCTIONS`.
+    cos : list of CSpaceObstacle
+        Its C-obstacles (convex pieces and containment terms for triangle pairs).
+    detail : str
+        Sizes: pieces or pairs built, and those left out (flat, out of the bounds).
+    seconds : float
+    cache : {'hit', 'miss', 'off', ''}
+    """
+
+    part: str
+    construction: str
+    cos: list = field(default_factory=list)
+    detail: str = ""
+    seconds: float = 0.0
+    cache: str = ""
+
+    def line(self) -> str:
+        built = f"; {self.seconds:.3f} s (cache {self.cache})" if self.cache else ""
+        return (f"x {self.part}: {self.construction}"
+                f"{'; ' + self.detail if self.detail else ''}{built}")
+
+
+# --------------------------------------------------------------------------------------
+# steps 1-3: weld, deduplicate, split
+
+
+# in cspace.mesh.components: weld_dedupe, split_parts (shared with CSpaceObstacle.build)
+
+
+# --------------------------------------------------------------------------------------
+# steps 4-5: drop and classify
+
+
+def _excess(body) -> float:
+    """How far a convex body's (or robot part's) hull may exceed its snapped mesh (0 for the
+    others); counted in each C-obstacle's ``excess`` and so in ``error_bound``."""
+    return float(getattr(body._solid, "excess", 0.0) or 0.0) if body.kind == "convex" else 0.0
+
+
+@dataclass(frozen=True, eq=False)
+class Enclosing:
+    """A closed 2-cycle that bounds no valid solid on the grid (it meets itself, or slivers
+    that snapping flattened cannot be repaired): grid vertices and triangles, every directed
+    edge balanced by its reverse. The region it encloses is where its winding number is
+    non-zero (:class:`cspace.mesh.query.MeshCO`, exact)."""
+
+    ints: np.ndarray
+    faces: np.ndarray
+
+
+def _closed_kind(name, P, F, grid):
+    """Kind of a welded part, without bounds: ``(kind, reason, operand)``.
+
+    ``('convex', reason, ConvexPolytope)``, ``('solid', reason, ClosedMesh)``,
+    ``('surface', why, Enclosing)`` (closed and oriented, but its snapped surface bounds no
+    valid solid: it is modelled as its surface and the region it encloses) or
+    ``('surface', why, None)`` (open, or not consistently oriented).
+
+    A closed body whose snapped surface meets itself is never left as a bare surface: that
+    would count its inside as free. Snapping moves every point of the surface by at most the
+    snapping bound, so away from the surface the snapped winding number is the input's; near
+    it, the (grown) surface pieces hold every contact.
+    """
+    from ..mesh.query import unbalanced_edge
+
+    edge, count = edge_uses(F, len(P))
+    n_boundary = int((count == 1).sum())
+    if n_boundary:
+        return "surface", f"open: {n_boundary} boundary edges", None
+    cycle = Enclosing(P, F) if unbalanced_edge(F, len(P)) is None else None
+    V = grid.to_float(P)
+    try:
+        solid = ClosedMesh.from_arrays(V, F, grid=grid, name=name)
+    except InvalidMeshError as exc:
+        return "surface", (f"closed but not a valid solid ({type(exc).__name__}: "
+                           f"{str(exc).split(': ', 1)[-1]})"), cycle
+    from ..mesh.self_intersection import self_intersections
+
+    crossing = self_intersections(solid)
+    if len(crossing):
+        i, j = crossing[0].tolist()
+        return "surface", (f"closed but intersecting itself (triangles {i} and {j} cross; "
+                           f"{len(crossing)} pairs), so it bounds no valid solid"), Enclosing(
+                               solid.ints, solid.faces)
+    shells = int(solid.components.max()) + 1
+    chi = len(solid.ints) - len(F) * 3 // 2 + len(F)
+    poly, why = convex_within_bound(solid)  # the one definition of "convex"
+    if poly is None:
+        genus = f", genus {1 - chi // 2}" if shells == 1 else ""
+        return "solid", (f"closed 2-manifold, not convex ({shells} shell"
+                         f"{'s' if shells > 1 else ''}, Euler characteristic {chi}{genus})"), solid
+    if poly.excess:
+        return "convex", f"closed and {why}; modelled by its hull ({poly.n_facets} facets)", poly
+    return "convex", f"closed and convex ({poly.n_facets} facets)", poly
+
+
+def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
+              convex_robot: bool = True, memo: dict | None = None) -> BodyModel:
+    used, local = np.unique(F, return_inverse=True)
+    P, F = ints[used], local.reshape(-1, 3)
+    V = grid.to_float(P)
+    r_lo, r_hi = minus_r_box  # the box of c - R, grid units
+    lo, hi = P.min(axis=0) + r_lo, P.max(axis=0) + r_hi
+    body = BodyModel(name, source, "dropped", "", V, F, _ints=P)
+    if not _meets(lo, hi, *bounds_g):
+        body.reason = (f"its C-obstacle's bounding box {grid.to_float(np.stack([lo, hi])).tolist()} "
+                       "misses the planning bounds: the robot can never touch it")
+        return body
+    if memo is None:
+        kind, why, operand = _closed_kind(name, P, F, grid)
+    else:  # the kind depends only on these, exactly (bytes compare exactly on a collision)
+        key = (name, grid.exponent, grid.bits, tuple(int(x) for x in grid.origin),
+               P.shape, P.tobytes(), F.tobytes())
+        if key not in memo:
+            memo[key] = _closed_kind(name, P, F, grid)
+        kind, why, operand = memo[key]
+    if kind != "surface":
+        body.kind, body._solid = kind, operand
+        if kind == "convex" and operand.excess:
+            body.changed = (f"modelled by its convex hull, which exceeds the snapped body by at "
+                            f"most {operand.excess:.3g} (counted in the error bound)")
+        # With a convex robot the body's kind names its algorithm; else each pair's line does.
+        body.reason = why + ((": CVMS" if kind == "convex" else ": NCC-CVMS") if convex_robot
+                             else "")
+        return body
+    # Surface semantics; leave out triangles whose piece cannot meet the bounds.
+    body._encloses = operand
+    if operand is not None:
+        body.changed = (f"a closed body modelled as its surface and the region it encloses "
+                        f"(non-zero winding number of its snapped surface): {why}")
+    elif why.startswith("closed"):
+        body.changed = f"a closed body modelled as its surface (its inside counts as free): {why}"
+    tri = P[F]
+    keep = _meets(tri.min(axis=1) + r_lo, tri.max(axis=1) + r_hi, *bounds_g)
+    body.kind, body._keep, body.pieces = "surface", keep, int(keep.sum())
+    inside = (" and containment terms for what it encloses (non-zero winding number)"
+              if operand is not None else "")
+    body.reason = (f"{why}: surface semantics, the union of triangle ⊕ (-R) over "
+                   f"{int(keep.sum())} triangles" + (f" ({int((~keep).sum())} more cannot "
+                                                     "reach the bounds)" if (~keep).any() else "")
+                   + inside)
+    if not convex_robot:
+        body.reason = (f"{why}: surface semantics (FCL's mesh collision), "
+                       f"{int(keep.sum())} triangles can reach the bounds" + inside)
+    return body
+
+
+def _without_far_parts(scene):
+    """The scene without the parts of its obstacle bodies that cannot reach the bounds and
+    would coarsen the grid, and per scene body ``(count, box)`` of what was left out.
+
+    Precision follows the size of what is modelled, not where everything lies: an obstacle
+    far away that the robot can never touch must not set the grid step for the rest. Parts
+    are the components of triangles sharing a vertex (exact float positions); a part is far
+    when its C-obstacle's bounding box ``[lo(P) + lo(c - R), hi(P) + hi(c - R)]`` misses the
+    planning bounds (decided with exact rationals on the float input) and it reaches beyond
+    the extent of everything else; parts are left out only when that changes the grid step.
+    Other unreachable parts are dropped later, on the grid, as usual.
+    """
+    from dataclasses import replace
+    from fractions import Fraction
+
+    from .scene import Body
+
+    rel = scene.robot.vertices - scene.reference_point
+    # c - R as a box of exact rationals (the reference point minus the robot's box)
+    c = [Fraction(float(x)) for x in scene.reference_point]
+    r_lo = [Fraction(float(x)) for x in scene.robot.vertices.min(axis=0)]
+    r_hi = [Fraction(float(x)) for x in scene.robot.vertices.max(axis=0)]
+    b_lo = [Fraction(float(x)) for x in scene.bounds[0]]
+    b_hi = [Fraction(float(x)) for x in scene.bounds[1]]
+    split = []
+    for body in scene.obstacles:
+        _, inverse = np.unique(body.vertices, axis=0, return_inverse=True)
+        F = inverse.reshape(-1)[body.faces]
+        n = int(F.max()) + 1
+        _, label = component_labels(n, F.reshape(-1), np.repeat(F[:, 0], 3))
+        part = label[F[:, 0]]
+        parts = []
+        for k in np.unique(part):
+            faces = np.nonzero(part == k)[0]
+            V = body.vertices[np.unique(body.faces[faces])]
+            lo, hi = V.min(axis=0), V.max(axis=0)
+            reach = all(Fraction(float(lo[i])) + c[i] - r_hi[i] <= b_hi[i]
+                        and b_lo[i] <= Fraction(float(hi[i])) + c[i] - r_lo[i] for i in range(3))
+            box = np.stack([np.minimum(lo, lo - rel.max(axis=0)),
+                            np.maximum(hi, hi - rel.min(axis=0))])
+            parts.append((faces, reach, box, lo, hi))
+        split.append(parts)
+    # The box of what is near: the bounds with the robot at their corners, and the parts
+    # that can reach them (each with its C-obstacle's box).
+    near = [np.stack([scene.bounds[0] + rel.min(axis=0), scene.bounds[1] + rel.max(axis=0)]),
+            scene.bounds] + [box for parts in split for _, reach, box, _, _ in parts if reach]
+    near = np.concatenate(near)
+    n_lo, n_hi = near.min(axis=0), near.max(axis=0)
+    r_far = max(float(np.abs(scene.robot.vertices).max()),
+                float(np.abs(scene.reference_point).max()))
+    near_grid = Grid.for_box(n_lo, n_hi, reach=float(np.abs(rel).max()), far=r_far)
+    if near_grid.exponent >= scene.grid().exponent:
+        return scene, {}  # nothing far enough to coarsen the grid: model everything as is
+
+    def outside(box) -> bool:  # beyond the near box: it would widen the grid
+        return bool((box[0] < n_lo).any() or (box[1] > n_hi).any())
+
+    far, bodies = {}, []
+    for body, parts in zip(scene.obstacles, split):
+        gone = [p for p in parts if not p[1] and outside(p[2])]
+        if not gone:
+            bodies.append(body)
+            continue
+        lo = np.min([p[3] for p in gone], axis=0) - rel.max(axis=0)
+        hi = np.max([p[4] for p in gone], axis=0) - rel.min(axis=0)
+        far[body.name] = (len(gone), [lo.tolist(), hi.tolist()])
+        kept = np.sort(np.concatenate([p[0] for p in parts if p[1] or not outside(p[2])]
+                                      + [np.zeros(0, np.int64)]))
+        if len(kept):  # only the vertices the kept triangles use (the body's box shrinks)
+            used, faces = np.unique(body.faces[kept], return_inverse=True)
+            bodies.append(Body(body.name, body.vertices[used], faces.reshape(-1, 3),
+                               body.source))
+    if not far:
+        return scene, far
+    return replace(scene, obstacles=tuple(bodies)), far
+
+
+def _far_body(name: str, n_far: int, box) -> BodyModel:
+    return BodyModel(f"{name} (far parts)", name, "dropped",
+                     f"{n_far} connected part{'s' if n_far > 1 else ''} far from the bounds "
+                     f"(C-obstacle bounding box {box} misses them, decided exactly before the "
+                     "grid was chosen, so they do not coarsen it)",
+                     np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64))

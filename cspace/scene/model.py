@@ -1,0 +1,535 @@
+"""Model only what a scene needs: per obstacle body, what to build and why.
+
+:func:`model_scene` turns a :class:`~cspace.scene.scene.Scene` into a :class:`SceneModel`. Each
+obstacle body (a mesh as its file gives it) goes through these steps, all exact on the
+scene grid (``scene.grid()``, centred on the scene):
+
+1. **Weld** vertices by exact snapped position; triangles whose corners weld to fewer than
+   three points are dropped (they have no area), and counted.
+2. **Duplicates**: triangles on the same three welded vertices are one surface patch. The
+   first (in file order) is kept and later copies are dropped, counted as *double-sided*
+   (opposite winding: the two sides of a zero-thickness sheet) or *repeated* (same
+   winding). A sheet modelled with both sides becomes the single open surface it is; a
+   closed surface modelled double-sided becomes closed.
+3. **Split** into connected parts (triangles sharing an edge that no third triangle uses:
+   at a non-manifold edge the parts meeting there are split apart). A closed part (no boundary
+   edge) that lies inside another closed part's solid (a vertex of it, decided exactly) is
+   kept with it: a cavity; every other part is its own body, named ``<body>#<k>``.
+4. **Drop** a part whose C-obstacle cannot meet the planning bounds: its bounding box is
+   exactly ``[lo(O) + lo(c - R), hi(O) + hi(c - R)]`` in grid integers, compared exactly
+   with the bounds, before anything is built.
+5. **Classify**: ``convex`` (a closed convex mesh: CVMS), ``solid`` (closed, oriented
+   2-manifold, not convex: NCC-CVMS through :meth:`CSpaceObstacle.build`), ``surface``
+   (open, or closed but not a valid solid, e.g. non-manifold: the union of the pieces
+   ``t ⊕ (c - R)`` of its triangles, :class:`~cspace.cobstacle.surface.SurfaceObstacle`; triangles
+   whose piece cannot meet the bounds are left out), or ``dropped``. Each decision carries a
+   human-readable reason.
+6. **Build** (``build=True``) each kept body's C-obstacle, through the disk cache
+   (:mod:`cspace.scene.cache`) when one is given.
+
+The robot goes through steps 1-3 and 5 too (nothing of it is dropped): its parts
+(:class:`RobotPart`) are ``convex``, ``solid`` or ``surface``, and every (kept body, robot
+part) pair gets the construction :func:`cspace.cobstacle.pairs.pair_construction` names for its kinds
+(:class:`PairModel`). A convex robot is one convex part and steps 5-6 are as described above;
+``robot_hull=True`` makes the robot's convex hull its one part instead.
+
+Surface semantics equals FCL's mesh collision: a robot wholly inside an unclosed surface
+meets nothing.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from fractions import Fraction
+
+import numpy as np
+
+from ..cobstacle.convex import _translations
+from ..cobstacle.margin import Margin
+from ..cobstacle.obstacle import CSpaceObstacle
+from ..cobstacle.pairs import CONSTRUCTIONS, pair_construction
+from ..cobstacle.surface import SurfaceObstacle
+from ..cobstacle.union import _UnionOf
+from ..errors import BuildError, InvalidMeshError, InvalidArgumentError
+from ..geometry.exact import Grid
+from ..geometry.snapping import snap_deviation
+from ..mesh.components import split_parts, weld_dedupe
+from ..mesh.convex import ConvexPolytope
+from .build import (
+    _Context,
+    _add_enclosed,
+    _assemble,
+    _build,
+    _build_pair_arrays,
+    _build_with,
+    _failed,
+    _grown,
+    _lookup,
+    _store,
+    _to_arrays,
+)
+from .cache import COCache
+from .classify import (
+    BodyModel,
+    KINDS,
+    PairModel,
+    RobotPart,
+    _classify,
+    _closed_kind,
+    _far_body,
+    _without_far_parts,
+)
+
+__all__ = ["SceneModel", "model_scene", "CSpace"]
+
+
+@dataclass(eq=False)
+class SceneModel:
+    """What :func:`model_scene` decided and built for a scene.
+
+    Attributes
+    ----------
+    scene : Scene
+    grid : Grid
+    robot : ConvexPolytope or None
+        The robot's hull on ``grid`` (its frame); None for a flat robot.
+    robot_parts : list of RobotPart
+        What the C-obstacles are built from: the robot's exact parts, or its hull alone when
+        ``robot_hull=True`` was asked for.
+    robot_hull : bool
+        Whether the hull stands in for the robot (an explicit choice, never a silent one).
+    bodies : list of BodyModel
+    sources : dict
+        Per scene body: ``triangles`` (input), ``collapsed``, ``double_sided``, ``repeated``
+        (dropped in steps 1-2) and ``parts`` (after splitting).
+    seconds : dict
+        ``model`` (steps 1-5) and ``build`` (step 6) wall seconds.
+    margin : Margin or None
+        The outward rounding (:mod:`cspace.cobstacle.margin`): the snapping deviation of the scene and
+        the box every C-obstacle is grown by (a float64 surface's may be one step wider, to
+        cover its rounding: its own ``margin`` says). With ``conservative=True`` every
+        C-obstacle holds the true one of the scene's float input.
+    """
+
+    scene: object
+    grid: Grid
+    robot: ConvexPolytope | None
+    bodies: list
+    sources: dict
+    seconds: dict
+    robot_parts: list = field(default_factory=list)
+    robot_hull: bool = False
+    margin: Margin | None = None
+
+    @property
+    def error_bound(self) -> float:
+        """How far (scene units) a translation reported in collision can be from the scene's
+        true C-obstacles (the largest over the built ones); with ``conservative=True`` no true
+        collision is ever missed."""
+        built = [co.error_bound for b in self.bodies for co in b.cos]  # excess included
+        return max(built + [self.margin.error_bound if self.margin else 0.0])
+
+    def meaning_changes(self, limit: int | None = None) -> list[str]:
+        """One line per body whose meaning modelling changed (:attr:`BodyModel.changed`),
+        the first ``limit`` of them and a count of the rest; empty when none did."""
+        changed = [b for b in self.bodies if b.changed]
+        if not changed:
+            return []
+        lines = [f"meaning changed for {len(changed)} of {len(self.bodies)} bodies:"]
+        shown = changed if limit is None else changed[:limit]
+        lines += [f"  {b.name}: {b.changed}" for b in shown]
+        if len(shown) < len(changed):
+            lines.append(f"  ... and {len(changed) - len(shown)} more (--explain lists them)")
+        return lines
+
+    def of_kind(self, kind: str) -> list[BodyModel]:
+        return [b for b in self.bodies if b.kind == kind]
+
+    def counts(self) -> dict:
+        """Number of bodies of each kind."""
+        return {k: len(self.of_kind(k)) for k in KINDS}
+
+    def cspace(self) -> CSpace:
+        """The :class:`CSpace` of the built bodies (dropped ones cannot matter); the surface
+        bodies' C-obstacles are joined into one (:meth:`SurfaceObstacle.union`).
+
+        Raises
+        ------
+        BuildError
+            If the model was made with ``build=False`` or a body's build failed.
+        """
+        failed = [b for b in self.bodies if b.error]
+        if failed:
+            raise BuildError(f"scene {self.scene.name!r}: " + "; ".join(
+                f"cannot build the C-obstacle of body {b.name!r} ({b.kind}: {b.reason}): "
+                f"{b.error}" for b in failed))
+        kept = [b for b in self.bodies if b.kind != "dropped"]
+        missing = [b.name for b in kept if not b.pairs]
+        if missing:
+            raise BuildError(f"scene {self.scene.name!r}: bodies {missing} were modelled "
+                             "without building (build=False)")
+        # Surface pieces of one robot part share one broad phase (one cell lookup per query
+        # for all of them); every other C-obstacle stands alone.
+        cos, surfaces = [], {}
+        for b in kept:
+            for p in b.pairs:
+                for co in p.cos:
+                    if isinstance(co, SurfaceObstacle) and p.construction == "surface pieces":
+                        surfaces.setdefault(p.part, []).append(co)
+                    else:
+                        cos.append(co)
+        cos += [SurfaceObstacle.union(group) for group in surfaces.values()]
+        return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name, scene=self.scene,
+                      robot_hull=self.robot_hull)
+
+    def _margin_line(self) -> str:
+        m = self.margin
+        if m is None:
+            return "error bound: unknown"
+        steps = sorted({co.margin.steps for b in self.bodies for co in b.cos} | {m.steps})
+        grown = ("not grown" if steps == [(0, 0, 0)] else
+                 "grown by " + " or ".join(str(list(s)) for s in steps) + " grid steps per axis")
+        one_sided = m.conservative and all(co.margin.holds_true for b in self.bodies
+                                           for co in b.cos)
+        return (f"error bound {self.error_bound:.3g}: snapping moved the input by at most "
+                f"{[float(f'{d:.3g}') for d in m.deviation]} per axis; C-obstacles {grown}: "
+                + ("every error is a false collision, never a false free" if one_sided else
+                   "the error is two-sided (conservative=False)"))
+
+    def explain(self) -> str:
+        """A human-readable report: per scene body and per modelled body."""
+        c = self.counts()
+        lines = [f"scene {self.scene.name!r}: {len(self.scene.obstacles)} obstacle bodies -> "
+                 f"{len(self.bodies)} modelled: " + ", ".join(f"{c[k]} {k}" for k in KINDS),
+                 f"robot {self.scene.robot.name!r}: " + (
+                     f"its convex hull ({self.robot.n_facets} facets, {len(self.robot.ints)} "
+                     "vertices), as asked (robot_hull)" if self.robot_hull else
+                     f"{len(self.robot_parts)} part{'s' if len(self.robot_parts) != 1 else ''}, "
+                     "modelled exactly") + f"; grid step 2**{self.grid.exponent}; bounds "
+                 f"{self.scene.bounds.tolist()}", self._margin_line()]
+        lines += ["  " + p.line() for p in self.robot_parts]
+        for name, s in self.sources.items():
+            extra = [f"{s[k]} {k.replace('_', '-')}" for k in ("collapsed", "double_sided",
+                                                                 "repeated") if s[k]]
+            lines.append(f"  {name}: {s['triangles']} triangles, {s['parts']} parts"
+                         + (f"; dropped triangles: {', '.join(extra)}" if extra else ""))
+        for b in self.bodies:
+            lines.append("    " + b.line())
+            if len(self.robot_parts) > 1 or any(p.kind != "convex" for p in self.robot_parts):
+                lines += ["      " + p.line() for p in b.pairs]
+        used = sorted({p.construction for b in self.bodies for p in b.pairs})
+        if len(self.robot_parts) > 1 or any(p.kind != "convex" for p in self.robot_parts):
+            lines += ["constructions:"] + [f"  {c}: {CONSTRUCTIONS[c]}" for c in used]
+        lines += self.meaning_changes()
+        lines.append(f"modelling {self.seconds['model']:.3f} s, building "
+                     f"{self.seconds['build']:.3f} s")
+        return "\n".join(lines)
+
+
+def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> list[RobotPart]:
+    """The robot's exact parts (steps 1-3 and 5 of the obstacles, without dropping), or the
+    hull alone when asked for."""
+    if robot_hull:
+        return [RobotPart(scene.robot.name, "convex", "the convex hull of its vertices "
+                          "(robot_hull: an approximation that can only add collisions)",
+                          hull.ints, hull.faces, grid, hull)]
+    ints, F, _ = weld_dedupe(scene.robot, grid)
+    parts = split_parts(ints, F) if len(F) else []
+    if not parts:
+        raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r}: all "
+                         f"{len(scene.robot.faces)} triangles collapse when welded on the grid "
+                         f"(step 2**{grid.exponent})")
+    out = []
+    for k, faces in enumerate(parts):
+        name = scene.robot.name if len(parts) == 1 else f"{scene.robot.name}#{k}"
+        used, local = np.unique(F[faces], return_inverse=True)
+        P, Fk = ints[used], local.reshape(-1, 3)
+        kind, why, operand = _closed_kind(name, P, Fk, grid)
+        if kind == "solid":  # the validated mesh: oriented outwards
+            P, Fk = operand.ints, operand.faces
+        out.append(RobotPart(name, kind, why, P, Fk, grid, operand))
+    return out
+
+
+def model_scene(scene, *, build: bool = True, cache=None, progress=None,
+                grid: Grid | None = None, robot_hull: bool = False,
+                conservative: bool = True, executor=None,
+                memo: dict | None = None) -> SceneModel:
+    """Decide, per obstacle body, what to build and why; build it.
+
+    Parameters
+    ----------
+    scene : Scene
+    build : bool, default True
+        Build the C-obstacles (else only steps 1-5: cheap, for reports).
+    cache : COCache, path, True, or None/False
+        A :class:`~cspace.scene.cache.COCache` (or its folder; True: the default folder,
+        ``$CSPACE_CACHE`` or ``~/.cache/cspace``); None or False: no disk cache.
+    progress : callable, optional
+        ``progress(fraction, message)`` with the overall fraction in ``[0, 1]``: once per
+        body, during long surface builds, and per stage of a non-convex (NCC-CVMS) build.
+    grid : Grid, optional
+        Default ``Scene.grid`` of what is modelled: obstacle parts that cannot reach the
+        bounds and lie beyond everything else are dropped first, so that an obstacle far away
+        does not coarsen the grid for the rest.
+    robot_hull : bool, default False
+        Build against the robot's convex hull instead of its exact parts: faster for a
+        non-convex robot, and conservative (the hull holds the robot, so it can only add
+        collisions), but not the robot the scene gave. ``explain()`` says which was used.
+    conservative : bool, default True
+        Grow every C-obstacle by the least box that makes it hold the true C-obstacle of the
+        scene's float input (:mod:`cspace.cobstacle.margin`): errors are then false collisions within
+        ``error_bound``, never false free. False: the exact C-obstacles of the snapped
+        input, whose error is two-sided (for measuring, not for planning).
+    executor : concurrent.futures.Executor, optional
+        Build the (body, robot part) pairs there: a ``ProcessPoolExecutor``, a Dask
+        ``Client(...).get_executor()`` (:func:`cspace.planning.scale.executor_for`), any Executor.
+        Modelling (steps 1-5), cache look-ups and writes stay in this process: cache hits
+        are never submitted; misses go out as :func:`cspace.scene.build.build_pair_batch` tasks (picklable
+        arrays and grid objects in, the arrays the cache stores out), and this process
+        makes the C-obstacles from those arrays as it makes them from a cache hit, so the
+        answers are those of the local build. ``progress`` is called as tasks complete;
+        an error in a task (or a lost worker) becomes that body's error, as locally.
+        None (default): build here, one pair after the other.
+    memo : dict, optional
+        Shared by calls on scenes with the same obstacle bodies (orientation slices,
+        :func:`cspace.planning.scale.build_slices`): steps 1-3 of a body and step 5's classification
+        depend only on the body and the grid, and are made once per grid.
+
+    Returns
+    -------
+    SceneModel
+        Build failures are recorded per body (``body.error``) and raised as
+        :class:`~cspace.errors.BuildError` by :meth:`SceneModel.cspace`.
+    """
+    t0 = time.perf_counter()
+    far: dict = {}
+    modelled = scene
+    if grid is None:
+        modelled, far = _without_far_parts(scene)
+        grid = modelled.grid()
+    c = np.asarray(scene.reference_point, dtype=np.float64)
+    # The robot is snapped on the scene's step, about its reference point when far from the
+    # grid's origin (Grid.for_robot): c - r are vectors, every C-obstacle is in grid's frame.
+    rgrid = grid.for_robot(scene.robot.vertices, c)
+    c_ints = rgrid.snap(c)
+    margin = _margin(modelled, grid, conservative)
+    # The box of c - R, grown by the widest margin a build may take (one more step for a
+    # float64 surface's rounding), decides what is dropped, exactly, whatever the robot's parts.
+    r_ints = rgrid.snap(scene.robot.vertices[np.unique(scene.robot.faces)])
+    g = margin.g + 1
+    minus_r_box = (c_ints - r_ints.max(axis=0) - g, c_ints - r_ints.min(axis=0) + g)
+    try:
+        robot = ConvexPolytope.from_ints(r_ints, grid=rgrid, name=scene.robot.name)
+    except InvalidMeshError as exc:  # a flat robot has no hull polytope
+        if robot_hull:
+            raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r} has no convex "
+                             f"hull to stand in for it ({exc})") from exc
+        robot = None
+    parts = _model_robot(scene, rgrid, robot, robot_hull)
+    bounds_g = grid.inner_box(*np.asarray(scene.bounds, dtype=np.float64))
+    bodies, sources = [], {}
+    kept = {sb.name: sb for sb in modelled.obstacles}
+    for sb in scene.obstacles:
+        if sb.name not in kept:  # every part of it far away
+            n_far, box = far[sb.name]
+            sources[sb.name] = {"triangles": len(sb.faces), "collapsed": 0, "double_sided": 0,
+                                "repeated": 0, "parts": n_far}
+            bodies.append(_far_body(sb.name, n_far, box))
+            continue
+        sb = kept[sb.name]
+        welded = None if memo is None else memo.get(
+            ("weld", id(sb), grid.exponent, grid.bits, tuple(int(x) for x in grid.origin)))
+        if welded is None:  # steps 1-3 depend only on the body and the grid
+            ints, F, counts = weld_dedupe(sb, grid)
+            split = split_parts(ints, F) if len(F) else []
+            if memo is not None:  # the body is kept in the value: its id stays its own
+                memo[("weld", id(sb), grid.exponent, grid.bits,
+                      tuple(int(x) for x in grid.origin))] = (sb, ints, F, counts, split)
+        else:
+            _, ints, F, counts, split = welded
+        counts = dict(counts)
+        counts["parts"] = len(split)
+        sources[sb.name] = counts
+        for k, faces in enumerate(split):
+            name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
+            bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
+                                    len(parts) == 1 and parts[0].kind == "convex", memo))
+        if sb.name in far:
+            bodies.append(_far_body(sb.name, *far[sb.name]))
+        if not split and sb.name not in far:
+            bodies.append(BodyModel(sb.name, sb.name, "dropped",
+                                    f"empty: all {len(sb.faces)} triangles collapse when welded "
+                                    f"on the grid (step 2**{grid.exponent})",
+                                    np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)))
+    t1 = time.perf_counter()
+    if isinstance(cache, COCache):
+        store = cache
+    elif cache is None or cache is False:
+        store = None
+    else:
+        store = COCache(None if cache is True else cache)
+    if build:
+        todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
+        ctx = _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store)
+        if executor is not None:
+            _build_with(executor, todo, parts, ctx, progress)
+        for i, (b, part) in enumerate(todo if executor is None else ()):
+            construction = pair_construction(b.kind, part.kind)
+
+            def sub(f, stage=None, i=i, b=b, part=part):
+                if progress is not None:
+                    progress((i + f) / len(todo), f"{b.name} ({b.kind})"
+                             + (f" x {part.name}" if len(parts) > 1 else "")
+                             + (f": {stage}" if stage else ""))
+            sub(0.0)
+            t = time.perf_counter()
+            pair = PairModel(part.name, construction)
+            b.pairs.append(pair)
+            try:
+                key, arrays = _lookup(ctx, construction, b, part, pair)
+                if part.kind == "convex" and arrays is None:
+                    pair.cos = [_build(b, part.operand, c, grid, margin, sub,
+                                       _grown(ctx.grown, margin, part))]
+                    arrays = _to_arrays(pair.cos[0]) if store is not None else None
+                    _add_enclosed(ctx, b, part, pair)
+                else:
+                    if arrays is None:
+                        arrays = _build_pair_arrays(construction, b, part, c_ints, grid,
+                                                    bounds_g, margin, sub)
+                    _assemble(ctx, construction, b, part, pair, arrays)
+                _store(ctx, key, pair, arrays)
+            except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
+                _failed(ctx, b, part, pair, parts, f"{type(exc).__name__}: {exc}")
+            pair.seconds = time.perf_counter() - t
+            b.seconds += pair.seconds
+            b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"
+        for b in bodies:  # one convex part: the body's one C-obstacle, as before parts
+            if len(parts) == 1 and parts[0].kind == "convex" and b.pairs and b.pairs[0].cos:
+                b.co = b.pairs[0].cos[0]
+        if progress is not None:
+            progress(1.0, f"{len(todo)} C-obstacles" if len(parts) == 1
+                     else f"{len(todo)} (body, robot part) pairs")
+    t2 = time.perf_counter()
+    return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
+                      seconds={"model": t1 - t0, "build": t2 - t1}, robot_parts=parts,
+                      robot_hull=robot_hull, margin=margin)
+
+
+def _margin(scene, grid: Grid, conservative: bool) -> Margin:
+    """The scene's outward rounding: the obstacles' largest snapping move per axis (over all
+    bodies), plus the robot's, plus the reference point's, exact. Float64 surfaces may widen
+    it by a step to cover their rounding (each C-obstacle's ``margin`` says)."""
+    dev_o = np.zeros(3)
+    for body in scene.obstacles:
+        dev_o = np.maximum(dev_o, snap_deviation(body.vertices, grid))
+    parts = (dev_o, snap_deviation(scene.robot.vertices, grid),
+             snap_deviation(np.asarray(scene.reference_point, np.float64), grid))
+    dev = [sum((Fraction(float(p[i])) for p in parts), Fraction(0)) for i in range(3)]
+    out = Margin.for_deviation(dev, grid, rounded=False)
+    return out if conservative else out.without_growth()
+
+
+_NON_CONVEX = "non-convex C-obstacles need cspace.minkowski_sum (issue #4)"
+
+
+class CSpace:
+    """Several C-obstacles answering the same queries over all of them (no union built).
+
+    Parameters
+    ----------
+    obstacles : sequence of CSpaceObstacle
+    bounds : (2, 3) float64, optional
+        The box translations are planned in (used by sampling checks); default the bounding
+        box of the C-obstacles.
+    scene : Scene, optional
+        The scene the C-obstacles were built from: checks against FCL use its raw meshes.
+    robot_hull : bool, default False
+        The C-obstacles are of the robot's convex hull (checks use the hull too).
+    """
+
+    def __init__(self, obstacles, *, bounds=None, name: str = "cspace", scene=None,
+                 robot_hull: bool = False):
+        self.obstacles = tuple(obstacles)
+        self._union = _UnionOf(self.obstacles)
+        self.name = name
+        # The scene as loaded (set by SceneModel.cspace): FCL cross-checks judge on its raw
+        # meshes (cspace.check.oracle.SceneOracle), never on anything built here.
+        self.scene = scene
+        self.robot_hull = bool(robot_hull)
+        if bounds is None:
+            if not self.obstacles:
+                raise InvalidArgumentError("a CSpace without obstacles needs bounds")
+            b = np.stack([o.bounds for o in self.obstacles])
+            bounds = np.stack([b[:, 0].min(axis=0), b[:, 1].max(axis=0)])
+        self.bounds = np.asarray(bounds, dtype=np.float64).reshape(2, 3)
+
+    @classmethod
+    def from_scene(cls, scene, *, grid: Grid | None = None, cache=None,
+                   progress=None, robot_hull: bool = False, executor=None) -> "CSpace":
+        """The C-obstacles a scene needs, built: :func:`cspace.scene.model.model_scene` decides per
+        body (split, deduplicated; convex, solid, surface or dropped) and builds each.
+
+        Parameters
+        ----------
+        scene : Scene
+        grid : Grid, optional
+            Default ``scene.grid()`` (centred on the scene).
+        cache : COCache, path, True, or None
+            Disk cache of C-obstacles (:mod:`cspace.scene.cache`); None: none.
+        progress : callable, optional
+            ``progress(fraction, message)``, see :func:`cspace.scene.model.model_scene`.
+        robot_hull : bool, default False
+            Use the robot's convex hull instead of its exact parts (see ``model_scene``).
+        executor : concurrent.futures.Executor, optional
+            Build the C-obstacles there (a process pool, a Dask cluster:
+            :func:`cspace.planning.scale.executor_for`); same answers as the local build.
+
+        Raises
+        ------
+        BuildError
+            A body's C-obstacle could not be built; the message names the body and why.
+        """
+
+        return model_scene(scene, grid=grid, cache=cache, progress=progress,
+                           robot_hull=robot_hull, executor=executor).cspace()
+
+    def __len__(self) -> int:
+        return len(self.obstacles)
+
+    def __repr__(self) -> str:
+        return f"CSpace(name={self.name!r}, obstacles={len(self.obstacles)})"
+
+    def contains(self, q) -> np.ndarray | bool:
+        """In collision with any obstacle (exact, touching counts).
+
+        See :meth:`CSpaceObstacle.contains`.
+        """
+        q, single = _translations(q)
+        out = self._union.contains(q)
+        return bool(out[0]) if single else out
+
+    def signed_distance(self, q) -> np.ndarray | float:
+        """Minimum of the obstacles' signed distances.
+
+        Outside every C-obstacle this is the exact clearance (distance to the union).
+        Inside, it is ``-max`` of the penetration depths of the C-obstacles containing ``q``:
+        a lower bound on the penetration depth of the union (overlapping C-obstacles can
+        make the true depth larger); the sign is exact either way.
+        """
+        q, single = _translations(q)
+        out = self._union.signed_distance(q)
+        return float(out[0]) if single else out
+
+    def segment_free(self, q0, q1) -> np.ndarray | bool:
+        """Free of every obstacle (exact); see :meth:`CSpaceObstacle.segment_free`."""
+        a, b, single = CSpaceObstacle._pair(q0, q1)
+        free = ~self._union.segments(a, b, want_t=False)[0]
+        return bool(free[0]) if single else free
+
+    def first_contact(self, q0, q1) -> np.ndarray | float:
+        """Smallest first-contact parameter over the obstacles (NaN if the segment is free)."""
+        a, b, single = CSpaceObstacle._pair(q0, q1)
+        t = self._union.segments(a, b, want_t=True)[1]
+        return float(t[0]) if single else t

@@ -1,0 +1,220 @@
+"""A planning scene: obstacle bodies, a robot at a fixed orientation, bounds, start and goal.
+
+:class:`Body` is a named mesh as its file gives it (float64 vertices, int64 faces, world frame
+for obstacles, robot frame for the robot); :class:`Scene` holds the bodies, the robot's
+reference point, the planning bounds and the query. Reading files: :mod:`cspace.scene.files`.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import InvalidMeshError, SceneError
+from ..geometry.exact import Grid
+from ..mesh.convex import ConvexPolytope
+
+__all__ = ["Body", "Scene"]
+
+
+# --------------------------------------------------------------------------------------
+# data
+
+
+def _frozen(a: np.ndarray) -> np.ndarray:
+    a.flags.writeable = False
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class Body:
+    """A named triangle mesh of a scene, as its file gives it (not welded or repaired).
+
+    Attributes
+    ----------
+    name : str
+        Used in reports and error messages.
+    vertices : (n, 3) float64
+        World frame (pose applied) for obstacles; the robot frame for the robot. Read-only.
+    faces : (m, 3) int64
+        Vertex indices of the triangles, in the file's order and winding. Read-only.
+    source : str
+        The file the body came from, or ``'box'``.
+    """
+
+    name: str
+    vertices: np.ndarray
+    faces: np.ndarray
+    source: str
+
+    def __post_init__(self):
+        vertices = np.array(self.vertices, dtype=np.float64)
+        faces = np.array(self.faces, dtype=np.int64)
+        where = f"body {self.name!r} ({self.source})"
+        if vertices.ndim != 2 or vertices.shape[1] != 3 or len(vertices) == 0:
+            raise SceneError(f"{where}: vertices must be (n, 3) with n > 0, got {vertices.shape}")
+        if faces.ndim != 2 or faces.shape[1] != 3 or len(faces) == 0:
+            raise SceneError(f"{where}: faces must be (m, 3) with m > 0, got {faces.shape}")
+        if not np.isfinite(vertices).all():
+            row = int(np.argmin(np.isfinite(vertices).all(axis=1)))
+            raise SceneError(f"{where}: vertex {row} is not finite: {vertices[row].tolist()}")
+        if faces.min() < 0 or faces.max() >= len(vertices):
+            raise SceneError(
+                f"{where}: face indices must be in [0, {len(vertices)}), "
+                f"found {int(faces.min())}..{int(faces.max())}"
+            )
+        object.__setattr__(self, "vertices", _frozen(vertices))
+        object.__setattr__(self, "faces", _frozen(faces))
+
+    @property
+    def bounds(self) -> np.ndarray:
+        """(2, 3) float64: the lower and upper corner of the vertices' bounding box."""
+        return np.stack([self.vertices.min(axis=0), self.vertices.max(axis=0)])
+
+    def __repr__(self) -> str:
+        return (
+            f"Body(name={self.name!r}, vertices={len(self.vertices)}, faces={len(self.faces)}, "
+            f"source={self.source!r})"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Scene:
+    """A translational planning problem: obstacles, a robot at a fixed orientation, bounds.
+
+    Build one with :func:`cspace.scene.files.load_scene` (or directly; the constructor checks the arrays).
+
+    Attributes
+    ----------
+    name : str
+    path : Path or None
+        The file the scene was read from.
+    obstacles : tuple of Body
+        World frame.
+    robot : Body
+        The robot in its own frame, its fixed orientation already applied; the reference
+        point is not subtracted.
+    reference_point : (3,) float64
+        The point of the robot whose position is planned, in the robot frame. The robot with
+        its reference point at ``q`` occupies ``robot.vertices - reference_point + q``.
+    bounds : (2, 3) float64
+        Lower and upper corner of the box the reference point moves in.
+    start, goal : (3,) float64
+        Reference-point positions, inside ``bounds``.
+    start_rotation, goal_rotation : (3, 3) float64
+        The robot's orientation at the start (already applied to :attr:`robot`) and the one
+        asked for at the goal, world frame (rotations acting on column vectors; default the
+        identity, the goal's default the start's). Translation-only planning keeps the start
+        orientation; planning with turns (:func:`cspace.planning.plan.plan` ``slices=``) reaches
+        the goal's.
+    """
+
+    name: str
+    path: Path | None
+    obstacles: tuple[Body, ...]
+    robot: Body
+    reference_point: np.ndarray
+    bounds: np.ndarray
+    start: np.ndarray
+    goal: np.ndarray
+    start_rotation: np.ndarray | None = None
+    goal_rotation: np.ndarray | None = None
+
+    def __post_init__(self):
+        where = f"scene {self.name!r}"
+        if self.start_rotation is None:
+            object.__setattr__(self, "start_rotation", np.eye(3))
+        if self.goal_rotation is None:
+            object.__setattr__(self, "goal_rotation", self.start_rotation)
+        arrays = {}
+        for key, shape in (("reference_point", (3,)), ("bounds", (2, 3)), ("start", (3,)),
+                           ("goal", (3,)), ("start_rotation", (3, 3)), ("goal_rotation", (3, 3))):
+            a = np.array(getattr(self, key), dtype=np.float64)
+            if a.shape != shape:
+                raise SceneError(f"{where}: {key} must have shape {shape}, got {a.shape}")
+            if not np.isfinite(a).all():
+                raise SceneError(f"{where}: {key} is not finite: {a.tolist()}")
+            arrays[key] = a
+        for key in ("start_rotation", "goal_rotation"):
+            r = arrays[key]
+            if not (np.abs(r @ r.T - np.eye(3)).max() <= 1e-9 and np.linalg.det(r) > 0):
+                raise SceneError(f"{where}: {key} is not a rotation matrix: {r.tolist()}")
+        lo, hi = arrays["bounds"]
+        if (lo > hi).any():
+            raise SceneError(f"{where}: bounds lower corner {lo.tolist()} exceeds the upper "
+                             f"corner {hi.tolist()}")
+        for key in ("start", "goal"):
+            if not _inside(arrays[key], arrays["bounds"]):
+                raise SceneError(f"{where}: {key} {arrays[key].tolist()} is outside the bounds "
+                                 f"{arrays['bounds'].tolist()}")
+        for key, a in arrays.items():
+            object.__setattr__(self, key, _frozen(a))
+        object.__setattr__(self, "obstacles", tuple(self.obstacles))
+        if self.path is not None:
+            object.__setattr__(self, "path", Path(self.path))
+
+    def robot_polytope(self, grid=None) -> ConvexPolytope:
+        """The robot as an exact convex polytope (robot frame; reference point not subtracted).
+
+        Parameters
+        ----------
+        grid : Grid, optional
+            Snapping grid; default the grid for the robot's own coordinates. Pass the scene's
+            grid (e.g. ``scene.grid()``) to combine it with obstacles.
+
+        Returns
+        -------
+        ConvexPolytope
+            ``ConvexPolytope.from_mesh`` of the robot mesh when it is a closed convex mesh.
+            Otherwise (not convex, open, double-sided, several shells, ...) the convex hull of
+            its vertices, with a :class:`UserWarning` saying why.
+        """
+        robot = self.robot
+        if grid is not None:  # the scene grid's step, about the reference point if far
+            grid = grid.for_robot(robot.vertices, self.reference_point)
+        try:
+            return ConvexPolytope.from_mesh(
+                (robot.vertices, robot.faces), grid=grid, name=robot.name
+            )
+        except InvalidMeshError as exc:
+            warnings.warn(
+                f"scene {self.name!r}: robot {robot.name!r} ({robot.source}) is not a closed "
+                f"convex mesh ({type(exc).__name__}: {exc}); using the convex hull of its "
+                f"{len(robot.vertices)} vertices instead",
+                UserWarning,
+                stacklevel=2,
+            )
+            return ConvexPolytope.from_points(robot.vertices, grid=grid, name=robot.name)
+
+    def grid(self, *, bits: int = 26) -> Grid:
+        """The scene's snapping grid: :meth:`Grid.for_box` of everything the C-obstacles'
+        computations meet in the world frame (the bounds, the robot placed at their corners,
+        the obstacles and their C-obstacles' boxes ``O ⊕ (c - R)``), with the robot's vectors
+        ``c - r`` within reach. Centred on that box when it lies away from the origin, so that
+        the step follows the scene's size, not its distance from the origin."""
+        rel = self.robot.vertices - self.reference_point
+        r_lo, r_hi = rel.min(axis=0), rel.max(axis=0)
+        lo, hi = self.bounds
+        boxes = [self.bounds, np.stack([lo + r_lo, hi + r_hi])]
+        for body in self.obstacles:
+            b_lo, b_hi = body.bounds
+            boxes.append(np.stack([b_lo, b_hi, b_lo - r_hi, b_hi - r_lo]))
+        allv = np.concatenate(boxes)
+        far = max(float(np.abs(self.robot.vertices).max()),
+                  float(np.abs(self.reference_point).max()))
+        return Grid.for_box(allv.min(axis=0), allv.max(axis=0),
+                            reach=float(np.abs(rel).max()), far=far, bits=bits)
+
+    def __repr__(self) -> str:
+        return (
+            f"Scene(name={self.name!r}, obstacles={len(self.obstacles)}, robot={self.robot!r}, "
+            f"bounds={self.bounds.tolist()}, start={self.start.tolist()}, "
+            f"goal={self.goal.tolist()})"
+        )
+
+
+def _inside(point: np.ndarray, bounds: np.ndarray) -> bool:
+    return bool((bounds[0] <= point).all() and (point <= bounds[1]).all())
