@@ -239,7 +239,7 @@ def _model(args: argparse.Namespace, scene=None):
     try:
         executor = _executor(args)
         return model_scene(scene, cache=cache, progress=progress, robot_hull=args.robot_hull,
-                           executor=executor)
+                           executor=executor, memory=args.memory)
     finally:
         if executor is not None:  # all done (or interrupted): stop the pool, close the client
             executor.shutdown(wait=False, cancel_futures=True)
@@ -431,7 +431,8 @@ def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_ou
     executor = _executor(args)
     try:
         r = plan_turning(scene, slices, planner=args.planner, time=args.time, seed=args.seed,
-                         cache=cache, robot_hull=args.robot_hull, executor=executor)
+                         cache=cache, robot_hull=args.robot_hull, executor=executor,
+                         memory=args.memory)
     finally:
         if executor is not None:
             executor.shutdown(wait=False, cancel_futures=True)
@@ -538,6 +539,10 @@ def _model_options(p: argparse.ArgumentParser) -> None:
                         "(faster for a non-convex robot; conservative: it can only add "
                         "collisions); default: the robot exactly")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
+    p.add_argument("--memory", type=_size, default=None, metavar="SIZE",
+                   help="memory budget of the build, e.g. 6G (default $CSPACE_MEMORY, else half "
+                        "of the memory available); a build over it stops before it starts, "
+                        f"exit status {EXIT_MEMORY}")
     _progress_options(p)
 
 
@@ -579,6 +584,19 @@ _positive = _number(float, lambda v: 0 < v < float("inf"), "a positive number")
 _non_negative = _number(float, lambda v: 0 <= v < float("inf"), "a number >= 0")
 
 
+def _size(text: str) -> int:
+    from .memory import parse_size
+
+    try:
+        return parse_size(text, "--memory")
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
+# Exit status of a build that would not fit in its memory budget (2 is bad input).
+EXIT_MEMORY = 4
+
+
 class _Formatter(argparse.RawDescriptionHelpFormatter):
     """Help that shows an option's default when it has one (not None or False)."""
 
@@ -597,7 +615,7 @@ def _help(example: str) -> dict:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
-    from .errors import CspaceError
+    from .errors import CspaceError, MemoryBudgetError
 
     parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
     parser.add_argument("--debug", action="store_true",
@@ -687,6 +705,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("cspace: interrupted", file=sys.stderr)
         return 130
+    except MemoryBudgetError as e:  # would not fit: said before anything was allocated
+        if args.debug:
+            raise
+        print(f"cspace: error: {e}", file=sys.stderr)
+        return EXIT_MEMORY
     except (CspaceError, ValueError, OSError) as e:  # bad input, paths, files: one line
         if args.debug:
             raise

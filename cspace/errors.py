@@ -29,6 +29,7 @@ __all__ = [
     "ArgumentTypeError",
     "SelfIntersectionError",
     "MissingDependencyError",
+    "MemoryBudgetError",
 ]
 
 
@@ -124,3 +125,14 @@ class SelfIntersectionError(InvalidMeshError):
 class MissingDependencyError(CspaceError, ImportError):
     """An optional capability needs a package that is not installed (the message names it
     and the pip command); nothing in the default path needs one."""
+
+
+class MemoryBudgetError(CspaceError, MemoryError):
+    """A build would need more memory than its budget (:func:`cspace.memory.memory_budget`):
+    it stops before allocating, instead of being killed by the kernel. ``needed`` and
+    ``budget`` are in bytes; the message says what needs the memory and how to change the
+    budget (``memory=``, ``--memory``, ``$CSPACE_MEMORY``)."""
+
+    def __init__(self, message: str, needed: int = 0, budget: int = 0):
+        super().__init__(message)
+        self.needed, self.budget = int(needed), int(budget)

@@ -5,7 +5,7 @@ The graph is read from the source (``ast``), not from ``sys.modules``: every ``i
 dependency), and ``from .. import name`` counts as an import of the package's ``__init__``.
 The stack, bottom up (``docs/architecture.md``)::
 
-    errors ← output, workers, _version ← geometry ← mesh ← minkowski ← cobstacle ← scene
+    errors ← output, workers, memory, _version ← geometry ← mesh ← minkowski ← cobstacle ← scene
            ← check, viz ← planning ← cli ← the package root (the public API), __main__
 """
 
@@ -22,7 +22,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "cspace"
 # Rank of each layer; a module may import its own layer (without cycles) and lower ranks.
 RANKS = {
     "errors": 0,
-    "output": 1, "workers": 1, "_version": 1,
+    "output": 1, "workers": 1, "memory": 1, "_version": 1,
     "geometry": 2,
     "mesh": 3,
     "minkowski": 4,

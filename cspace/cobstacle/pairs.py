@@ -70,7 +70,7 @@ from .convex import exact_plane_sign, exact_segment_entry, segment_filter
 
 __all__ = ["CONSTRUCTIONS", "pair_construction", "PairPieces", "TrianglePairs",
            "triangle_pairs", "triangle_pair_pieces", "PairObstacle", "convex_triangle_pieces",
-           "component_points", "containment_meshes"]
+           "component_points", "containment_meshes", "PAIR_BYTES", "pairs_memory"]
 
 #: Every construction a pair can get, with what it computes.
 CONSTRUCTIONS = {
@@ -92,6 +92,16 @@ _PAIRS = 1 << 12
 _PAD = -1e300
 # Pairs whose slab columns are kept in memory (about 2 KB a pair).
 _KEEP = 1 << 15
+
+#: Bytes a triangle pair takes while its C-obstacle lives (``held``: indices, box, cells) and
+#: while it is built (``peak``): tracemalloc measured 100 and 525-600 bytes on 0.08M-1.3M pairs
+#: (tests/test_memory.py holds these bounds to it).
+PAIR_BYTES = {"held": 160, "peak": 768}
+
+
+def pairs_memory(n_pairs: int) -> tuple[int, int]:
+    """``(held, peak)`` bytes of at most ``n_pairs`` triangle pairs (:data:`PAIR_BYTES`)."""
+    return PAIR_BYTES["held"] * int(n_pairs), PAIR_BYTES["peak"] * int(n_pairs)
 
 
 def pair_construction(obstacle_kind: str, robot_kind: str) -> str:

@@ -117,11 +117,12 @@ class PlanResult:
         return float(np.linalg.norm(np.diff(self.path, axis=0), axis=1).sum())
 
 
-def _as_cspace(scene_or_cspace, cache=None, robot_hull: bool = False):
+def _as_cspace(scene_or_cspace, cache=None, robot_hull: bool = False, memory=None):
     if isinstance(scene_or_cspace, CSpace):
         return scene_or_cspace, None
     if hasattr(scene_or_cspace, "obstacles") and hasattr(scene_or_cspace, "robot"):
-        return (CSpace.from_scene(scene_or_cspace, cache=cache, robot_hull=robot_hull),
+        return (CSpace.from_scene(scene_or_cspace, cache=cache, robot_hull=robot_hull,
+                                  memory=memory),
                 scene_or_cspace)
     raise ArgumentTypeError(f"expected a Scene or a CSpace, got {type(scene_or_cspace).__name__}")
 
@@ -205,7 +206,8 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
          time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
          planner_range: float | None = None, cache=None,
-         sampler: str = "uniform", robot_hull: bool = False, slices=None) -> PlanResult:
+         sampler: str = "uniform", robot_hull: bool = False, slices=None,
+         memory=None) -> PlanResult:
     """Plan a collision-free translation with OMPL, checked exactly; with ``slices``, a
     path that also turns the robot, every motion certified.
 
@@ -254,6 +256,11 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         Plan with turns (a scene only): over these orientation slices (an int ``n``: ``n``
         equal steps about the axis of the scene's goal rotation relative to its start, z
         when they are equal, plus the goal's angle). See :func:`plan_turning`.
+    memory : int or str, optional
+        Memory budget of the build (bytes or a size such as ``"6G"``; default
+        ``$CSPACE_MEMORY``, else half of what is available: :mod:`cspace.memory`). Over it,
+        :class:`~cspace.errors.MemoryBudgetError` before anything is built; with turns, one
+        budget for all the slices built.
 
     Returns
     -------
@@ -285,8 +292,9 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
                                        "sampler='uniform' only")
         return plan_turning(scene_or_cspace, slices, start, goal, planner=planner, time=time,
                             seed=seed, simplify=simplify, bounds=bounds, optimize=optimize,
-                            planner_range=planner_range, cache=cache, robot_hull=robot_hull)
-    cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull)
+                            planner_range=planner_range, cache=cache, robot_hull=robot_hull,
+                            memory=memory)
+    cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull, memory)
     if bounds is None:
         bounds = scene.bounds if scene is not None else cs.bounds
     b = _bounds(bounds)
@@ -377,7 +385,7 @@ def default_slices(scene, n: int):
 def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTConnect",
                  time: float = 1.0, seed: int | None = None, simplify: bool = True,
                  bounds=None, optimize: bool = False, planner_range: float | None = None,
-                 cache=None, robot_hull: bool = False, executor=None) -> PlanResult:
+                 cache=None, robot_hull: bool = False, executor=None, memory=None) -> PlanResult:
     """Plan translations and turns in place over orientation slices, every motion certified.
 
     A state is a position and an orientation of the set: for :class:`~cspace.planning.orientations.Slices`
@@ -417,7 +425,7 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
         raise InvalidArgumentError("the orientation set's goal is not the scene's goal rotation "
                                    "(relative to its start)")
     b = _bounds(scene.bounds if bounds is None else bounds)
-    tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull)
+    tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull, memory=memory)
     tcs.bounds = b
     if executor is not None:
         tcs.prebuild(executor)

@@ -35,6 +35,8 @@ import dataclasses
 import numpy as np
 
 from .orientations import _turned, swept_points
+from ..errors import MemoryBudgetError
+from ..memory import budget_and_source, format_size
 
 __all__ = ["TurningCSpace"]
 
@@ -64,8 +66,11 @@ class TurningCSpace:
         there. So a slice or a turn is built only where the robot comes near an obstacle.
     """
 
-    def __init__(self, scene, slices, *, cache=None, robot_hull: bool = False):
+    def __init__(self, scene, slices, *, cache=None, robot_hull: bool = False, memory=None):
         self.scene = scene
+        # One memory budget for all the slices this builds (cspace.memory): each slice's
+        # build gets what the slices already built leave of it.
+        self.memory, self._memory_source = budget_and_source(memory)
         self.slices = slices
         self.cache = cache
         self.robot_hull = bool(robot_hull)
@@ -101,7 +106,18 @@ class TurningCSpace:
     def _cspace(self, scene, hull: bool):
         from ..scene.model import CSpace
 
-        return CSpace.from_scene(scene, cache=self.cache, robot_hull=hull)
+        held = sum(cs.memory for cs in self.built_slices.values())
+        try:
+            return CSpace.from_scene(scene, cache=self.cache, robot_hull=hull,
+                                     memory=max(1, self.memory - held))
+        except MemoryBudgetError as exc:
+            if not held:
+                raise
+            raise MemoryBudgetError(
+                f"{exc}. The {len(self.built_slices)} orientation slices built so far hold about "
+                f"{format_size(held)} of the budget of {format_size(self.memory)} "
+                f"({self._memory_source}): fewer orientations need less",
+                needed=exc.needed + held, budget=self.memory) from exc
 
     def slice(self, k: int):
         """The :class:`~cspace.CSpace` of the robot at slice ``k`` (built on first use)."""

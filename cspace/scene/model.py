@@ -48,12 +48,13 @@ import numpy as np
 from ..cobstacle.convex import _translations
 from ..cobstacle.margin import Margin
 from ..cobstacle.obstacle import CSpaceObstacle
-from ..cobstacle.pairs import CONSTRUCTIONS, pair_construction
+from ..cobstacle.pairs import CONSTRUCTIONS, pair_construction, pairs_memory
 from ..cobstacle.surface import SurfaceObstacle
 from ..cobstacle.union import _UnionOf
-from ..errors import BuildError, InvalidMeshError, InvalidArgumentError
+from ..errors import BuildError, InvalidArgumentError, InvalidMeshError, MemoryBudgetError
 from ..geometry.exact import Grid
 from ..geometry.snapping import snap_deviation
+from ..memory import budget_and_source, format_size
 from ..mesh.components import split_parts, weld_dedupe
 from ..mesh.convex import ConvexPolytope
 from .build import (
@@ -121,6 +122,7 @@ class SceneModel:
     robot_parts: list = field(default_factory=list)
     robot_hull: bool = False
     margin: Margin | None = None
+    memory: int = 0  # bytes its C-obstacles hold, as estimated before the build (_memory_check)
 
     @property
     def error_bound(self) -> float:
@@ -181,7 +183,7 @@ class SceneModel:
                         cos.append(co)
         cos += [SurfaceObstacle.union(group) for group in surfaces.values()]
         return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name, scene=self.scene,
-                      robot_hull=self.robot_hull)
+                      robot_hull=self.robot_hull, memory=self.memory)
 
     def _margin_line(self) -> str:
         m = self.margin
@@ -255,7 +257,7 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
 def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                 grid: Grid | None = None, robot_hull: bool = False,
                 conservative: bool = True, executor=None,
-                memo: dict | None = None) -> SceneModel:
+                memo: dict | None = None, memory=None) -> SceneModel:
     """Decide, per obstacle body, what to build and why; build it.
 
     Parameters
@@ -296,6 +298,12 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         Shared by calls on scenes with the same obstacle bodies (orientation slices,
         :func:`cspace.planning.scale.build_slices`): steps 1-3 of a body and step 5's classification
         depend only on the body and the grid, and are made once per grid.
+    memory : int or str, optional
+        The memory budget of the build (bytes or a size such as ``"6G"``; default
+        ``$CSPACE_MEMORY``, else half of the memory available: :mod:`cspace.memory`). The
+        constructions quadratic in the triangle counts (triangle pairs of a non-convex robot
+        part and a non-convex body) are estimated before anything is built; a build over the
+        budget raises :class:`~cspace.errors.MemoryBudgetError` saying what it needed.
 
     Returns
     -------
@@ -370,8 +378,10 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         store = None
     else:
         store = COCache(None if cache is True else cache)
+    held = 0
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
+        held = _memory_check(scene, todo, memory)
         ctx = _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store)
         if executor is not None:
             _build_with(executor, todo, parts, ctx, progress)
@@ -414,7 +424,39 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     t2 = time.perf_counter()
     return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
                       seconds={"model": t1 - t0, "build": t2 - t1}, robot_parts=parts,
-                      robot_hull=robot_hull, margin=margin)
+                      robot_hull=robot_hull, margin=margin, memory=held)
+
+
+def _memory_check(scene, todo, memory) -> int:
+    """Bytes the C-obstacles of ``todo`` will hold; raises :class:`MemoryBudgetError` before
+    anything is built when they, and the largest construction's own peak, exceed the budget.
+
+    Counted: the triangle pairs (:func:`cspace.cobstacle.pairs.pairs_memory`, at most one
+    pair per obstacle triangle and robot triangle), the only constructions quadratic in the
+    triangle counts; the others are linear in them (a few kB a triangle)."""
+    held, peak, total, largest = 0, 0, 0, None
+    for b, part in todo:
+        if pair_construction(b.kind, part.kind) != "triangle pairs":
+            continue
+        n = len(b.faces) * len(part.faces)
+        h, p = pairs_memory(n)
+        held, total = held + h, total + n
+        if p - h > peak:
+            peak, largest = p - h, (b.name, part.name, n)
+    if not total:
+        return 0
+    budget, source = budget_and_source(memory)
+    if held + peak > budget:
+        body, part, n = largest
+        raise MemoryBudgetError(
+            f"scene {scene.name!r}: building its C-obstacles needs about "
+            f"{format_size(held + peak)} ({total:,} triangle pairs of the robot's exact parts; "
+            f"the largest: body {body!r} x robot part {part!r}, {n:,} pairs), over the memory "
+            f"budget of {format_size(budget)} ({source}); nothing was built. Use the robot's "
+            "convex hull (robot_hull=True, --robot-hull: conservative), a smaller scene or "
+            "bounds, or a larger budget (memory=, --memory, $CSPACE_MEMORY)",
+            needed=held + peak, budget=budget)
+    return held
 
 
 def _margin(scene, grid: Grid, conservative: bool) -> Margin:
@@ -447,10 +489,13 @@ class CSpace:
         The scene the C-obstacles were built from: checks against FCL use its raw meshes.
     robot_hull : bool, default False
         The C-obstacles are of the robot's convex hull (checks use the hull too).
+    memory : int, default 0
+        Bytes the C-obstacles hold, as the build estimated them (``SceneModel.memory``):
+        what a set of orientation slices counts against its budget.
     """
 
     def __init__(self, obstacles, *, bounds=None, name: str = "cspace", scene=None,
-                 robot_hull: bool = False):
+                 robot_hull: bool = False, memory: int = 0):
         self.obstacles = tuple(obstacles)
         self._union = _UnionOf(self.obstacles)
         self.name = name
@@ -458,6 +503,7 @@ class CSpace:
         # meshes (cspace.check.oracle.SceneOracle), never on anything built here.
         self.scene = scene
         self.robot_hull = bool(robot_hull)
+        self.memory = int(memory)
         if bounds is None:
             if not self.obstacles:
                 raise InvalidArgumentError("a CSpace without obstacles needs bounds")
@@ -467,7 +513,8 @@ class CSpace:
 
     @classmethod
     def from_scene(cls, scene, *, grid: Grid | None = None, cache=None,
-                   progress=None, robot_hull: bool = False, executor=None) -> "CSpace":
+                   progress=None, robot_hull: bool = False, executor=None,
+                   memory=None) -> "CSpace":
         """The C-obstacles a scene needs, built: :func:`cspace.scene.model.model_scene` decides per
         body (split, deduplicated; convex, solid, surface or dropped) and builds each.
 
@@ -485,15 +532,19 @@ class CSpace:
         executor : concurrent.futures.Executor, optional
             Build the C-obstacles there (a process pool, a Dask cluster:
             :func:`cspace.planning.scale.executor_for`); same answers as the local build.
+        memory : int or str, optional
+            The build's memory budget (see :func:`model_scene`).
 
         Raises
         ------
         BuildError
             A body's C-obstacle could not be built; the message names the body and why.
+        MemoryBudgetError
+            The build would exceed the memory budget; nothing was built.
         """
 
         return model_scene(scene, grid=grid, cache=cache, progress=progress,
-                           robot_hull=robot_hull, executor=executor).cspace()
+                           robot_hull=robot_hull, executor=executor, memory=memory).cspace()
 
     def __len__(self) -> int:
         return len(self.obstacles)
