@@ -523,3 +523,26 @@ def _flat_mesh(points):
     P = np.asarray(points, dtype=np.float64)
     F = {2: [[0, 1, 1]], 3: [[0, 1, 2]], 4: [[0, 1, 2], [0, 2, 3]]}.get(len(P))
     return raw_mesh(P) if F is None else (P, np.array(F, dtype=np.int64))
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (250.0, 150.0, -300.0)])
+def test_first_contact_of_segments_that_meet_no_surface_piece(offset):
+    """Surface pieces (an open sheet, a convex robot): segments whose boxes meet no piece have
+    no first contact (nan, not an IndexError), alone or beside segments that do."""
+    from cspace import model_scene
+
+    o = np.asarray(offset)
+    sheet = Body("sheet", np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], float) + o,
+                 np.array([[0, 1, 2], [0, 2, 3]]), "sheet")
+    cube = np.array([[x, y, z] for x in (-0.1, 0.1) for y in (-0.1, 0.1) for z in (-0.1, 0.1)])
+    robot = Body("cube", cube, np.array(ConvexHull(cube).simplices, dtype=np.int64), "cube")
+    scene = Scene("sheet", None, (sheet,), robot, np.zeros(3),
+                  np.array([[-1.0, -1.0, -1.0], [2.0, 2.0, 1.0]]) + o,
+                  np.array([-0.9, -0.9, 0.9]) + o, np.array([1.9, 1.9, 0.9]) + o)
+    space = model_scene(scene, cache=None).cspace()
+    assert [b.kind for b in model_scene(scene, build=False).bodies] == ["surface"]
+    far0, far1 = o + [-0.9, -0.9, 0.9], o + [1.9, -0.9, 0.9]  # high above, beside the sheet
+    assert np.isnan(space.first_contact(far0, far1)) and space.segment_free(far0, far1)
+    down0, down1 = o + [0.5, 0.5, 0.9], o + [0.5, 0.5, -0.9]  # through the sheet at z = 0.1
+    t = space.first_contact(np.stack([far0, down0]), np.stack([far1, down1]))
+    assert np.isnan(t[0]) and abs(t[1] - 0.8 / 1.8) <= 1e-6

@@ -230,17 +230,13 @@ class _UnionCO:
         t = np.full(len(q0), np.nan)
         rows, js = self._segment_pairs(q0, q1)
         open_ = ~self._separated(q0, q1, rows, js)
-        rows, js = rows[open_], js[open_]
-        order = np.argsort(js, kind="stable")
-        rows, js = rows[order], js[order]
-        bounds = np.flatnonzero(np.r_[True, js[1:] != js[:-1], True])
-        for s, e in zip(bounds[:-1], bounds[1:]):
-            r = rows[s:e]
+        # No candidate at all (no segment's box meets a piece) is no group, not an empty one.
+        for j, r in self._by_piece(rows[open_], js[open_]):
             if not want_t:
                 r = r[~hit[r]]  # already hit: no need to look further
                 if not r.size:
                     continue
-            h, tt = self.impl[js[s]].segments(q0[r], q1[r], want_t)
+            h, tt = self.impl[j].segments(q0[r], q1[r], want_t)
             hit[r] |= h
             if want_t:
                 t[r] = np.fmin(t[r], tt)
