@@ -114,14 +114,37 @@ def test_scenes_without_pairs_are_not_limited():
 
 
 def test_orientation_slices_share_one_budget():
-    """Each slice gets what the slices already built leave: the second stops, and says so."""
+    """Each slice gets what the slices already built leave: with no disk cache the second
+    stops, and says so."""
     scene = pair_scene(20)
     one = pairs_memory(800 * 44)[1]
     tcs = TurningCSpace(scene, Slices.about(4), cache=None, memory=one + 1000)
     assert tcs.slice(0).memory == pairs_memory(800 * 44)[0]
-    with pytest.raises(MemoryBudgetError, match="1 orientation slices built so far hold"):
+    with pytest.raises(MemoryBudgetError, match="1 orientation slices built so far hold.*no disk"):
         tcs.slice(1)
-    assert list(tcs.built_slices) == [0]
+    assert list(tcs.built_slices) == [0] and tcs.spilled == 0
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), OFF])
+def test_slices_spill_to_the_disk_cache_and_come_back_the_same(tmp_path, offset):
+    """With a cache, a slice that does not fit beside the others spills the least recently
+    used one; asked for again, it is read back from the cache and answers the same."""
+    scene = pair_scene(20, offset)
+    one = pairs_memory(800 * 44)[1]
+    tcs = TurningCSpace(scene, Slices.about(4), cache=tmp_path, memory=one + 1000)
+    rng = np.random.default_rng(5)
+    q = scene.bounds[0] + rng.random((300, 3)) * (scene.bounds[1] - scene.bounds[0])
+    first = [tcs.slice(k).contains(q) for k in (0, 1)]  # slice 1 spills slice 0
+    assert list(tcs.built_slices) == [1] and tcs.spilled == 1
+    assert first[0].any() and first[1].any()
+    again = tcs.slice(0).contains(q)  # back from the cache, spilling slice 1
+    assert list(tcs.built_slices) == [0] and tcs.spilled == 2
+    assert np.array_equal(again, first[0])
+    # the same answers as a slice built alone, with no budget pressure and no cache
+    alone = TurningCSpace(scene, Slices.about(4), cache=None).slice(0).contains(q)
+    assert np.array_equal(again, alone)
+    tcs.slice(0)  # asking for what is held spills nothing
+    assert tcs.spilled == 2
 
 
 def test_the_command_line_exits_4_and_writes_nothing(tmp_path, capsys):

@@ -54,6 +54,12 @@ class TurningCSpace:
         (:func:`cspace.scene.model.model_scene`).
     robot_hull : bool, default False
         Slices against the robot's convex hull instead of its exact parts.
+    memory : int or str, optional
+        One memory budget for all the slices (:mod:`cspace.memory`; default
+        ``$CSPACE_MEMORY``, else half of what is available). A slice that does not fit beside
+        those built spills the least recently used ones when there is a disk cache (asked
+        for again, they are read back from it: the same C-obstacles); with no cache, or when
+        one slice alone does not fit, :class:`~cspace.errors.MemoryBudgetError`.
 
     Attributes
     ----------
@@ -64,13 +70,17 @@ class TurningCSpace:
         Queries answered free before any C-space: the robot's ball (radius: its farthest
         vertex from the reference point, which no turn changes) misses every obstacle's box
         there. So a slice or a turn is built only where the robot comes near an obstacle.
+    spilled : int
+        Slices dropped from memory to keep within the budget (they stay in the disk cache).
     """
 
     def __init__(self, scene, slices, *, cache=None, robot_hull: bool = False, memory=None):
         self.scene = scene
         # One memory budget for all the slices this builds (cspace.memory): each slice's
-        # build gets what the slices already built leave of it.
+        # build gets what the slices already built leave of it; with a disk cache the least
+        # recently used slices are spilled to make room (``spilled`` counts them).
         self.memory, self._memory_source = budget_and_source(memory)
+        self.spilled = 0
         self.slices = slices
         self.cache = cache
         self.robot_hull = bool(robot_hull)
@@ -106,24 +116,35 @@ class TurningCSpace:
     def _cspace(self, scene, hull: bool):
         from ..scene.model import CSpace
 
-        held = sum(cs.memory for cs in self.built_slices.values())
-        try:
-            return CSpace.from_scene(scene, cache=self.cache, robot_hull=hull,
-                                     memory=max(1, self.memory - held))
-        except MemoryBudgetError as exc:
-            if not held:
-                raise
-            raise MemoryBudgetError(
-                f"{exc}. The {len(self.built_slices)} orientation slices built so far hold about "
-                f"{format_size(held)} of the budget of {format_size(self.memory)} "
-                f"({self._memory_source}): fewer orientations need less",
-                needed=exc.needed + held, budget=self.memory) from exc
+        while True:
+            held = sum(cs.memory for cs in self.built_slices.values())
+            try:
+                return CSpace.from_scene(scene, cache=self.cache, robot_hull=hull,
+                                         memory=max(1, self.memory - held))
+            except MemoryBudgetError as exc:
+                holding = [j for j, cs in self.built_slices.items() if cs.memory]
+                if self.cache not in (None, False) and holding:
+                    # Spill the least recently used slice: its C-obstacles are in the disk
+                    # cache, so asking for it again reads them back instead of rebuilding.
+                    del self.built_slices[holding[0]]
+                    self.spilled += 1
+                    continue
+                if not held:
+                    raise
+                raise MemoryBudgetError(
+                    f"{exc}. The {len(self.built_slices)} orientation slices built so far hold "
+                    f"about {format_size(held)} of the budget of {format_size(self.memory)} "
+                    f"({self._memory_source}), and with no disk cache they cannot be spilled: "
+                    "fewer orientations need less",
+                    needed=exc.needed + held, budget=self.memory) from exc
 
     def slice(self, k: int):
         """The :class:`~cspace.CSpace` of the robot at slice ``k`` (built on first use)."""
         k = int(k) % len(self.slices)
-        cs = self.built_slices.get(k)
-        if cs is None:
+        cs = self.built_slices.pop(k, None)
+        if cs is not None:
+            self.built_slices[k] = cs  # the most recently used last: spilled last
+        else:
             robot = self.scene.robot
             V = _turned(robot.vertices, self.scene.reference_point, self.slices.rotation(k))
             name = f"{robot.name} at {self.slices.label(k)}"
