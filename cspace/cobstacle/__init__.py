@@ -7,6 +7,10 @@
   containment terms for a non-convex robot;
 - :mod:`.margin` — :class:`~cspace.cobstacle.margin.Margin`, the outward rounding that makes a
   stored C-obstacle hold the true one (no false free).
+
+The C-space of a scene (:class:`cspace.CSpace`, all its C-obstacles behind one set of queries) is
+made from a scene (``CSpace.from_scene`` models it first), so it lives one layer up, in
+:mod:`cspace.scene.model`.
 """
 
 from .margin import Margin
