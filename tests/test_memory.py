@@ -166,3 +166,29 @@ def test_the_command_line_exits_4_and_writes_nothing(tmp_path, capsys):
                  "--time", "0.1"]) == 4
     with pytest.raises(SystemExit):  # a bad size is bad input (argparse: exit 2)
         main(["build", str(tmp_path / "s.toml"), "--memory", "lots"])
+
+
+def test_over_the_bound_the_pairs_are_counted_exactly():
+    """When at most one pair per triangle pair is over the budget, the pairs the build keeps
+    are counted (exactly: the same number the build stores), and a build that fits is made."""
+    from cspace.cobstacle.pairs import triangle_pairs
+
+    scene = pair_scene(20)
+    scene = Scene("corner", None, scene.obstacles, scene.robot, scene.reference_point,
+                  np.array([[-2.5, -2.5, -1.0], [-1.0, -1.0, 1.0]]), np.array([-2.4, -2.4, 0.9]),
+                  np.array([-1.1, -1.1, 0.9]))  # a corner of the sheet: most pairs miss it
+    model = cspace.model_scene(scene, cache=None, memory="64G")
+    (body,) = [b for b in model.bodies if b.kind != "dropped"]
+    bound = len(body.faces[body._keep]) * 44
+    stored = int(body.pairs[0].detail.split()[0].replace(",", ""))
+    assert model.memory == pairs_memory(bound)[0] and stored < bound
+    # a budget between the exact need and the bound: counted, then built
+    tight = cspace.model_scene(scene, cache=None, memory=pairs_memory(stored)[1] + 1)
+    assert tight.memory == pairs_memory(stored)[0] and len(tight.cspace()) == 1
+    with pytest.raises(MemoryBudgetError, match=f"{stored:,} triangle pairs"):
+        cspace.model_scene(scene, cache=None, memory=pairs_memory(stored)[1] - 1)
+    grid = model.grid
+    counted = triangle_pairs(body._ints, body.faces[body._keep], model.robot_parts[0].ints,
+                             model.robot_parts[0].faces, np.zeros(3, np.int64),
+                             grid.inner_box(*scene.bounds), closed=True, count_only=True)
+    assert len(counted.pairs) == 0 and counted.kept > 0  # counted, none stored

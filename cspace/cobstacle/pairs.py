@@ -62,6 +62,7 @@ import numpy as np
 from ..mesh.convex import ConvexPolytope
 from ..errors import DegenerateError
 from ..geometry.exact import _FILTER, _TINY
+from ..geometry.distance import _tri_tri_distance
 from ..geometry.graphs import component_labels
 from .margin import Margin
 from ..geometry.snapping import grow_points
@@ -93,9 +94,8 @@ _PAD = -1e300
 # Pairs whose slab columns are kept in memory (about 2 KB a pair).
 _KEEP = 1 << 15
 
-#: Bytes a triangle pair takes while its C-obstacle lives (``held``: indices, box, cells) and
-#: while it is built (``peak``): tracemalloc measured 100 and 525-600 bytes on 0.08M-1.3M pairs
-#: (tests/test_memory.py holds these bounds to it).
+#: Bytes a triangle pair takes while its C-obstacle lives (``held``) and while it is built
+#: (``peak``): tracemalloc measured 105-113 and 575-655 (tests/test_memory.py holds them to it).
 PAIR_BYTES = {"held": 160, "peak": 768}
 
 
@@ -173,6 +173,8 @@ class TrianglePairs:
     flat_skipped, out_of_bounds : int
         Pairs left out: flat with a closed operand (redundant), or whose piece box misses the
         planning bounds (decided exactly).
+    kept : int
+        ``len(pairs)`` (with ``count_only``: the pairs that would be kept, none stored).
     margin : (3,) int64
         Every piece is grown by the box ``[-margin, margin]`` (grid steps per axis; outward
         rounding, :mod:`cspace.cobstacle.margin`): ``S[i] ⊕ T[j] ⊕ box``.
@@ -184,6 +186,7 @@ class TrianglePairs:
     flat: np.ndarray
     flat_skipped: int = 0
     out_of_bounds: int = 0
+    kept: int = 0
     margin: np.ndarray = field(default_factory=lambda: np.zeros(3, np.int64))
 
     def __post_init__(self):
@@ -196,7 +199,7 @@ class TrianglePairs:
 
 
 def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
-                   closed: bool, margin=(0, 0, 0)) -> TrianglePairs:
+                   closed: bool, margin=(0, 0, 0), count_only: bool = False) -> TrianglePairs:
     """The pairs (obstacle triangle s, robot triangle t) whose piece ``s ⊕ (c - t)`` can meet
     the bounds; flat ones are left out when either operand is closed (see the module).
 
@@ -214,6 +217,8 @@ def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
         Whether either operand is closed.
     margin : (3,) int
         Grow every piece by this box (grid steps per axis), see :class:`TrianglePairs`.
+    count_only : bool, default False
+        Only count them (``kept``), storing none: for a memory estimate before the build.
     """
     g = np.asarray(margin, dtype=np.int64).reshape(3)
     S = np.asarray(o_ints, np.int64)[np.asarray(o_faces, np.int64)]
@@ -234,8 +239,10 @@ def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
         if closed:
             out.flat_skipped += int(flat.sum())
             ii, jj, flat = ii[~flat], jj[~flat], flat[~flat]
-        kept.append(np.stack([ii, jj], axis=1))
-        flats.append(flat)
+        out.kept += len(ii)
+        if not count_only:
+            kept.append(np.stack([ii, jj], axis=1))
+            flats.append(flat)
     if kept:
         out.pairs, out.flat = np.concatenate(kept), np.concatenate(flats)
     return out
@@ -653,67 +660,6 @@ class _PairsCO:
     def _pair_distance(self, S, T, x, rows, ps):
         i, j = self.pairs[ps, 0], self.pairs[ps, 1]
         return _tri_tri_distance(S[i], x[rows][:, None, :] - T[j])
-
-
-def _point_segment_d2(p, a, b):
-    ab = b - a
-    t = np.clip(np.einsum("kj,kj->k", p - a, ab) / np.maximum(np.einsum("kj,kj->k", ab, ab),
-                                                                1e-300), 0.0, 1.0)
-    d = p - (a + t[:, None] * ab)
-    return np.einsum("kj,kj->k", d, d)
-
-
-def _point_triangle_d2(p, tri):
-    """Squared distance from points to triangles (k,), float."""
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    # The normal from the two shorter edges (see cspace.mesh.query_reference._tri_dist2: slivers).
-    E = np.stack([b - a, c - b, a - c], axis=1)
-    longest = np.einsum("kij,kij->ki", E, E).argmax(axis=1)
-    r = np.arange(len(tri))
-    n = np.cross(E[r, (longest + 1) % 3], E[r, (longest + 2) % 3])
-    nn = np.einsum("kj,kj->k", n, n)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        h = np.einsum("kj,kj->k", p - a, n) / nn
-    proj = p - h[:, None] * n
-    inside = np.ones(len(p), dtype=bool)
-    for u, v in ((a, b), (b, c), (c, a)):
-        inside &= np.einsum("kj,kj->k", np.cross(v - u, proj - u), n) >= 0
-    inside &= nn > 0
-    plane = np.where(inside, h * h * nn, np.inf)
-    edges = np.minimum.reduce([_point_segment_d2(p, a, b), _point_segment_d2(p, b, c),
-                               _point_segment_d2(p, c, a)])
-    return np.minimum(plane, edges)
-
-
-def _segment_segment_d2(p1, q1, p2, q2):
-    """Squared distance between segments (Ericson, Real-Time Collision Detection 5.1.9)."""
-    d1, d2, r = q1 - p1, q2 - p2, p1 - p2
-    a = np.einsum("kj,kj->k", d1, d1)
-    e = np.einsum("kj,kj->k", d2, d2)
-    f = np.einsum("kj,kj->k", d2, r)
-    c = np.einsum("kj,kj->k", d1, r)
-    b = np.einsum("kj,kj->k", d1, d2)
-    denom = a * e - b * b
-    with np.errstate(divide="ignore", invalid="ignore"):
-        s = np.where(denom > 0, np.clip((b * f - c * e) / denom, 0.0, 1.0), 0.0)
-        t = np.where(e > 0, (b * s + f) / e, 0.0)
-        s = np.where(t < 0, np.where(a > 0, np.clip(-c / a, 0.0, 1.0), 0.0), s)
-        s = np.where(t > 1, np.where(a > 0, np.clip((b - c) / a, 0.0, 1.0), 0.0), s)
-    t = np.clip(t, 0.0, 1.0)
-    d = (p1 + s[:, None] * d1) - (p2 + t[:, None] * d2)
-    return np.einsum("kj,kj->k", d, d)
-
-
-def _tri_tri_distance(A: np.ndarray, B: np.ndarray) -> np.ndarray:
-    """Distance between disjoint triangles (k,): the least of the corner-triangle and
-    edge-edge distances, float."""
-    d2 = [_point_triangle_d2(A[:, i], B) for i in range(3)]
-    d2 += [_point_triangle_d2(B[:, i], A) for i in range(3)]
-    for i in range(3):
-        for j in range(3):
-            d2.append(_segment_segment_d2(A[:, i], A[:, (i + 1) % 3], B[:, j],
-                                          B[:, (j + 1) % 3]))
-    return np.sqrt(np.minimum.reduce(d2))
 
 
 class PairObstacle(CSpaceObstacle):

@@ -7,7 +7,8 @@
 - :mod:`.tritri`, :mod:`.endpoints`, :mod:`.boxes` — exact triangle–triangle intersection,
   its segment endpoints, candidate pairs by box sweep;
 - :mod:`.homogeneous` — exact planar points (rationals, homogeneous integer triples) and their predicates;
-- :mod:`.transform`, :mod:`.graphs`, :mod:`.polygon` — rotations, graph components, polygon fans;
+- :mod:`.transform`, :mod:`.graphs`, :mod:`.polygon`, :mod:`.distance` — rotations, graph
+  components, polygon fans, float triangle distances;
 - ``_kernels/`` — the Cython extension modules (built at install time), each tested identical
   to its pure-Python reference.
 
