@@ -233,20 +233,22 @@ def judge(ours: np.ndarray, Q: np.ndarray, oracle, error_bound: float) -> Verdic
 
 @contextlib.contextmanager
 def shifted_piece_boxes():
-    """Re-introduce the bug of issue #27 while inside: triangle-pair boxes shifted by the
-    grid's origin (added twice). A check that passes with it is a check that cannot fail."""
+    """Re-introduce the bug of issue #27 while inside: triangle-pair boxes (the obstacle's box
+    tree) shifted by the grid's origin (added twice). A check that passes with it is a check that cannot fail."""
     import cspace.cobstacle.pairs as pairs
 
-    init = pairs._PairsCO.__init__
+    from cspace.geometry.boxes import BoxTree
 
-    def shifted(self, S, T, p, grid, margin=(0, 0, 0)):
-        init(self, S, T, p, grid, margin)
-        o = grid.to_float(np.zeros(3, np.int64))
-        self.lo, self.hi = self.lo + o, self.hi + o
-        self.cells = type(self.cells)(self.lo, self.hi)
+    init = pairs._TreePairsCO.__init__
 
-    pairs._PairsCO.__init__ = shifted
+    def shifted(self, S, T, grid, *, closed, margin=(0, 0, 0)):
+        init(self, S, T, grid, closed=closed, margin=margin)
+        o = np.asarray(grid.origin, dtype=np.float64)
+        self._set = self._pair_set(BoxTree(self.tree_s.box_lo + o, self.tree_s.box_hi + o),
+                                   self.tree_r)
+
+    pairs._TreePairsCO.__init__ = shifted
     try:
         yield
     finally:
-        pairs._PairsCO.__init__ = init
+        pairs._TreePairsCO.__init__ = init

@@ -434,3 +434,119 @@ def thin_wall(folder: Path, *, n_clutter: int = 36, tessellation: int = 1, seed:
                           "duplicate_triangles": sum(len(m[1]) for n, m, _ in world
                                                      if n.endswith("dup")),
                           "panels": sum(n.startswith("panel") for n, _, _ in world)})
+
+
+def piano(sliver_edges: int = 350) -> Mesh:
+    """A closed non-convex 'grand piano' of about 1.7k triangles: a case 48 x 30 (x, z) and
+    10 tall (y) whose curved side is a staircase of voxels, on three legs 14 tall; its long
+    edges split into slivers. Designed about the case's centre."""
+    nx, nz = 20, 12
+    occ = np.zeros((nx, 4, nz), bool)
+    i, k = np.meshgrid(np.arange(nx), np.arange(nz), indexing="ij")
+    curve = k < nz - 1 - np.maximum(0, (i - 6)) * 0.65  # the bent side
+    occ[:, 2:, :] = curve[:, None, :]
+    for a, b in ((1, 1), (1, nz - 3), (nx - 2, 1)):  # legs under the case
+        occ[a, :2, b] = True
+    x = np.linspace(-24, 24, nx + 1)
+    z = np.linspace(-15, 15, nz + 1)
+    y = np.array([-19.0, -12.0, -5.0, 0.0, 5.0])
+    return split_long_edges(lattice_solid(occ, x, y, z), 1e-3, sliver_edges)
+
+
+def apartment(folder: Path, *, rooms=(4, 3), wall_cells: int = 1, sheet_cells=(60, 40),
+              furniture: int = 12, seed: int = 5, sliver_edges: int = 350) -> Problem:
+    """An apartment-class world of about 40k triangles in about 180 bodies round
+    ``CENTRE``: a floor and a ceiling (open double-sided tessellated sheets), outer walls
+    and inner wall segments (open double-sided sheets, each its own node) with a door 60
+    wide and 60 tall in every inner segment, and ``furniture`` bodies a room (closed
+    tessellated boxes, closed tori, open panels; turned node matrices). The robot is
+    :func:`piano`; start and goal are in opposite corner rooms, so a path goes through
+    doors. The footprint is 600 x 400 (x, z), 80 tall (y, Assimp's up)."""
+    from zoo import torus
+
+    folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    lo = CENTRE + np.array([-300.0, -40.0, -200.0])
+    hi = CENTRE + np.array([300.0, 40.0, 200.0])
+    ex, ey, ez = np.eye(3)
+    size = hi - lo
+    c = wall_cells
+    world = []
+    # floor and ceiling
+    for name, yv in (("floor", lo[1]), ("ceiling", hi[1])):
+        world.append((name, double_sided(grid_sheet((lo[0], yv, lo[2]), size[0] * ex,
+                                                    size[2] * ez, *sheet_cells)), matrix()))
+    # outer walls
+    for name, corner, u, n_u in (("wall_s", lo, size[0] * ex, sheet_cells[0]),
+                                 ("wall_n", (lo[0], lo[1], hi[2]), size[0] * ex, sheet_cells[0]),
+                                 ("wall_w", lo, size[2] * ez, sheet_cells[1]),
+                                 ("wall_e", (hi[0], lo[1], lo[2]), size[2] * ez, sheet_cells[1])):
+        world.append((name, double_sided(grid_sheet(corner, u, size[1] * ey, n_u, 8 * c)),
+                      matrix()))
+    nx, nz = rooms
+    xs = np.linspace(lo[0], hi[0], nx + 1)
+    zs = np.linspace(lo[2], hi[2], nz + 1)
+    doors = []
+
+    def segment(name, corner, u, length):
+        n_u = max(4, int(round(length / 10.0)) * c)
+        mid = n_u // 2
+        w = max(1, int(round(60.0 / length * n_u / 2)))   # a door 60 wide ...
+        h = int(round(60.0 / size[1] * 8 * c))            # ... and 60 tall
+        holes = [(i, j) for i in range(mid - w, mid + w) for j in range(h)]
+        world.append((name, double_sided(grid_sheet(corner, u, size[1] * ey, n_u, 8 * c,
+                                                    holes)), matrix()))
+        doors.append(np.asarray(corner, float) + u * 0.5 + ey * 30.0)
+
+    for a in range(1, nx):           # inner walls along z at x = xs[a]
+        for b in range(nz):
+            segment(f"wall_x{a}_{b}", (xs[a], lo[1], zs[b]), (zs[b + 1] - zs[b]) * ez,
+                    zs[b + 1] - zs[b])
+    for b in range(1, nz):           # inner walls along x at z = zs[b]
+        for a in range(nx):
+            segment(f"wall_z{a}_{b}", (xs[a], lo[1], zs[b]), (xs[a + 1] - xs[a]) * ex,
+                    xs[a + 1] - xs[a])
+    start = np.array([xs[0] + 45.0, lo[1] + 21.0, zs[0] + 45.0])
+    goal = np.array([xs[-1] - 45.0, lo[1] + 21.0, zs[-1] - 45.0])
+    keep = [(p - 40.0, p + 40.0) for p in doors] + [(p - 45.0, p + 45.0) for p in (start, goal)]
+    T = torus(sections=12, ring=6)
+    panel = double_sided(grid_sheet((-6, -6, 0), np.array([12.0, 0, 0]),
+                                    np.array([0, 12.0, 0]), 2, 2))
+    for a in range(nx):
+        for b in range(nz):
+            room_lo = np.array([xs[a] + 12, lo[1] + 6, zs[b] + 12])
+            room_hi = np.array([xs[a + 1] - 12, hi[1] - 20, zs[b + 1] - 12])
+            placed, tries = 0, 0
+            while placed < furniture and tries < 10000:
+                tries += 1
+                p = rng.uniform(room_lo, room_hi)
+                if any(((p + 12 > k0) & (p - 12 < k1)).all() for k0, k1 in keep):
+                    continue
+                rot = rng.normal(size=3) * 40.0
+                m = matrix(rot, (0, 0, 0))
+                k = placed % 4
+                if k == 0:
+                    s = rng.uniform(4, 10, 3)
+                    V, F = tessellated_box(-s / 2, s / 2, 2)
+                elif k == 1:
+                    V, F = np.asarray(T[0]) * rng.uniform(4, 8), T[1]
+                elif k == 2:
+                    V, F = panel
+                else:
+                    s = rng.uniform(4, 10, 3)
+                    V, F = box(-s / 2, s / 2)
+                name = ("chest", "ring", "panel", "box")[k]
+                world.append((f"{name}{a}{b}_{placed}", (np.asarray(V) @ m[:3, :3].T + p, F),
+                              matrix(rot, Z_UP.T @ p)))
+                placed += 1
+    write_dae(folder / "world.dae", world)
+    P = piano(sliver_edges)
+    offset = np.array([21.0, -17.0, 33.0])
+    robot, cr = _robot_file(folder, P, offset, (0, 35, 0), (4.0, 9.0, -6.0))
+    # the robot's node turns it 35 degrees about y: start and goal turn it back
+    back = ((0.0, 1.0, 0.0), -math.radians(35.0))
+    cfg = write_cfg(folder / "apartment.cfg", "world.dae", "robot.dae", start + cr - offset,
+                    goal + cr - offset, np.array([lo, hi]), start_rotation=back,
+                    goal_rotation=back)
+    return Problem("apartment", cfg, folder / "world.dae", robot, n_triangles(world),
+                   len(P[1]), len(world), facts={"doors": np.array(doors)})

@@ -225,18 +225,17 @@ def shifted_boxes(monkeypatch):
     """The old bug: the pieces' boxes converted by the grid that adds its origin (S already
     holds it), so every box sits one grid origin away from its piece."""
     import cspace.cobstacle.pairs as pairs
-    from cspace.cobstacle.surface import _CellGrid
+    from cspace.geometry.boxes import BoxTree
 
-    original = pairs._PairsCO.__init__
+    original = pairs._TreePairsCO.__init__
 
-    def shifted(self, S, T, P, grid, margin=(0, 0, 0)):
-        original(self, S, T, P, grid, margin)
-        i, j = self.pairs[:, 0], self.pairs[:, 1]
-        self.lo = grid.to_float(self.S[i].min(axis=1) + self.T[j].min(axis=1) - self.g)
-        self.hi = grid.to_float(self.S[i].max(axis=1) + self.T[j].max(axis=1) + self.g)
-        self.cells = _CellGrid(self.lo, self.hi)
+    def shifted(self, S, T, grid, *, closed, margin=(0, 0, 0)):
+        original(self, S, T, grid, closed=closed, margin=margin)
+        o = np.asarray(grid.origin, dtype=np.float64)
+        self._set = self._pair_set(BoxTree(self.tree_s.box_lo + o, self.tree_s.box_hi + o),
+                                   self.tree_r)
 
-    monkeypatch.setattr(pairs._PairsCO, "__init__", shifted)
+    monkeypatch.setattr(pairs._TreePairsCO, "__init__", shifted)
 
 
 # Along the U's bar (y in [149, 150]) with the robot (0.8 wide) overlapping it by 0.4 and its
@@ -249,7 +248,7 @@ AROUND = [[247.5, 150.0, -300.0], [247.5, 152.2, -300.0], [252.5, 152.2, -300.0]
 def _uses_triangle_pairs(cs):
     import cspace.cobstacle.pairs as pairs
 
-    return any(isinstance(getattr(o, "_impl", None), pairs._PairsCO) for o in cs.obstacles)
+    return any(isinstance(getattr(o, "_impl", None), pairs._TreePairsCO) for o in cs.obstacles)
 
 
 def _run(tmp_path, capsys):

@@ -106,12 +106,16 @@ def test_triangle_pairs_equal_their_reference_hulls(conservative):
                                np.ldexp(np.asarray(m.scene.bounds), -m.grid.exponent),
                                closed=True, margin=fast.pairs.margin)
     assert fast.pairs.margin.any() == conservative  # 0.4 is not on the grid
-    assert len(ref.pieces) == len(fast.pairs.pairs) and ref.thickened == 0
+    # the engine ranges over every pair; the reference keeps those whose piece meets the bounds
+    assert 0 < len(ref.pieces) <= len(fast.pairs.pairs) and ref.thickened == 0
     slow = SurfaceObstacle(ref.pieces, obstacle=None, robot=None, reference_point=np.zeros(3),
                            grid=m.grid)
     rng = np.random.default_rng(11)
     q = np.vstack([rng.uniform(-2, 2, (1500, 3)), fast.vertices[rng.integers(0, len(
         fast.vertices), 500)]])  # hull corners: on piece boundaries, exact ties
+    lo, hi = m.scene.bounds
+    q = q[((lo <= q) & (q <= hi)).all(axis=1)]  # the reference keeps the pieces meeting these
+    assert len(q) > 1000
     assert np.array_equal(fast.contains(q), slow.contains(q))
     q1 = q + rng.normal(scale=0.3, size=q.shape)
     assert np.array_equal(fast.segment_free(q, q1), slow.segment_free(q, q1))

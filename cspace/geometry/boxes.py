@@ -12,7 +12,7 @@ import numpy as np
 from ._kernels import load
 from .tritri import _check_soup
 
-__all__ = ["candidate_pairs", "box_pairs", "BoxSweep"]
+__all__ = ["candidate_pairs", "box_pairs", "BoxSweep", "BoxTree"]
 
 
 # The box sweep, the pair classification and the endpoint coordinates run compiled
@@ -145,3 +145,53 @@ class BoxSweep:
             return np.zeros((0, 2), dtype=np.int64)
         pairs = np.concatenate(out)
         return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+# --------------------------------------------------------------------------------------
+# a bounding-box tree, for queries whose boxes move (a robot at a translation)
+
+
+class BoxTree:
+    """A binary tree of integer boxes (a BVH): each node's box holds its children's.
+
+    Built top-down, splitting at the median box centre along the node's longest axis, with
+    at most ``leaf`` boxes a leaf. Node ``k``'s box is ``lo[k], hi[k]`` (float64 of grid
+    integers below 2**53, so exact); an inner node's children are ``first[k]`` and
+    ``first[k] + 1`` (``count[k] == 0``); a leaf holds the boxes ``order[first[k]:first[k] +
+    count[k]]``. Node 0 is the root. Only prunes: what a query keeps is decided exactly after.
+    """
+
+    def __init__(self, lo: np.ndarray, hi: np.ndarray, leaf: int = 4):
+        lo = np.asarray(lo, dtype=np.float64).reshape(-1, 3)
+        hi = np.asarray(hi, dtype=np.float64).reshape(-1, 3)
+        if not len(lo):
+            raise ValueError("a box tree needs at least one box")
+        centre = lo + hi
+        order = np.arange(len(lo), dtype=np.int64)
+        n_max = 2 * len(lo)
+        nlo, nhi = np.empty((n_max, 3)), np.empty((n_max, 3))
+        first, count = np.zeros(n_max, np.int64), np.zeros(n_max, np.int64)
+        stack, n = [(0, 0, len(lo))], 1  # (node, start, end) into order
+        while stack:
+            k, a, b = stack.pop()
+            idx = order[a:b]
+            nlo[k], nhi[k] = lo[idx].min(axis=0), hi[idx].max(axis=0)
+            if b - a <= leaf:
+                first[k], count[k] = a, b - a
+                continue
+            axis = int(np.argmax(nhi[k] - nlo[k]))
+            half = (b - a) // 2
+            order[a:b] = idx[np.argpartition(centre[idx, axis], half, kind="introselect")]
+            first[k] = n
+            stack += [(n, a, a + half), (n + 1, a + half, b)]
+            n += 2
+        self.lo, self.hi = np.ascontiguousarray(nlo[:n]), np.ascontiguousarray(nhi[:n])
+        self.first, self.count = first[:n], count[:n]
+        self.order = order
+        self.box_lo, self.box_hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+
+    def __len__(self) -> int:
+        return len(self.order)
+
+    def __repr__(self) -> str:
+        return f"BoxTree(boxes={len(self.order)}, nodes={len(self.first)})"

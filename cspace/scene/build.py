@@ -23,13 +23,11 @@ from ..cobstacle.margin import Margin
 from ..cobstacle.obstacle import CSpaceObstacle, grown_mesh_sum
 from ..cobstacle.pairs import (
     PairObstacle,
-    TrianglePairs,
     _meets,
     component_points,
     containment_meshes,
     convex_triangle_pieces,
     pair_construction,
-    triangle_pairs,
 )
 from ..cobstacle.surface import SurfaceMesh, SurfaceObstacle
 from ..geometry.exact import Grid
@@ -123,7 +121,8 @@ def _pair_key(construction, body: BodyModel, part: RobotPart, c_ints, grid,
               margin: Margin) -> str:
     faces = body.faces[body._keep] if body.kind == "surface" else body.faces
     robot = np.vstack([part.ints, part.faces])
-    return co_key(f"{construction} robot {len(part.ints)} margin {list(margin.steps)}", grid,
+    # "trees": triangle pairs are stored as the triangles in reach, not as enumerated pairs
+    return co_key(f"{construction} trees robot {len(part.ints)} margin {list(margin.steps)}", grid,
                   body._ints, faces, robot, c_ints)
 
 
@@ -145,11 +144,10 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
                                         robot=part, reference_point=c, grid=grid, name=name)]
     elif construction == "triangle pairs":
         o_ints, o_faces = _body_operand(body)
-        S = o_ints[o_faces]
-        T = c_ints - part.ints[part.faces]
-        tp = TrianglePairs(S, T, arrays["pairs"], arrays["flat"], margin=arrays["margin"])
-        cos = [PairObstacle(tp, obstacle=obstacle, robot=part, reference_point=c,
-                            grid=grid)] if len(tp.pairs) else []
+        S, T = _pair_operands(o_ints[o_faces], c_ints - part.ints[part.faces], arrays)
+        cos = [PairObstacle(S, T, closed=bool(arrays["closed"]), margin=arrays["margin"],
+                            obstacle=obstacle, robot=part, reference_point=c,
+                            grid=grid)] if len(S) and len(T) else []
     else:
         pieces = unpack_polytopes(arrays, "p_", grid)
         cos = [SurfaceObstacle(pieces, obstacle=obstacle, robot=part, reference_point=c,
@@ -209,21 +207,44 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
         made = convex_triangle_pieces(margin.grow_ints(body._solid.ints), part.ints, part.faces,
                                       c_ints, grid, bounds_g)
     else:
+        # Nothing is enumerated: the C-obstacle is queried through two box trees
+        # (PairObstacle). Kept: the triangles whose pieces can meet the bounds at all.
         o_ints, o_faces = _body_operand(body)
-        tp = triangle_pairs(o_ints, o_faces, part.ints, part.faces, c_ints, bounds_g,
-                            closed=body.kind == "solid" or part.kind == "solid", margin=margin.g)
-        return {"pairs": tp.pairs, "flat": tp.flat, "margin": margin.g,
-                "counts": np.array([len(tp.pairs), tp.flat_skipped, tp.out_of_bounds],
-                                   dtype=np.int64)}
+        S, T = o_ints[o_faces], c_ints - part.ints[part.faces]
+        s_keep, t_keep = _in_reach(S, T, margin.g, bounds_g)
+        return {"s_keep": s_keep, "t_keep": t_keep, "margin": margin.g,
+                "closed": np.array(body.kind == "solid" or part.kind == "solid"),
+                "counts": np.array([int(s_keep.sum()), int(t_keep.sum()),
+                                    len(S) - int(s_keep.sum())], dtype=np.int64)}
     arrays = pack_polytopes(made.pieces, "p_")
     arrays["counts"] = np.array([len(made.pieces), made.flat_skipped,
                                  made.out_of_bounds], dtype=np.int64)
     return arrays
 
 
+def _in_reach(S, T, g, bounds_g) -> tuple[np.ndarray, np.ndarray]:
+    """Exact: the obstacle triangles whose pieces ``s ⊕ T ⊕ box`` can meet the bounds (with
+    some robot triangle), and the robot triangles likewise: the others never hold a query."""
+    s_lo, s_hi = S.min(axis=1) - g, S.max(axis=1) + g
+    t_lo, t_hi = T.min(axis=1), T.max(axis=1)
+    s_keep = _meets(s_lo + t_lo.min(axis=0), s_hi + t_hi.max(axis=0), *bounds_g)
+    t_keep = _meets(t_lo + s_lo.min(axis=0), t_hi + s_hi.max(axis=0), *bounds_g)
+    return s_keep, t_keep
+
+
+def _pair_operands(S, T, arrays):
+    """The triangles a triangle-pair C-obstacle keeps (``_in_reach``, from the arrays)."""
+    return S[arrays["s_keep"]], T[arrays["t_keep"]]
+
+
 def _pair_detail(construction, arrays) -> str:
     if "counts" not in arrays:
         return ""
+    if construction == "triangle pairs":
+        s, t, out = (int(x) for x in arrays["counts"])
+        extra = f"; {out} obstacle triangles out of reach of the bounds" if out else ""
+        return (f"{s} x {t} triangles, pairs found per query by two box trees "
+                f"(none enumerated{extra})")
     n, flat, out = (int(x) for x in arrays["counts"])  # built, flat left out, out of bounds
     what = "triangle pairs" if construction == "triangle pairs" else "robot-triangle pieces"
     extra = [f"{out} out of the bounds"] if out else []

@@ -48,7 +48,7 @@ import numpy as np
 from ..cobstacle.convex import _translations
 from ..cobstacle.margin import Margin
 from ..cobstacle.obstacle import CSpaceObstacle
-from ..cobstacle.pairs import CONSTRUCTIONS, pair_construction, pairs_memory, triangle_pairs
+from ..cobstacle.pairs import CONSTRUCTIONS, pair_construction, pairs_memory
 from ..cobstacle.surface import SurfaceObstacle
 from ..cobstacle.union import _UnionOf
 from ..errors import BuildError, InvalidArgumentError, InvalidMeshError, MemoryBudgetError
@@ -382,7 +382,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     held = 0
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
-        held = _memory_check(scene, todo, memory, c_ints, bounds_g, margin)
+        held = _memory_check(scene, todo, memory)
         ctx = _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store)
         if executor is not None:
             _build_with(executor, todo, parts, ctx, progress)
@@ -428,42 +428,32 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                       robot_hull=robot_hull, margin=margin, memory=held)
 
 
-def _memory_check(scene, todo, memory, c_ints, bounds_g, margin) -> int:
+def _memory_check(scene, todo, memory) -> int:
     """Bytes the C-obstacles of ``todo`` will hold; raises :class:`MemoryBudgetError` before
     anything is built when they, and the largest construction's own peak, exceed the budget.
 
-    Counted: the triangle pairs (:func:`cspace.cobstacle.pairs.pairs_memory`), the only
-    constructions quadratic in the triangle counts; the others are linear in them (a few kB a
-    triangle). First at most one pair per obstacle triangle and robot triangle; when that
-    bound is over the budget, the pairs the build would keep are counted exactly (one pass
-    that stores none, :func:`~cspace.cobstacle.pairs.triangle_pairs` ``count_only``)."""
-    items = [(b, part, *_body_operand(b)) for b, part in todo
+    Counted: the triangle-pair C-obstacles (:func:`cspace.cobstacle.pairs.pairs_memory`, per
+    triangle of each (body, robot part) pair: the robot's triangles count once per body),
+    the constructions whose size grows with bodies times robot triangles; the others are
+    linear in a body's triangles."""
+    items = [(b, part, len(_body_operand(b)[1]) + len(part.faces)) for b, part in todo
              if pair_construction(b.kind, part.kind) == "triangle pairs"]
     if not items:
         return 0
     budget, source = budget_and_source(memory)
-
-    def need(ns):  # (held, needed at the largest build's peak)
-        held = sum(pairs_memory(n)[0] for n in ns)
-        return held, held + max(pairs_memory(n)[1] - pairs_memory(n)[0] for n in ns)
-
-    ns = [len(o_faces) * len(part.faces) for b, part, o_ints, o_faces in items]
-    held, needed = need(ns)
-    if needed > budget:
-        ns = [triangle_pairs(o_ints, o_faces, part.ints, part.faces, c_ints, bounds_g,
-                             closed="solid" in (b.kind, part.kind), margin=margin.g,
-                             count_only=True).kept for b, part, o_ints, o_faces in items]
-        held, needed = need(ns)
+    ns = [n for _, _, n in items]
+    held = sum(pairs_memory(n)[0] for n in ns)
+    needed = held + max(pairs_memory(n)[1] - pairs_memory(n)[0] for n in ns)
     if needed > budget:
         k = max(range(len(ns)), key=ns.__getitem__)
         raise MemoryBudgetError(
             f"scene {scene.name!r}: building its C-obstacles needs about "
-            f"{format_size(needed)} ({sum(ns):,} triangle pairs of the robot's exact parts; "
-            f"the largest: body {items[k][0].name!r} x robot part {items[k][1].name!r}, "
-            f"{ns[k]:,} pairs), over the memory budget of {format_size(budget)} ({source}); "
-            "nothing was built. Use the robot's convex hull (robot_hull=True, --robot-hull: "
-            "conservative), a smaller scene or bounds, or a larger budget (memory=, --memory, "
-            "$CSPACE_MEMORY)",
+            f"{format_size(needed)} ({len(items):,} triangle-pair C-obstacles over "
+            f"{sum(ns):,} triangles; the largest: body {items[k][0].name!r} x robot part "
+            f"{items[k][1].name!r}, {ns[k]:,} triangles), over the memory budget of "
+            f"{format_size(budget)} ({source}); nothing was built. Use the robot's convex hull "
+            "(robot_hull=True, --robot-hull: conservative), a smaller scene or bounds, or a "
+            "larger budget (memory=, --memory, $CSPACE_MEMORY)",
             needed=needed, budget=budget)
     return held
 

@@ -4,6 +4,9 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
 - ``arrangement`` — :mod:`cspace.geometry.boxes` (box sweep), :mod:`cspace.geometry.tritri`
   (exact triangle-pair classes), :mod:`cspace.geometry.endpoints` (their endpoints);
 - ``meshquery`` — :mod:`cspace.mesh.query` (references in :mod:`cspace.mesh.query_reference`);
+- ``pairquery`` — :mod:`cspace.cobstacle.pairs` (triangle pairs found by two box trees; reference
+  :mod:`cspace.cobstacle.pairs_reference`, every pair enumerated, tested in
+  ``tests/test_pair_engine.py``);
 - ``planar`` — :mod:`cspace.minkowski.plane_arrangement` (each plane's arrangement core),
   :mod:`cspace.minkowski.triangulation`;
 - ``trim`` — :mod:`cspace.mesh.self_intersection` (undecided pairs, triangle boxes),

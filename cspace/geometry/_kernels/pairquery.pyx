@@ -1,0 +1,462 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
+"""Compiled kernels of :mod:`cspace.cobstacle.pairs`: triangle-pair C-obstacles queried
+without enumerating the pairs.
+
+The C-obstacle is ``∪ S_i ⊕ T_j ⊕ box`` over obstacle triangles ``S_i`` and robot vectors
+``T_j = c - t_j`` (grid integers, held as exact float64; ``box = [-g, g]``). The piece of pair
+``(i, j)`` holds a query ``Q`` only if the box of ``S_i`` grown by ``g`` meets the box of
+``Q - T_j``: two box trees (:class:`cspace.geometry.boxes.BoxTree`, one over the obstacle's
+grown triangle boxes, one over the boxes of ``-T_j``) are traversed together with the query
+box added to the robot side. Every box comparison is between a difference of two grid
+integers (exact in float64 below 2**53) and the query: exact, no candidate is missed.
+
+Each candidate is then tested on the slabs of :func:`cspace.cobstacle.pairs.pair_planes`
+with the same float filter as the numpy engine (``cspace.cobstacle.pairs_reference._PairsCO``, the reference these are tested
+against): the two triangle-normal slabs first, then all 17 (38 when grown), each value with
+its rigorous bound (16 unit roundoffs of the sum of absolute products, the normals and
+supports rounded to float included). Nothing here decides an undecided sign: such pairs are
+returned for the exact path in Python integers.
+"""
+
+import numpy as np
+
+from libc.math cimport INFINITY, fabs
+from libc.stdint cimport int64_t
+
+cdef double _EPS = 2.0 ** -53
+cdef double _FILTER = 16.0 * _EPS
+cdef double _TINY = 2.0 ** -1000
+cdef int _STACK = 512
+
+
+cdef inline bint _boxes_meet(const double* slo, const double* shi, const double* rlo,
+                             const double* rhi, const double* qlo, const double* qhi) noexcept nogil:
+    # the box [slo, shi] meets [qlo + rlo, qhi + rhi], as slo - rhi <= qhi and qlo <= shi - rlo:
+    # differences of grid integers below 2**53, exact
+    cdef int k
+    for k in range(3):
+        if slo[k] - rhi[k] > qhi[k] or qlo[k] > shi[k] - rlo[k]:
+            return False
+    return True
+
+
+cdef inline void _cross(const int64_t* a, const int64_t* b, int64_t* out) noexcept nogil:
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+cdef int _normals(const int64_t* s, const int64_t* t, bint grown, int64_t* N) noexcept nogil:
+    """The slab normals of pair_planes (17, or 38 when grown) into N (3 each); their count."""
+    cdef int64_t es[18]
+    cdef int64_t et[9]
+    cdef int64_t ns[3]
+    cdef int64_t nt[3]
+    cdef int64_t unit[3]
+    cdef int64_t m, best
+    cdef int a, b, k, n = 0, axis
+    for a in range(3):
+        b = (a + 1) % 3
+        for k in range(3):
+            es[3 * a + k] = s[3 * b + k] - s[3 * a + k]
+            et[3 * a + k] = t[3 * b + k] - t[3 * a + k]
+    # ns = (p1 - p0) x (p2 - p0) = es0 x -es2
+    for k in range(3):
+        es[9 + k] = -es[6 + k]
+    _cross(&es[0], &es[9], ns)
+    for k in range(3):
+        es[9 + k] = -et[6 + k]
+    _cross(&et[0], &es[9], nt)
+    for k in range(3):
+        N[k] = ns[k]
+        N[3 + k] = nt[k]
+    n = 2
+    for a in range(3):
+        for b in range(3):
+            _cross(&es[3 * a], &et[3 * b], &N[3 * n])
+            n += 1
+    # the axis nearest the reference normal (s's, else t's): first largest |component|
+    if ns[0] != 0 or ns[1] != 0 or ns[2] != 0:
+        unit[0], unit[1], unit[2] = ns[0], ns[1], ns[2]
+    else:
+        unit[0], unit[1], unit[2] = nt[0], nt[1], nt[2]
+    axis, best = 0, -1
+    for k in range(3):
+        m = unit[k] if unit[k] >= 0 else -unit[k]
+        if m > best:
+            axis, best = k, m
+    unit[0], unit[1], unit[2] = 0, 0, 0
+    unit[axis] = 1
+    for a in range(3):
+        _cross(unit, &es[3 * a], &N[3 * n])
+        n += 1
+    for a in range(3):
+        _cross(unit, &et[3 * a], &N[3 * n])
+        n += 1
+    if grown:
+        for a in range(3):
+            for k in range(3):
+                N[3 * n + k] = 1 if k == a else 0
+            n += 1
+        for a in range(3):
+            unit[0], unit[1], unit[2] = 0, 0, 0
+            unit[a] = 1
+            for b in range(3):
+                _cross(unit, &es[3 * b], &N[3 * n])
+                n += 1
+            for b in range(3):
+                _cross(unit, &et[3 * b], &N[3 * n])
+                n += 1
+    return n
+
+
+cdef inline void _support(const double* n, const double* tri, double* lo, double* hi,
+                          double* perm) noexcept nogil:
+    # min and max of n . p over the corners (as numpy: products summed left to right), and
+    # the permanent sum |n_k| max |p_k|
+    cdef int a, k
+    cdef double d, m
+    lo[0], hi[0], perm[0] = INFINITY, -INFINITY, 0.0
+    for a in range(3):
+        d = n[0] * tri[3 * a] + n[1] * tri[3 * a + 1] + n[2] * tri[3 * a + 2]
+        if d < lo[0]:
+            lo[0] = d
+        if d > hi[0]:
+            hi[0] = d
+    for k in range(3):
+        m = fabs(tri[k])
+        if fabs(tri[3 + k]) > m:
+            m = fabs(tri[3 + k])
+        if fabs(tri[6 + k]) > m:
+            m = fabs(tri[6 + k])
+        perm[0] += fabs(n[k]) * m
+
+
+cdef inline int _sides(const double* nf, const double* s, const double* t, const double* g,
+                       const double* q, double* val, double* err) noexcept nogil:
+    """Both sides of the slab of normal nf at q: values (<= 0 inside) and bounds."""
+    cdef double slo, shi, sperm, tlo, thi, tperm, box, x, ax, a3
+    _support(nf, s, &slo, &shi, &sperm)
+    _support(nf, t, &tlo, &thi, &tperm)
+    box = fabs(nf[0]) * g[0] + fabs(nf[1]) * g[1] + fabs(nf[2]) * g[2]
+    x = nf[0] * q[0] + nf[1] * q[1] + nf[2] * q[2]
+    ax = fabs(nf[0]) * fabs(q[0]) + fabs(nf[1]) * fabs(q[1]) + fabs(nf[2]) * fabs(q[2])
+    a3 = -(shi + thi + box)
+    val[0] = x + a3
+    err[0] = _FILTER * (ax + fabs(a3) + sperm + tperm + box) + _TINY
+    a3 = slo + tlo - box
+    val[1] = -x + a3
+    err[1] = _FILTER * (ax + fabs(a3) + sperm + tperm + box) + _TINY
+    return 2
+
+
+cdef inline int _face_sides(const double* n, const double* own, const double* other,
+                            const double* g, const double* q, double* val,
+                            double* err) noexcept nogil:
+    """The two sides of a triangle's own normal slab at q (as _PairsCO._face_values)."""
+    cdef double base, dmin = INFINITY, dmax = -INFINITY, d, x, e, box, an, own_abs, other_abs
+    cdef int a, k
+    base = n[0] * own[0] + n[1] * own[1] + n[2] * own[2]
+    for a in range(3):
+        d = n[0] * other[3 * a] + n[1] * other[3 * a + 1] + n[2] * other[3 * a + 2]
+        if d < dmin:
+            dmin = d
+        if d > dmax:
+            dmax = d
+    x = n[0] * q[0] + n[1] * q[1] + n[2] * q[2]
+    box = fabs(n[0]) * g[0] + fabs(n[1]) * g[1] + fabs(n[2]) * g[2]
+    e = 0.0
+    for k in range(3):
+        an = fabs(n[k])
+        own_abs = fabs(own[k])
+        if fabs(own[3 + k]) > own_abs:
+            own_abs = fabs(own[3 + k])
+        if fabs(own[6 + k]) > own_abs:
+            own_abs = fabs(own[6 + k])
+        other_abs = fabs(other[k])
+        if fabs(other[3 + k]) > other_abs:
+            other_abs = fabs(other[3 + k])
+        if fabs(other[6 + k]) > other_abs:
+            other_abs = fabs(other[6 + k])
+        e += an * fabs(q[k]) + an * own_abs + an * other_abs
+    e = _FILTER * (e + box) + _TINY
+    val[0] = x - base - dmax - box
+    val[1] = base + dmin - x - box
+    err[0] = e
+    err[1] = e
+    return 2
+
+
+cdef class PairSet:
+    """The operands of one triangle-pair C-obstacle, as the kernels read them.
+
+    ``S (m, 9)`` obstacle triangles and ``T (l, 9)`` robot vectors ``c - t`` (grid integers,
+    scene frame, int64 and the same as float64); ``ns, nt`` their canonical primitive normals
+    (flat pairs are skipped when ``closed``); ``g (3,)`` the margin box; the two trees'
+    arrays (obstacle boxes grown by ``g``; robot boxes of ``-T``).
+    """
+
+    cdef const int64_t[:, ::1] S
+    cdef const int64_t[:, ::1] T
+    cdef const double[:, ::1] Sf
+    cdef const double[:, ::1] Tf
+    cdef const int64_t[:, ::1] ns
+    cdef const int64_t[:, ::1] nt
+    cdef const double[::1] nsf
+    cdef const double[::1] ntf
+    cdef double g[3]
+    cdef bint closed, grown
+    cdef const double[:, ::1] a_lo
+    cdef const double[:, ::1] a_hi
+    cdef const int64_t[::1] a_first
+    cdef const int64_t[::1] a_count
+    cdef const int64_t[::1] a_order
+    cdef const double[:, ::1] a_blo
+    cdef const double[:, ::1] a_bhi
+    cdef const double[:, ::1] b_lo
+    cdef const double[:, ::1] b_hi
+    cdef const int64_t[::1] b_first
+    cdef const int64_t[::1] b_count
+    cdef const int64_t[::1] b_order
+    cdef const double[:, ::1] b_blo
+    cdef const double[:, ::1] b_bhi
+    cdef object _keep
+
+    def __init__(self, S, T, ns, nt, nsf, ntf, g, bint closed, tree_s, tree_r):
+        self._keep = (S, T, ns, nt, nsf, ntf, tree_s, tree_r)
+        self.S, self.T = S, T
+        self.Sf, self.Tf = S.astype(np.float64), T.astype(np.float64)
+        self._keep += (self.Sf, self.Tf)
+        self.ns, self.nt, self.nsf, self.ntf = ns, nt, nsf, ntf
+        for k in range(3):
+            self.g[k] = float(g[k])
+        self.grown = g[0] != 0 or g[1] != 0 or g[2] != 0
+        self.closed = closed
+        self.a_lo, self.a_hi, self.a_first, self.a_count, self.a_order = (
+            tree_s.lo, tree_s.hi, tree_s.first, tree_s.count, tree_s.order)
+        self.a_blo, self.a_bhi = tree_s.box_lo, tree_s.box_hi
+        self.b_lo, self.b_hi, self.b_first, self.b_count, self.b_order = (
+            tree_r.lo, tree_r.hi, tree_r.first, tree_r.count, tree_r.order)
+        self.b_blo, self.b_bhi = tree_r.box_lo, tree_r.box_hi
+
+    cdef inline bint _flat_skipped(self, Py_ssize_t i, Py_ssize_t j) noexcept nogil:
+        if not self.closed:
+            return False
+        if self.ns[i, 0] == 0 and self.ns[i, 1] == 0 and self.ns[i, 2] == 0:
+            return True
+        if self.nt[j, 0] == 0 and self.nt[j, 1] == 0 and self.nt[j, 2] == 0:
+            return True
+        return (self.ns[i, 0] == self.nt[j, 0] and self.ns[i, 1] == self.nt[j, 1]
+                and self.ns[i, 2] == self.nt[j, 2])
+
+    cdef int _point(self, Py_ssize_t i, Py_ssize_t j, const double* q) noexcept nogil:
+        """0: q certainly outside the piece of (i, j); 1: certainly inside; 2: undecided."""
+        cdef double val[2]
+        cdef double err[2]
+        cdef int64_t N[3 * 38]
+        cdef double nf[3]
+        cdef int n, k, c
+        cdef bint unsure = False
+        _face_sides(&self.nsf[3 * i], &self.Sf[i, 0], &self.Tf[j, 0], self.g, q, val, err)
+        if val[0] > err[0] or val[1] > err[1]:
+            return 0
+        _face_sides(&self.ntf[3 * j], &self.Tf[j, 0], &self.Sf[i, 0], self.g, q, val, err)
+        if val[0] > err[0] or val[1] > err[1]:
+            return 0
+        n = _normals(&self.S[i, 0], &self.T[j, 0], self.grown, N)
+        for k in range(n):
+            if N[3 * k] == 0 and N[3 * k + 1] == 0 and N[3 * k + 2] == 0:
+                continue
+            for c in range(3):
+                nf[c] = <double>N[3 * k + c]
+            _sides(nf, &self.Sf[i, 0], &self.Tf[j, 0], self.g, q, val, err)
+            for c in range(2):
+                if val[c] > err[c]:
+                    return 0
+                if not val[c] < -err[c]:
+                    unsure = True
+        return 2 if unsure else 1
+
+    cdef int _segment(self, Py_ssize_t i, Py_ssize_t j, const double* q0,
+                      const double* q1) noexcept nogil:
+        """0: the closed segment certainly misses the piece; 1: certainly meets it; 2:
+        undecided (the filter of cspace.cobstacle.convex.segment_filter, one row)."""
+        cdef double v0[2]
+        cdef double e0[2]
+        cdef double v1[2]
+        cdef double e1[2]
+        cdef int64_t N[3 * 38]
+        cdef double nf[3]
+        cdef int n, k, c
+        cdef bint unknown = False, pos0, neg0, pos1, neg1
+        cdef double lo_dn = 0.0, lo_up = 0.0, hi_dn = 1.0, hi_up = 1.0, A0, A1, ssum, t, terr
+        _face_sides(&self.nsf[3 * i], &self.Sf[i, 0], &self.Tf[j, 0], self.g, q0, v0, e0)
+        _face_sides(&self.nsf[3 * i], &self.Sf[i, 0], &self.Tf[j, 0], self.g, q1, v1, e1)
+        if (v0[0] > e0[0] and v1[0] > e1[0]) or (v0[1] > e0[1] and v1[1] > e1[1]):
+            return 0
+        _face_sides(&self.ntf[3 * j], &self.Tf[j, 0], &self.Sf[i, 0], self.g, q0, v0, e0)
+        _face_sides(&self.ntf[3 * j], &self.Tf[j, 0], &self.Sf[i, 0], self.g, q1, v1, e1)
+        if (v0[0] > e0[0] and v1[0] > e1[0]) or (v0[1] > e0[1] and v1[1] > e1[1]):
+            return 0
+        n = _normals(&self.S[i, 0], &self.T[j, 0], self.grown, N)
+        for k in range(n):
+            if N[3 * k] == 0 and N[3 * k + 1] == 0 and N[3 * k + 2] == 0:
+                continue
+            for c in range(3):
+                nf[c] = <double>N[3 * k + c]
+            _sides(nf, &self.Sf[i, 0], &self.Tf[j, 0], self.g, q0, v0, e0)
+            _sides(nf, &self.Sf[i, 0], &self.Tf[j, 0], self.g, q1, v1, e1)
+            for c in range(2):
+                pos0, neg0 = v0[c] > e0[c], v0[c] < -e0[c]
+                pos1, neg1 = v1[c] > e1[c], v1[c] < -e1[c]
+                if pos0 and pos1:
+                    return 0
+                if not (pos0 or neg0) or not (pos1 or neg1):
+                    unknown = True
+                    continue
+                if pos0 == pos1:
+                    continue  # both ends inside this side
+                A0, A1 = fabs(v0[c]), fabs(v1[c])
+                ssum = A0 + A1
+                t = A0 / ssum
+                terr = 2.0 * (e0[c] * A1 + e1[c] * A0) / (ssum * (ssum - e0[c] - e1[c])) \
+                    + 8 * _EPS * t
+                if pos0:  # entering
+                    if t - terr > lo_dn:
+                        lo_dn = t - terr
+                    if t + terr > lo_up:
+                        lo_up = t + terr
+                else:     # leaving
+                    if t - terr < hi_dn:
+                        hi_dn = t - terr
+                    if t + terr < hi_up:
+                        hi_up = t + terr
+        if lo_dn > hi_up:
+            return 0
+        if not unknown and lo_up <= hi_dn:
+            return 1
+        return 2
+
+    def contains(self, const double[:, ::1] Q):
+        """Per query row (grid units, scene frame): status 0 free, 1 inside, 2 undecided,
+        and the undecided pairs ``(row, i, j)`` of the rows with status 2."""
+        cdef Py_ssize_t r, nq = Q.shape[0]
+        status = np.zeros(nq, dtype=np.int8)
+        cdef signed char[::1] st = status
+        out = []
+        cdef list found
+        for r in range(nq):
+            found = []
+            st[r] = self._traverse(&Q[r, 0], &Q[r, 0], &Q[r, 0], &Q[r, 0], False, found, 0)
+            if st[r] == 2:
+                out += [(r, i, j) for i, j in found]
+        return status, np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    def segments(self, const double[:, ::1] Q0, const double[:, ::1] Q1):
+        """Per segment row: status 0 free, 1 certainly hits, 2 undecided, and the undecided
+        pairs ``(row, i, j)`` of the rows with status 2."""
+        cdef Py_ssize_t r, k, nq = Q0.shape[0]
+        cdef double lo[3]
+        cdef double hi[3]
+        status = np.zeros(nq, dtype=np.int8)
+        cdef signed char[::1] st = status
+        out = []
+        cdef list found
+        for r in range(nq):
+            for k in range(3):
+                lo[k] = Q0[r, k] if Q0[r, k] < Q1[r, k] else Q1[r, k]
+                hi[k] = Q1[r, k] if Q0[r, k] < Q1[r, k] else Q0[r, k]
+            found = []
+            st[r] = self._traverse(lo, hi, &Q0[r, 0], &Q1[r, 0], True, found, 0)
+            if st[r] == 2:
+                out += [(r, i, j) for i, j in found]
+        return status, np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    def segment_pairs(self, const double[:, ::1] Q0, const double[:, ::1] Q1):
+        """Every pair ``(row, i, j)`` the segment filter does not rule out (certain hits
+        included): the pairs whose exact entry parameter gives the first contact."""
+        cdef Py_ssize_t r, k
+        cdef double lo[3]
+        cdef double hi[3]
+        out = []
+        cdef list found
+        for r in range(Q0.shape[0]):
+            for k in range(3):
+                lo[k] = Q0[r, k] if Q0[r, k] < Q1[r, k] else Q1[r, k]
+                hi[k] = Q1[r, k] if Q0[r, k] < Q1[r, k] else Q0[r, k]
+            found = []
+            self._traverse(lo, hi, &Q0[r, 0], &Q1[r, 0], True, found, 2)
+            out += [(r, i, j) for i, j in found]
+        return np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    def candidates(self, const double[:, ::1] lo, const double[:, ::1] hi):
+        """Every pair ``(row, i, j)`` whose piece box meets the query box ``lo[row], hi[row]``
+        (flat pairs of a closed operand left out); no slab is evaluated."""
+        cdef Py_ssize_t r
+        out = []
+        cdef list found
+        for r in range(lo.shape[0]):
+            found = []
+            self._traverse(&lo[r, 0], &hi[r, 0], &lo[r, 0], &hi[r, 0], False, found, 1)
+            out += [(r, i, j) for i, j in found]
+        return np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    cdef int _traverse(self, const double* qlo, const double* qhi, const double* q0,
+                       const double* q1, bint segment, list found, int mode) except -1:
+        """Both trees together over the query box. mode 0: stop at the first pair certainly
+        hit (1), else 2 with the undecided pairs in ``found``, else 0. mode 1: collect every
+        candidate pair in ``found``. mode 2: collect every pair not certainly missed."""
+        cdef int a_stack[512]
+        cdef int b_stack[512]
+        cdef int top = 0, status = 0, res, a, b
+        cdef Py_ssize_t x, y, i, j
+        cdef bint a_leaf, b_leaf
+        a_stack[0], b_stack[0] = 0, 0
+        top = 1
+        while top > 0:
+            top -= 1
+            a, b = a_stack[top], b_stack[top]
+            if not _boxes_meet(&self.a_lo[a, 0], &self.a_hi[a, 0], &self.b_lo[b, 0],
+                               &self.b_hi[b, 0], qlo, qhi):
+                continue
+            a_leaf, b_leaf = self.a_count[a] > 0, self.b_count[b] > 0
+            if a_leaf and b_leaf:
+                for x in range(self.a_first[a], self.a_first[a] + self.a_count[a]):
+                    i = self.a_order[x]
+                    for y in range(self.b_first[b], self.b_first[b] + self.b_count[b]):
+                        j = self.b_order[y]
+                        if not _boxes_meet(&self.a_blo[i, 0], &self.a_bhi[i, 0],
+                                           &self.b_blo[j, 0], &self.b_bhi[j, 0], qlo, qhi):
+                            continue
+                        if self._flat_skipped(i, j):
+                            continue
+                        if mode == 1:
+                            found.append((i, j))
+                            continue
+                        res = self._segment(i, j, q0, q1) if segment else self._point(i, j, q0)
+                        if mode == 2:
+                            if res != 0:
+                                found.append((i, j))
+                            continue
+                        if res == 1:
+                            return 1
+                        if res == 2:
+                            status = 2
+                            found.append((i, j))
+                continue
+            if top + 2 > _STACK:
+                raise RuntimeError("box tree deeper than the traversal stack")
+            # split the node with the larger box (or the inner one)
+            if b_leaf or (not a_leaf and (self.a_hi[a, 0] - self.a_lo[a, 0]
+                                          + self.a_hi[a, 1] - self.a_lo[a, 1]
+                                          + self.a_hi[a, 2] - self.a_lo[a, 2]
+                                          >= self.b_hi[b, 0] - self.b_lo[b, 0]
+                                          + self.b_hi[b, 1] - self.b_lo[b, 1]
+                                          + self.b_hi[b, 2] - self.b_lo[b, 2])):
+                a_stack[top], b_stack[top] = self.a_first[a] + 1, b
+                a_stack[top + 1], b_stack[top + 1] = self.a_first[a], b
+            else:
+                a_stack[top], b_stack[top] = a, self.b_first[b] + 1
+                a_stack[top + 1], b_stack[top + 1] = a, self.b_first[b]
+            top += 2
+        return status
