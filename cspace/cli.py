@@ -279,10 +279,18 @@ def _build(args: argparse.Namespace) -> int:
         arrays = {"names": np.array([name for name, _, _, _ in built]),
                   "kinds": np.array([kind for _, kind, _, _ in built])}
         for i, (_, _, co, _) in enumerate(built):
-            arrays[f"vertices_{i}"] = co.vertices
-            arrays[f"faces_{i}"] = co.faces
+            if co.kind == "pairs":
+                # A union over every triangle pair has no boundary mesh worth writing (one
+                # hull a pair): its operands define it, in scene coordinates.
+                arrays[f"obstacle_triangles_{i}"] = co.grid.to_float(co.S.reshape(-1, 3)).reshape(-1, 3, 3)
+                arrays[f"robot_vectors_{i}"] = co.grid.vectors.to_float(co.T.reshape(-1, 3)).reshape(-1, 3, 3)
+            else:
+                arrays[f"vertices_{i}"] = co.vertices
+                arrays[f"faces_{i}"] = co.faces
         write_atomic(out, lambda p: np.savez_compressed(p, **arrays))
-        print(f"wrote {out} (per C-obstacle: vertices_<i>, faces_<i>; names, kinds)")
+        print(f"wrote {out} (per C-obstacle: vertices_<i>, faces_<i>; for triangle pairs "
+              "obstacle_triangles_<i>, robot_vectors_<i> (c - t): the union of every "
+              "s + (c - t); names, kinds)")
     return 1 if failed else 0
 
 

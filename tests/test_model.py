@@ -61,13 +61,22 @@ def test_double_sided_sheet_keeps_one_side_and_is_a_surface():
     assert "2 double-sided" in m.explain()
 
 
-def test_double_sided_closed_box_becomes_convex_and_repeats_are_counted():
+def test_double_sided_closed_box_is_a_sheet_and_repeats_are_counted():
+    # Every triangle listed with both windings: the two sides of a sheet (winding number 0,
+    # FCL's reading), so the box encloses nothing; a box listed once (or repeated with the
+    # same winding) is a solid.
     F = CUBE.faces
     body = Body("box2", CUBE.vertices, np.vstack([F, F[:, ::-1], F[:3]]), "test")
     m = model_scene(make_scene([body]), build=False)
     s = m.sources["box2"]
     assert (s["double_sided"], s["repeated"], s["parts"]) == (12, 3, 1)
-    assert [b.kind for b in m.bodies] == ["convex"]
+    (b,) = m.bodies
+    assert b.kind == "surface" and b._encloses is None and "both windings" in b.reason
+    once = Body("box1", CUBE.vertices, np.vstack([F, F[:3]]), "test")
+    assert [b.kind for b in model_scene(make_scene([once]), build=False).bodies] == ["convex"]
+    # one side of one face listed once only: not a sheet, a closed solid as before
+    half = Body("box3", CUBE.vertices, np.vstack([F, F[1:, ::-1]]), "test")
+    assert [b.kind for b in model_scene(make_scene([half]), build=False).bodies] == ["convex"]
 
 
 def test_collapsed_triangles_are_dropped_and_counted():

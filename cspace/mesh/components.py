@@ -28,7 +28,8 @@ def _parity(F: np.ndarray) -> np.ndarray:
 
 
 def weld_dedupe(body, grid: Grid):
-    """Welded grid ints, deduplicated faces and the counts of steps 1-2."""
+    """Welded grid ints, deduplicated faces, the counts of steps 1-2, and per kept face
+    whether it was also listed with the opposite winding (double-sided)."""
     ints, inverse = np.unique(grid.snap(body.vertices), axis=0, return_inverse=True)
     F = inverse.reshape(-1)[body.faces]
     collapsed = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
@@ -41,7 +42,11 @@ def weld_dedupe(body, grid: Grid):
     same = _parity(F) == _parity(F[first[which]])
     counts = {"triangles": len(body.faces), "collapsed": int(collapsed.sum()),
               "double_sided": int((~keep & ~same).sum()), "repeated": int((~keep & same).sum())}
-    return ints, F[np.sort(first)], counts
+    # Per kept triangle: listed with both windings too (the two sides of a sheet).
+    reversed_copy = np.zeros(len(first), dtype=bool)
+    reversed_copy[which[~same]] = True
+    order = np.sort(first)
+    return ints, F[order], counts, reversed_copy[which[order]]
 
 
 def edge_uses(F: np.ndarray, n: int):
@@ -52,8 +57,11 @@ def edge_uses(F: np.ndarray, n: int):
     return inv.reshape(-1), count
 
 
-def split_parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
-    """Face index arrays of the bodies of step 3, in order of their first face."""
+def split_parts(ints: np.ndarray, F: np.ndarray, two_sided=None) -> list[np.ndarray]:
+    """Face index arrays of the bodies of step 3, in order of their first face.
+
+    ``two_sided`` (per face, from :func:`weld_dedupe`): a closed component all of whose faces
+    were listed with both windings is a sheet (it encloses nothing), so nothing nests in it."""
     m = len(F)
     edge, count = edge_uses(F, len(ints))
     face = np.repeat(np.arange(m), 3)
@@ -68,7 +76,12 @@ def split_parts(ints: np.ndarray, F: np.ndarray) -> list[np.ndarray]:
     np.logical_or.at(boundary, label[face], count[edge] == 1)
     # Closed components nested in another closed one's solid stay with it (a cavity).
     closed = np.nonzero(~boundary)[0]
-    i, j = nested_pairs(ints, F, label, closed, closed)
+    outer = closed
+    if two_sided is not None:
+        sheet = np.ones(ncomp, dtype=bool)
+        np.logical_and.at(sheet, label, np.asarray(two_sided, dtype=bool))
+        outer = closed[~sheet[closed]]
+    i, j = nested_pairs(ints, F, label, outer, closed)
     _, group = component_labels(ncomp, i, j)
     group = group[label]
     firsts = np.full(group.max() + 1, m)
@@ -84,7 +97,7 @@ def split_mesh(vertices, faces, grid: Grid) -> list[tuple[np.ndarray, np.ndarray
     mesh as the union of its parts."""
     from types import SimpleNamespace
 
-    ints, F, _ = weld_dedupe(SimpleNamespace(vertices=vertices, faces=faces), grid)
+    ints, F, _, _ = weld_dedupe(SimpleNamespace(vertices=vertices, faces=faces), grid)
     out = []
     for part in split_parts(ints, F) if len(F) else []:
         used, local = np.unique(F[part], return_inverse=True)

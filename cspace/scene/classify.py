@@ -206,6 +206,22 @@ class Enclosing:
     faces: np.ndarray
 
 
+def _sheet_kind(P, F):
+    """``('surface', why, None)`` for a closed part every triangle of which was listed with
+    both windings, else None.
+
+    Such a part is a sheet with two sides, not the boundary of a solid: the winding numbers of
+    its two listings cancel (0 everywhere, so it encloses nothing), and FCL's mesh collision
+    reads it as a surface. An apartment whose double-sided walls, floor and ceiling happen to
+    close up is a set of walls with free space inside, not a solid block.
+    """
+    edge, count = edge_uses(F, len(P))
+    if (count == 1).any():
+        return None  # open: the usual reason says so
+    return ("surface", "closed, but every triangle is listed with both windings (a double-sided "
+            "sheet: winding number 0, it encloses nothing)", None)
+
+
 def _closed_kind(name, P, F, grid):
     """Kind of a welded part, without bounds: ``(kind, reason, operand)``.
 
@@ -253,7 +269,8 @@ def _closed_kind(name, P, F, grid):
 
 
 def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
-              convex_robot: bool = True, memo: dict | None = None) -> BodyModel:
+              convex_robot: bool = True, memo: dict | None = None,
+              sheet: bool = False) -> BodyModel:
     used, local = np.unique(F, return_inverse=True)
     P, F = ints[used], local.reshape(-1, 3)
     V = grid.to_float(P)
@@ -264,7 +281,10 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
         body.reason = (f"its C-obstacle's bounding box {grid.to_float(np.stack([lo, hi])).tolist()} "
                        "misses the planning bounds: the robot can never touch it")
         return body
-    if memo is None:
+    sheet_kind = _sheet_kind(P, F) if sheet else None
+    if sheet_kind is not None:
+        kind, why, operand = sheet_kind
+    elif memo is None:
         kind, why, operand = _closed_kind(name, P, F, grid)
     else:  # the kind depends only on these, exactly (bytes compare exactly on a collision)
         key = (name, grid.exponent, grid.bits, tuple(int(x) for x in grid.origin),

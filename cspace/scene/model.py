@@ -79,6 +79,7 @@ from .classify import (
     RobotPart,
     _classify,
     _closed_kind,
+    _sheet_kind,
     _far_body,
     _without_far_parts,
 )
@@ -237,8 +238,8 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
         return [RobotPart(scene.robot.name, "convex", "the convex hull of its vertices "
                           "(robot_hull: an approximation that can only add collisions)",
                           hull.ints, hull.faces, grid, hull)]
-    ints, F, _ = weld_dedupe(scene.robot, grid)
-    parts = split_parts(ints, F) if len(F) else []
+    ints, F, _, two_sided = weld_dedupe(scene.robot, grid)
+    parts = split_parts(ints, F, two_sided) if len(F) else []
     if not parts:
         raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r}: all "
                          f"{len(scene.robot.faces)} triangles collapse when welded on the grid "
@@ -248,7 +249,8 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
         name = scene.robot.name if len(parts) == 1 else f"{scene.robot.name}#{k}"
         used, local = np.unique(F[faces], return_inverse=True)
         P, Fk = ints[used], local.reshape(-1, 3)
-        kind, why, operand = _closed_kind(name, P, Fk, grid)
+        kind, why, operand = (_sheet_kind(P, Fk) if two_sided[faces].all() else None) or \
+            _closed_kind(name, P, Fk, grid)
         if kind == "solid":  # the validated mesh: oriented outwards
             P, Fk = operand.ints, operand.faces
         out.append(RobotPart(name, kind, why, P, Fk, grid, operand))
@@ -351,20 +353,22 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         welded = None if memo is None else memo.get(
             ("weld", id(sb), grid.exponent, grid.bits, tuple(int(x) for x in grid.origin)))
         if welded is None:  # steps 1-3 depend only on the body and the grid
-            ints, F, counts = weld_dedupe(sb, grid)
-            split = split_parts(ints, F) if len(F) else []
+            ints, F, counts, two_sided = weld_dedupe(sb, grid)
+            split = split_parts(ints, F, two_sided) if len(F) else []
             if memo is not None:  # the body is kept in the value: its id stays its own
                 memo[("weld", id(sb), grid.exponent, grid.bits,
-                      tuple(int(x) for x in grid.origin))] = (sb, ints, F, counts, split)
+                      tuple(int(x) for x in grid.origin))] = (sb, ints, F, counts, split,
+                                                               two_sided)
         else:
-            _, ints, F, counts, split = welded
+            _, ints, F, counts, split, two_sided = welded
         counts = dict(counts)
         counts["parts"] = len(split)
         sources[sb.name] = counts
         for k, faces in enumerate(split):
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
             bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
-                                    len(parts) == 1 and parts[0].kind == "convex", memo))
+                                    len(parts) == 1 and parts[0].kind == "convex", memo,
+                                    sheet=bool(two_sided[faces].all())))
         if sb.name in far:
             bodies.append(_far_body(sb.name, *far[sb.name]))
         if not split and sb.name not in far:

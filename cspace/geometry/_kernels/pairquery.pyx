@@ -40,6 +40,21 @@ cdef inline bint _boxes_meet(const double* slo, const double* shi, const double*
     return True
 
 
+cdef inline double _box_gap2(const double* slo, const double* shi, const double* rlo,
+                            const double* rhi, const double* q) noexcept nogil:
+    # squared distance between the box [slo, shi] and [q + rlo, q + rhi] (a lower bound for
+    # any two triangles in them)
+    cdef double g, s = 0.0
+    cdef int k
+    for k in range(3):
+        g = slo[k] - (q[k] + rhi[k])
+        if q[k] + rlo[k] - shi[k] > g:
+            g = q[k] + rlo[k] - shi[k]
+        if g > 0.0:
+            s += g * g
+    return s
+
+
 cdef inline void _cross(const int64_t* a, const int64_t* b, int64_t* out) noexcept nogil:
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
@@ -185,6 +200,113 @@ cdef inline int _face_sides(const double* n, const double* own, const double* ot
     err[0] = e
     err[1] = e
     return 2
+
+
+cdef inline double _dot(const double* a, const double* b) noexcept nogil:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+cdef inline double _clamp01(double x) noexcept nogil:
+    return 0.0 if x < 0.0 else (1.0 if x > 1.0 else x)
+
+
+cdef double _seg_seg_dist2(const double* p1, const double* q1, const double* p2,
+                           const double* q2) noexcept nogil:
+    """Squared distance of two segments (Ericson, Real-Time Collision Detection 5.1.9)."""
+    cdef double d1[3]
+    cdef double d2[3]
+    cdef double r[3]
+    cdef double c1[3]
+    cdef double c2[3]
+    cdef double a, e, f, c, b, denom, s, t
+    cdef int k
+    for k in range(3):
+        d1[k] = q1[k] - p1[k]
+        d2[k] = q2[k] - p2[k]
+        r[k] = p1[k] - p2[k]
+    a, e, f = _dot(d1, d1), _dot(d2, d2), _dot(d2, r)
+    if a <= 0.0 and e <= 0.0:
+        s, t = 0.0, 0.0
+    elif a <= 0.0:
+        s, t = 0.0, _clamp01(f / e)
+    else:
+        c = _dot(d1, r)
+        if e <= 0.0:
+            t, s = 0.0, _clamp01(-c / a)
+        else:
+            b = _dot(d1, d2)
+            denom = a * e - b * b
+            s = _clamp01((b * f - c * e) / denom) if denom > 0.0 else 0.0
+            t = (b * s + f) / e
+            if t < 0.0:
+                t, s = 0.0, _clamp01(-c / a)
+            elif t > 1.0:
+                t, s = 1.0, _clamp01((b - c) / a)
+    for k in range(3):
+        c1[k] = p1[k] + d1[k] * s - p2[k] - d2[k] * t
+    return _dot(c1, c1)
+
+
+cdef double _pt_tri_dist2(const double* p, const double* a, const double* b,
+                          const double* c) noexcept nogil:
+    """Squared distance of a point to a triangle (Ericson 5.1.5; degenerate triangles fall
+    back to their edges)."""
+    cdef double ab[3]
+    cdef double ac[3]
+    cdef double ap[3]
+    cdef double n[3]
+    cdef double d, nn, best
+    cdef int k
+    for k in range(3):
+        ab[k] = b[k] - a[k]
+        ac[k] = c[k] - a[k]
+        ap[k] = p[k] - a[k]
+    n[0] = ab[1] * ac[2] - ab[2] * ac[1]
+    n[1] = ab[2] * ac[0] - ab[0] * ac[2]
+    n[2] = ab[0] * ac[1] - ab[1] * ac[0]
+    nn = _dot(n, n)
+    if nn > 0.0:
+        # inside the prism over the triangle: the distance to its plane
+        if (_side(a, b, p, n) >= 0.0 and _side(b, c, p, n) >= 0.0
+                and _side(c, a, p, n) >= 0.0):
+            d = _dot(ap, n)
+            return d * d / nn
+    best = _seg_seg_dist2(p, p, a, b)
+    d = _seg_seg_dist2(p, p, b, c)
+    if d < best:
+        best = d
+    d = _seg_seg_dist2(p, p, c, a)
+    if d < best:
+        best = d
+    return best
+
+
+cdef inline double _side(const double* u, const double* v, const double* p,
+                         const double* n) noexcept nogil:
+    # (v - u) x (p - u) . n: p on the inner side of edge uv (>= 0)
+    cdef double e0 = v[0] - u[0], e1 = v[1] - u[1], e2 = v[2] - u[2]
+    cdef double f0 = p[0] - u[0], f1 = p[1] - u[1], f2 = p[2] - u[2]
+    return (e1 * f2 - e2 * f1) * n[0] + (e2 * f0 - e0 * f2) * n[1] + (e0 * f1 - e1 * f0) * n[2]
+
+
+cdef double _tri_tri_dist2(const double* A, const double* B) noexcept nogil:
+    """Squared distance of two disjoint triangles: the least of the six vertex-triangle and
+    nine edge-edge distances."""
+    cdef double best = INFINITY, d
+    cdef int i, j
+    for i in range(3):
+        d = _pt_tri_dist2(&A[3 * i], &B[0], &B[3], &B[6])
+        if d < best:
+            best = d
+        d = _pt_tri_dist2(&B[3 * i], &A[0], &A[3], &A[6])
+        if d < best:
+            best = d
+    for i in range(3):
+        for j in range(3):
+            d = _seg_seg_dist2(&A[3 * i], &A[3 * ((i + 1) % 3)], &B[3 * j], &B[3 * ((j + 1) % 3)])
+            if d < best:
+                best = d
+    return best
 
 
 cdef class PairSet:
@@ -388,6 +510,64 @@ cdef class PairSet:
             self._traverse(lo, hi, &Q0[r, 0], &Q1[r, 0], True, found, 2)
             out += [(r, i, j) for i, j in found]
         return np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    def distances(self, const double[:, ::1] Q):
+        """Per query (grid units, outside the union): the float distance, in grid units, to
+        the nearest piece ``S_i ⊕ T_j`` (flat pairs of a closed operand left out), i.e. of
+        triangle ``S_i`` to triangle ``Q - T_j``: a branch and bound over both trees, boxes
+        giving the lower bounds. Not a decision (float throughout)."""
+        cdef Py_ssize_t r, nq = Q.shape[0]
+        out = np.empty(nq)
+        cdef double[::1] o = out
+        for r in range(nq):
+            o[r] = self._nearest(&Q[r, 0])
+        return out
+
+    cdef double _nearest(self, const double* q) except? -1:
+        cdef int a_stack[512]
+        cdef int b_stack[512]
+        cdef int top, a, b, k
+        cdef Py_ssize_t x, y, i, j
+        cdef double best = INFINITY, d
+        cdef double tri[9]
+        a_stack[0], b_stack[0] = 0, 0
+        top = 1
+        while top > 0:
+            top -= 1
+            a, b = a_stack[top], b_stack[top]
+            if _box_gap2(&self.a_lo[a, 0], &self.a_hi[a, 0], &self.b_lo[b, 0],
+                         &self.b_hi[b, 0], q) >= best:
+                continue
+            if self.a_count[a] > 0 and self.b_count[b] > 0:
+                for x in range(self.a_first[a], self.a_first[a] + self.a_count[a]):
+                    i = self.a_order[x]
+                    for y in range(self.b_first[b], self.b_first[b] + self.b_count[b]):
+                        j = self.b_order[y]
+                        if self._flat_skipped(i, j):
+                            continue
+                        if _box_gap2(&self.a_blo[i, 0], &self.a_bhi[i, 0], &self.b_blo[j, 0],
+                                     &self.b_bhi[j, 0], q) >= best:
+                            continue
+                        for k in range(9):
+                            tri[k] = q[k % 3] - self.Tf[j, k]
+                        d = _tri_tri_dist2(&self.Sf[i, 0], tri)
+                        if d < best:
+                            best = d
+                continue
+            if top + 2 > _STACK:
+                raise RuntimeError("box tree deeper than the traversal stack")
+            if self.b_count[b] > 0 or (self.a_count[a] == 0 and (
+                    self.a_hi[a, 0] - self.a_lo[a, 0] + self.a_hi[a, 1] - self.a_lo[a, 1]
+                    + self.a_hi[a, 2] - self.a_lo[a, 2]
+                    >= self.b_hi[b, 0] - self.b_lo[b, 0] + self.b_hi[b, 1] - self.b_lo[b, 1]
+                    + self.b_hi[b, 2] - self.b_lo[b, 2])):
+                a_stack[top], b_stack[top] = self.a_first[a] + 1, b
+                a_stack[top + 1], b_stack[top + 1] = self.a_first[a], b
+            else:
+                a_stack[top], b_stack[top] = a, self.b_first[b] + 1
+                a_stack[top + 1], b_stack[top + 1] = a, self.b_first[b]
+            top += 2
+        return best ** 0.5
 
     def candidates(self, const double[:, ::1] lo, const double[:, ::1] hi):
         """Every pair ``(row, i, j)`` whose piece box meets the query box ``lo[row], hi[row]``
