@@ -13,13 +13,34 @@ from ..mesh.operands import _Mesh
 
 class _UnionOf:
     """The engine interface over several C-obstacles' engines: their union, not built
-    (:class:`CSpace` and ``kind='union'`` C-obstacles). Each query stops asking engines for
-    rows already decided; vertices and faces are joined on first use (drawing only)."""
+    (:class:`CSpace` and ``kind='union'`` C-obstacles). A query asks only the engines whose
+    box it meets (one vectorised broad phase over all boxes), and not for rows already
+    decided; vertices and faces are joined on first use (drawing only)."""
 
     def __init__(self, cos):
         self.cos = tuple(cos)
         self.engines = [co._impl for co in self.cos]
         self._joined = None
+        # Broad phase: each C-obstacle's box, widened by 2**-40 of its coordinates (float
+        # vertices of rational points are off by an ulp at most): a query outside a box is
+        # outside that C-obstacle. Only prunes; each engine still decides exactly.
+        if self.cos:
+            B = np.array([np.asarray(co.bounds, dtype=np.float64) for co in self.cos])
+            pad = np.ldexp(np.abs(B).max(axis=1), -40) + 1e-300
+            self._lo, self._hi = B[:, 0] - pad, B[:, 1] + pad
+        else:
+            self._lo = self._hi = np.zeros((0, 3))
+
+    def _near(self, lo: np.ndarray, hi: np.ndarray):
+        """Per engine, the rows whose box ``[lo, hi]`` meets the engine's box."""
+        step = max(1, (1 << 18) // max(1, len(self.engines)))
+        hits = []
+        for s in range(0, len(lo), step):
+            m = ((self._lo[None] <= hi[s:s + step, None])
+                 & (lo[s:s + step, None] <= self._hi[None])).all(axis=2)
+            hits.append(m)
+        M = np.concatenate(hits) if hits else np.zeros((0, len(self.engines)), bool)
+        return [(k, np.nonzero(M[:, k])[0]) for k in np.nonzero(M.any(axis=0))[0].tolist()]
 
     @property
     def vertices(self) -> np.ndarray:
@@ -35,25 +56,24 @@ class _UnionOf:
 
     def contains(self, q: np.ndarray) -> np.ndarray:
         out = np.zeros(len(q), dtype=bool)
-        for e in self.engines:
-            rest = np.nonzero(~out)[0]
-            if not rest.size:
-                break
-            out[rest] = e.contains(q[rest])
+        for k, rows in self._near(q, q):
+            rest = rows[~out[rows]]
+            if rest.size:
+                out[rest] = self.engines[k].contains(q[rest])
         return out
 
     def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
         hit, t = np.zeros(len(q0), dtype=bool), np.full(len(q0), np.nan)
-        for e in self.engines:
+        for k, rows in self._near(np.minimum(q0, q1), np.maximum(q0, q1)):
+            e = self.engines[k]
             if want_t:  # the earliest contact over all
-                h, te = e.segments(q0, q1, True)
-                hit |= h
-                t = np.fmin(t, te)
+                h, te = e.segments(q0[rows], q1[rows], True)
+                hit[rows] |= h
+                t[rows] = np.fmin(t[rows], te)
                 continue
-            rest = np.nonzero(~hit)[0]
-            if not rest.size:
-                break
-            hit[rest], _ = e.segments(q0[rest], q1[rest], False)
+            rest = rows[~hit[rows]]
+            if rest.size:
+                hit[rest], _ = e.segments(q0[rest], q1[rest], False)
         return hit, t
 
     def signed_distance(self, q: np.ndarray) -> np.ndarray:
