@@ -55,8 +55,9 @@ POST = _box((0.3, 0.3, 2.0))                  # fits the U's 0.5-wide slot
 L_SOLID = l_shape(arm=2)                       # 5 voxels: reflex edge along z
 CASES = {
     # name: (obstacle, robot, obstacle kind, robot kind)
-    "post x U (NCC-CVMS swapped)": (POST, _u_robot(), "convex", "solid"),
-    "post x open U (convex + robot triangles)": (POST, _open(_u_robot()), "convex", "surface"),
+    "post x U (triangle pairs, convex obstacle)": (POST, _u_robot(), "convex", "solid"),
+    "post x open U (triangle pairs, convex obstacle)": (POST, _open(_u_robot()), "convex",
+                                                        "surface"),
     "L x U (triangle pairs, both solid)": (L_SOLID, _u_robot(0.4), "solid", "solid"),
     "open box x U (triangle pairs)": (_open(_box((1.0, 1.0, 1.0))), _u_robot(0.4), "surface",
                                       "solid"),
@@ -172,14 +173,14 @@ def test_containment_terms_count():
                             (_box((0.1, 0.1, 0.1), centre=(0.0, -0.5, 0.0)), _u_robot(0.5))]:
         m = model_scene(_scene(obstacle, robot))
         (pair,) = [p for b in m.bodies for p in b.pairs]
-        assert pair.construction == "triangle pairs" or pair.construction == "NCC-CVMS swapped"
+        assert pair.construction == "triangle pairs"
         cos = pair.cos
         assert m.cspace().contains(q)
-        if pair.construction == "triangle pairs":
-            pieces = [co for co in cos if co.kind == "surface"]
-            terms = [co for co in cos if co.kind == "mesh"]
-            assert not any(co.contains(q) for co in pieces)
-            assert any(co.contains(q) for co in terms)
+        pieces = [co for co in cos if co.kind == "pairs"]
+        terms = [co for co in cos if co.kind == "mesh"]
+        assert len(pieces) == 1 and len(terms) >= 1
+        assert not any(co.contains(q) for co in pieces)
+        assert any(co.contains(q) for co in terms)
 
 
 def test_l_robot_plans_through_an_l_corridor_and_fcl_agrees():
@@ -198,8 +199,7 @@ def test_l_robot_plans_through_an_l_corridor_and_fcl_agrees():
     scene = _scene(walls, robot, bounds, start=(-0.375, -0.375, 0.0), goal=(0.375, 0.4, 0.0),
                    name="l-corridor")
     m = model_scene(scene)
-    assert {p.construction for b in m.bodies for p in b.pairs} <= {"triangle pairs",
-                                                                   "NCC-CVMS swapped"}
+    assert {p.construction for b in m.bodies for p in b.pairs} == {"triangle pairs"}
     cs = m.cspace()
     r = cross_check(cs, n=10000, seed=5, band=1e-9)
     assert r["n_disagree"] == 0, r["disagreements"][:5]
@@ -220,7 +220,8 @@ def test_containment_terms_only_where_they_can_hold():
     # A small obstacle inside a large U's reach: the robot may hold it; it cannot hold the U.
     m = model_scene(_scene(_box((0.1, 0.1, 0.1), centre=(0.0, -0.5, 0.0)), _u_robot(0.5)))
     (pair,) = m.bodies[0].pairs
-    assert pair.construction == "NCC-CVMS swapped"  # convex obstacle: one exact surface
+    assert pair.construction == "triangle pairs"  # a convex obstacle too
+    assert [co.kind for co in pair.cos] == ["pairs", "mesh"]  # the robot may hold it
     tiny = _box((0.05, 0.05, 0.05))
     m = model_scene(_scene(_open(tiny), _u_robot(0.5)))  # an open speck: surface body
     (pair,) = m.bodies[0].pairs

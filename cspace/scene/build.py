@@ -26,12 +26,10 @@ from ..cobstacle.pairs import (
     _meets,
     component_points,
     containment_meshes,
-    convex_triangle_pieces,
     pair_construction,
 )
 from ..cobstacle.surface import SurfaceMesh, SurfaceObstacle
 from ..geometry.exact import Grid
-from ..mesh.closed import ClosedMesh
 from .cache import COCache, co_key, pack_polytopes, unpack_polytopes
 from .classify import BodyModel, PairModel, RobotPart, _excess
 
@@ -134,26 +132,18 @@ def _body_operand(body: BodyModel):
 
 
 def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, grid, bounds_g):
-    """C-obstacles of a pair with a non-convex robot part, from built or cached arrays."""
+    """C-obstacles of a pair with a non-convex robot part (triangle pairs and containment
+    terms), from built or cached arrays."""
     c = part.grid.to_float(c_ints)
     obstacle = (SurfaceMesh(body.vertices, body.faces[body._keep], body.name)
                 if body.kind == "surface" else body._solid)
     name = f"{body.name} x {part.name}"
-    if construction == "NCC-CVMS swapped":
-        cos = [CSpaceObstacle.from_mesh(arrays["vertices"], arrays["faces"], obstacle=obstacle,
-                                        robot=part, reference_point=c, grid=grid, name=name)]
-    elif construction == "triangle pairs":
-        o_ints, o_faces = _body_operand(body)
-        S, T = _pair_operands(o_ints[o_faces], c_ints - part.ints[part.faces], arrays)
-        cos = [PairObstacle(S, T, closed=bool(arrays["closed"]), margin=arrays["margin"],
-                            obstacle=obstacle, robot=part, reference_point=c,
-                            grid=grid)] if len(S) and len(T) else []
-    else:
-        pieces = unpack_polytopes(arrays, "p_", grid)
-        cos = [SurfaceObstacle(pieces, obstacle=obstacle, robot=part, reference_point=c,
-                               grid=grid)] if pieces else []
-    if construction in ("triangle pairs", "convex ⊕ robot triangles"):
-        cos += _containment_cos(body, part, c_ints, grid, bounds_g, obstacle, name)
+    o_ints, o_faces = _body_operand(body)
+    S, T = _pair_operands(o_ints[o_faces], c_ints - part.ints[part.faces], arrays)
+    cos = [PairObstacle(S, T, closed=bool(arrays["closed"]), margin=arrays["margin"],
+                        obstacle=obstacle, robot=part, reference_point=c,
+                        grid=grid)] if len(S) and len(T) else []
+    cos += _containment_cos(body, part, c_ints, grid, bounds_g, obstacle, name)
     for co in cos:
         co.semantics = (body.kind != "surface", part.kind)
         co.excess = _excess(body)  # a non-convex robot part is never a hull
@@ -176,7 +166,7 @@ def _containment_cos(body: BodyModel, part: RobotPart, c_ints, grid, bounds_g, o
     held_by_robot = ((part.ints, part.faces) if part.kind == "solid" else
                      (part.encloses.ints, part.encloses.faces) if part.encloses is not None
                      else None)
-    held_by_body = ((body._solid.ints, body._solid.faces) if body.kind == "solid" else
+    held_by_body = ((body._solid.ints, body._solid.faces) if body.kind in ("solid", "convex") else
                     (body._encloses.ints, body._encloses.faces)
                     if body.kind == "surface" and body._encloses is not None else None)
     terms = []
@@ -193,33 +183,17 @@ def _containment_cos(body: BodyModel, part: RobotPart, c_ints, grid, bounds_g, o
 
 def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, grid, bounds_g,
                        margin: Margin, progress) -> dict:
-    """Build a pair with a non-convex robot part, grown by ``margin`` (the convex obstacle,
-    or each triangle pair's piece): arrays for the cache."""
-    if construction == "NCC-CVMS swapped":
-        moved = ClosedMesh.from_arrays(grid.vectors.to_float(part.ints - c_ints), part.faces,
-                                       grid=grid.vectors, name=part.name)
-        S, m = grown_mesh_sum(moved, body._solid.reflected((0.0, 0.0, 0.0)), margin)
-        # -(A ⊕ B): negating floats is exact; reversing the triangles keeps them outward.
-        return {"vertices": -np.asarray(S.vertices) + 0.0,
-                "faces": np.ascontiguousarray(np.asarray(S.faces)[:, ::-1]),
-                "margin": np.array(m.steps, dtype=np.int64), "rounding": np.array([m.rounding])}
-    if construction == "convex ⊕ robot triangles":
-        made = convex_triangle_pieces(margin.grow_ints(body._solid.ints), part.ints, part.faces,
-                                      c_ints, grid, bounds_g)
-    else:
-        # Nothing is enumerated: the C-obstacle is queried through two box trees
-        # (PairObstacle). Kept: the triangles whose pieces can meet the bounds at all.
-        o_ints, o_faces = _body_operand(body)
-        S, T = o_ints[o_faces], c_ints - part.ints[part.faces]
-        s_keep, t_keep = _in_reach(S, T, margin.g, bounds_g)
-        return {"s_keep": s_keep, "t_keep": t_keep, "margin": margin.g,
-                "closed": np.array(body.kind == "solid" or part.kind == "solid"),
-                "counts": np.array([int(s_keep.sum()), int(t_keep.sum()),
-                                    len(S) - int(s_keep.sum())], dtype=np.int64)}
-    arrays = pack_polytopes(made.pieces, "p_")
-    arrays["counts"] = np.array([len(made.pieces), made.flat_skipped,
-                                 made.out_of_bounds], dtype=np.int64)
-    return arrays
+    """Build a pair with a non-convex robot part (triangle pairs, each piece grown by
+    ``margin``): arrays for the cache. Nothing is enumerated: the C-obstacle is queried
+    through two box trees (PairObstacle). Kept: the triangles whose pieces can meet the
+    bounds at all."""
+    o_ints, o_faces = _body_operand(body)
+    S, T = o_ints[o_faces], c_ints - part.ints[part.faces]
+    s_keep, t_keep = _in_reach(S, T, margin.g, bounds_g)
+    return {"s_keep": s_keep, "t_keep": t_keep, "margin": margin.g,
+            "closed": np.array(body.kind != "surface" or part.kind == "solid"),
+            "counts": np.array([int(s_keep.sum()), int(t_keep.sum()),
+                                len(S) - int(s_keep.sum())], dtype=np.int64)}
 
 
 def _in_reach(S, T, g, bounds_g) -> tuple[np.ndarray, np.ndarray]:
@@ -240,16 +214,10 @@ def _pair_operands(S, T, arrays):
 def _pair_detail(construction, arrays) -> str:
     if "counts" not in arrays:
         return ""
-    if construction == "triangle pairs":
-        s, t, out = (int(x) for x in arrays["counts"])
-        extra = f"; {out} obstacle triangles out of reach of the bounds" if out else ""
-        return (f"{s} x {t} triangles, pairs found per query by two box trees "
-                f"(none enumerated{extra})")
-    n, flat, out = (int(x) for x in arrays["counts"])  # built, flat left out, out of bounds
-    what = "triangle pairs" if construction == "triangle pairs" else "robot-triangle pieces"
-    extra = [f"{out} out of the bounds"] if out else []
-    extra += [f"{flat} flat left out (an operand is closed)"] if flat else []
-    return f"{n} {what}" + (f" ({', '.join(extra)})" if extra else "")
+    s, t, out = (int(x) for x in arrays["counts"])  # triangle pairs: the only kind here
+    extra = f"; {out} obstacle triangles out of reach of the bounds" if out else ""
+    return (f"{s} x {t} triangles, pairs found per query by two box trees "
+            f"(none enumerated{extra})")
 
 
 @dataclass(frozen=True, eq=False)
