@@ -20,7 +20,7 @@ Per problem:
 - agreement with the scene oracle (FCL on the raw meshes plus its own solid rule): false free
   must be 0; false collisions are counted;
 - **planning** (apartment, alpha): ``plan(scene, slices=Orientations.uniform(64))`` (turns
-  certified) against ``plan_sampled(space='SE3')`` (OMPL.app's way: FCL, discrete motions),
+  certified; and translations only where start and goal share an orientation) against ``plan_sampled(space='SE3')`` (OMPL.app's way: FCL, discrete motions),
   RRTConnect, same time budget and seeds; every returned path re-checked by
   ``pose_path_collisions`` (FCL on the raw meshes along the continuous motion).
 
@@ -63,8 +63,11 @@ scene = cspace.load_scene(sys.argv[1])
 t1 = time.perf_counter()
 cs = cspace.CSpace.from_scene(scene, cache=sys.argv[2])
 t2 = time.perf_counter()
+# VmHWM, not ru_maxrss: Linux carries ru_maxrss over exec from the forking parent
+hwm = [l for l in open("/proc/self/status") if l.startswith("VmHWM:")]
+rss = int(hwm[0].split()[1]) * 1024 if hwm else resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 print(json.dumps({"load": t1 - t0, "build": t2 - t1, "obstacles": len(cs.obstacles),
-                  "rss": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024}))
+                  "rss": rss}))
 """
 
 
@@ -180,10 +183,15 @@ def planning(scene) -> list[dict]:
     slices = Orientations.uniform(64, goal_rotation=rel)
     start_rot = np.asarray(scene.start_rotation)
     rows = []
-    for method in ("ours, 64 orientations", "OMPL.app-style SE3 (FCL)"):
+    same = np.allclose(scene.goal_rotation, scene.start_rotation)
+    methods = (["ours, translations only"] if same else []) + [
+        "ours, 64 orientations", "OMPL.app-style SE3 (FCL)"]
+    for method in methods:
         solved, times, clipping = 0, [], 0
         for seed in SEEDS:
-            if method.startswith("ours"):
+            if method == "ours, translations only":
+                r = plan(scene, time=PLAN_TIME, seed=seed)
+            elif method.startswith("ours"):
                 r = plan(scene, slices=slices, time=PLAN_TIME, seed=seed)
             else:
                 r = plan_sampled(scene, space="SE3", time=PLAN_TIME, seed=seed)
@@ -191,7 +199,10 @@ def planning(scene) -> list[dict]:
                 continue
             solved += 1
             times.append(r.time)
-            R = Rotation.from_quat(r.orientations).as_matrix() @ start_rot.T
+            if r.orientations is None:  # translations only: the start orientation throughout
+                R = np.repeat(np.eye(3)[None], len(r.path), axis=0)
+            else:
+                R = Rotation.from_quat(r.orientations).as_matrix() @ start_rot.T
             bad, _ = pose_path_collisions(scene, r.path, R, per_metre=1e3, per_degree=1e2)
             clipping += bad > 0
         rows.append({"method": method, "solved": solved, "runs": len(SEEDS),
