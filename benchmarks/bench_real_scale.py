@@ -22,7 +22,8 @@ Per problem:
 - **planning** (apartment, alpha): ``plan(scene, slices=Orientations.uniform(64))`` (turns
   certified; and translations only where start and goal share an orientation) against ``plan_sampled(space='SE3')`` (OMPL.app's way: FCL, discrete motions),
   RRTConnect, same time budget and seeds; every returned path re-checked by
-  ``pose_path_collisions`` (FCL on the raw meshes along the continuous motion).
+  ``pose_path_collisions`` (FCL on the raw meshes along the continuous motion, a pose every
+  10^-4 of the scene's diagonal and every 0.1 degree).
 
 Writes the section between the markers in benchmarks/reports/planning.md.
 ``python benchmarks/bench_real_scale.py [--quick]`` (quick: fewer states, no planning).
@@ -182,6 +183,7 @@ def planning(scene) -> list[dict]:
     rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
     slices = Orientations.uniform(64, goal_rotation=rel)
     start_rot = np.asarray(scene.start_rotation)
+    extent = float(np.linalg.norm(np.ptp(np.asarray(scene.bounds, np.float64), axis=0)))
     rows = []
     same = np.allclose(scene.goal_rotation, scene.start_rotation)
     methods = (["ours, translations only"] if same else []) + [
@@ -203,7 +205,8 @@ def planning(scene) -> list[dict]:
                 R = np.repeat(np.eye(3)[None], len(r.path), axis=0)
             else:
                 R = Rotation.from_quat(r.orientations).as_matrix() @ start_rot.T
-            bad, _ = pose_path_collisions(scene, r.path, R, per_metre=1e3, per_degree=1e2)
+            bad, _ = pose_path_collisions(scene, r.path, R, per_metre=1e4 / extent,
+                                          per_degree=10.0)
             clipping += bad > 0
         rows.append({"method": method, "solved": solved, "runs": len(SEEDS),
                      "mean_s": float(np.mean(times)) if times else None, "clipping": clipping})
@@ -256,7 +259,8 @@ def main():
     if plans:
         lines += ["", f"Planning ({len(SEEDS)} seeds, RRTConnect, {PLAN_TIME:.0f} s each; "
                   "'clipping' = returned paths with a colliding pose when re-checked by FCL "
-                  "along the continuous motion, 10^3 poses per unit and 10^2 per degree):", "",
+                  "along the continuous motion, a pose every 10^-4 of the scene's diagonal and "
+                  "every 0.1 degree):", "",
                   "| problem | method | solved | mean s | clipping paths |", "|---|---|---|---|---|"]
         for name, rows in plans:
             for r in rows:
