@@ -221,21 +221,13 @@ def _write_scene(tmp_path):
 
 
 @pytest.fixture
-def shifted_boxes(monkeypatch):
+def shifted_boxes():
     """The old bug: the pieces' boxes converted by the grid that adds its origin (S already
     holds it), so every box sits one grid origin away from its piece."""
-    import cspace.cobstacle.pairs as pairs
-    from cspace.geometry.boxes import BoxTree
+    from metamorphic import shifted_piece_boxes
 
-    original = pairs._TreePairsCO.__init__
-
-    def shifted(self, S, T, grid, *, closed, margin=(0, 0, 0)):
-        original(self, S, T, grid, closed=closed, margin=margin)
-        o = np.asarray(grid.origin, dtype=np.float64)
-        self._set = self._pair_set(BoxTree(self.tree_s.box_lo + o, self.tree_s.box_hi + o),
-                                   self.tree_r)
-
-    monkeypatch.setattr(pairs._TreePairsCO, "__init__", shifted)
+    with shifted_piece_boxes():
+        yield
 
 
 # Along the U's bar (y in [149, 150]) with the robot (0.8 wide) overlapping it by 0.4 and its

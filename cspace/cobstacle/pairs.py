@@ -431,6 +431,18 @@ def _depth_of(q: np.ndarray, A: np.ndarray, absA: np.ndarray, exponent: int, ste
     return np.where(inside, np.maximum(d.min(axis=1), 0.0), 0.0)
 
 
+def _signed_distance(engine, q: np.ndarray) -> np.ndarray:
+    """Minus the deepest containing piece's depth inside (exact sign), the distance to the
+    nearest piece outside: what both pair engines answer for ``signed_distance``."""
+    inside = engine.contains(q)
+    out = np.zeros(len(q))
+    if inside.any():
+        out[inside] = -engine._depth(q[inside])
+    if (~inside).any():
+        out[~inside] = engine._distance_outside(q[~inside])
+    return out
+
+
 def _pair_halfspaces(S: np.ndarray, T: np.ndarray, g) -> list:
     """``(n, d)`` Python-int half-spaces ``n . k <= d`` of the piece ``S ⊕ T ⊕ [-g, g]`` of one
     pair (grid triangles ``S, T`` (3, 3) int64): the exact test both engines fall back to."""
@@ -541,13 +553,7 @@ class _TreePairsCO:
         return hit, tout
 
     def signed_distance(self, q: np.ndarray) -> np.ndarray:
-        inside = self.contains(q)
-        out = np.zeros(len(q))
-        if inside.any():
-            out[inside] = -self._depth(q[inside])
-        if (~inside).any():
-            out[~inside] = self._distance_outside(q[~inside])
-        return out
+        return _signed_distance(self, q)
 
     def _depth(self, q: np.ndarray) -> np.ndarray:
         """Deepest containing piece: the least slab distance (every slab side supports the

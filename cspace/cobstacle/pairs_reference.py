@@ -13,7 +13,7 @@ import numpy as np
 from ..geometry.distance import _tri_tri_distance
 from ..geometry.exact import _FILTER, _TINY
 from .convex import exact_plane_sign, exact_segment_entry, segment_filter
-from .pairs import _KEEP, _PAIRS, _depth_of, _pair_halfspaces, _slab_columns
+from .pairs import _KEEP, _PAIRS, _depth_of, _pair_halfspaces, _signed_distance, _slab_columns
 
 __all__ = ["_PairsCO"]
 
@@ -202,13 +202,7 @@ class _PairsCO:
         return hit, tout
 
     def signed_distance(self, q: np.ndarray) -> np.ndarray:
-        inside = self.contains(q)
-        out = np.zeros(len(q))
-        if inside.any():
-            out[inside] = -self._depth(q[inside])
-        if (~inside).any():
-            out[~inside] = self._distance_outside(q[~inside])
-        return out
+        return _signed_distance(self, q)
 
     def _depth(self, q: np.ndarray) -> np.ndarray:
         """Deepest containing piece: the least slab distance (every slab side supports the
