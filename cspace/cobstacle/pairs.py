@@ -162,7 +162,11 @@ def _primitive_normals(tri: np.ndarray) -> np.ndarray:
 def _flat(tp: "TrianglePairs", i: np.ndarray, j: np.ndarray) -> np.ndarray:
     """Exact: are the pieces of pairs ``(i, j)`` flat (parallel triangles, or a degenerate
     one)? The rule :func:`triangle_pairs` and the compiled engine apply."""
-    ns, nt = _primitive_normals(tp.S)[i], _primitive_normals(-tp.T)[j]
+    return _parallel(_primitive_normals(tp.S)[i], _primitive_normals(-tp.T)[j])
+
+
+def _parallel(ns: np.ndarray, nt: np.ndarray) -> np.ndarray:
+    """Rows of canonical primitive normals that are equal (parallel triangles) or zero."""
     return (ns == nt).all(axis=1) | ~ns.any(axis=1) | ~nt.any(axis=1)
 
 
@@ -248,7 +252,7 @@ def triangle_pairs(o_ints, o_faces, r_ints, r_faces, c_ints, bounds_g, *,
         keep = _meets(s_lo[ii] + t_lo[jj], s_hi[ii] + t_hi[jj], *bounds_g)
         out.out_of_bounds += int((~keep).sum())
         ii, jj = ii[keep], jj[keep]
-        flat = (ns[ii] == nt[jj]).all(axis=1) | ~ns[ii].any(axis=1) | ~nt[jj].any(axis=1)
+        flat = _parallel(ns[ii], nt[jj])
         if closed:
             out.flat_skipped += int(flat.sum())
             ii, jj, flat = ii[~flat], jj[~flat], flat[~flat]

@@ -55,6 +55,14 @@ cdef inline double _box_gap2(const double* slo, const double* shi, const double*
     return s
 
 
+cdef inline void _segment_box(const double* q0, const double* q1, double* lo,
+                              double* hi) noexcept nogil:
+    cdef int k
+    for k in range(3):
+        lo[k] = q0[k] if q0[k] < q1[k] else q1[k]
+        hi[k] = q1[k] if q0[k] < q1[k] else q0[k]
+
+
 cdef inline void _cross(const int64_t* a, const int64_t* b, int64_t* out) noexcept nogil:
     out[0] = a[1] * b[2] - a[2] * b[1]
     out[1] = a[2] * b[0] - a[0] * b[2]
@@ -477,7 +485,7 @@ cdef class PairSet:
     def segments(self, const double[:, ::1] Q0, const double[:, ::1] Q1):
         """Per segment row: status 0 free, 1 certainly hits, 2 undecided, and the undecided
         pairs ``(row, i, j)`` of the rows with status 2."""
-        cdef Py_ssize_t r, k, nq = Q0.shape[0]
+        cdef Py_ssize_t r, nq = Q0.shape[0]
         cdef double lo[3]
         cdef double hi[3]
         status = np.zeros(nq, dtype=np.int8)
@@ -485,9 +493,7 @@ cdef class PairSet:
         out = []
         cdef list found
         for r in range(nq):
-            for k in range(3):
-                lo[k] = Q0[r, k] if Q0[r, k] < Q1[r, k] else Q1[r, k]
-                hi[k] = Q1[r, k] if Q0[r, k] < Q1[r, k] else Q0[r, k]
+            _segment_box(&Q0[r, 0], &Q1[r, 0], lo, hi)
             found = []
             st[r] = self._traverse(lo, hi, &Q0[r, 0], &Q1[r, 0], True, found, 0)
             if st[r] == 2:
@@ -497,15 +503,13 @@ cdef class PairSet:
     def segment_pairs(self, const double[:, ::1] Q0, const double[:, ::1] Q1):
         """Every pair ``(row, i, j)`` the segment filter does not rule out (certain hits
         included): the pairs whose exact entry parameter gives the first contact."""
-        cdef Py_ssize_t r, k
+        cdef Py_ssize_t r
         cdef double lo[3]
         cdef double hi[3]
         out = []
         cdef list found
         for r in range(Q0.shape[0]):
-            for k in range(3):
-                lo[k] = Q0[r, k] if Q0[r, k] < Q1[r, k] else Q1[r, k]
-                hi[k] = Q1[r, k] if Q0[r, k] < Q1[r, k] else Q0[r, k]
+            _segment_box(&Q0[r, 0], &Q1[r, 0], lo, hi)
             found = []
             self._traverse(lo, hi, &Q0[r, 0], &Q1[r, 0], True, found, 2)
             out += [(r, i, j) for i, j in found]
@@ -554,19 +558,7 @@ cdef class PairSet:
                         if d < best:
                             best = d
                 continue
-            if top + 2 > _STACK:
-                raise RuntimeError("box tree deeper than the traversal stack")
-            if self.b_count[b] > 0 or (self.a_count[a] == 0 and (
-                    self.a_hi[a, 0] - self.a_lo[a, 0] + self.a_hi[a, 1] - self.a_lo[a, 1]
-                    + self.a_hi[a, 2] - self.a_lo[a, 2]
-                    >= self.b_hi[b, 0] - self.b_lo[b, 0] + self.b_hi[b, 1] - self.b_lo[b, 1]
-                    + self.b_hi[b, 2] - self.b_lo[b, 2])):
-                a_stack[top], b_stack[top] = self.a_first[a] + 1, b
-                a_stack[top + 1], b_stack[top + 1] = self.a_first[a], b
-            else:
-                a_stack[top], b_stack[top] = a, self.b_first[b] + 1
-                a_stack[top + 1], b_stack[top + 1] = a, self.b_first[b]
-            top += 2
+            top = self._split(a, b, a_stack, b_stack, top)
         return best ** 0.5
 
     def candidates(self, const double[:, ::1] lo, const double[:, ::1] hi):
@@ -580,6 +572,23 @@ cdef class PairSet:
             self._traverse(&lo[r, 0], &hi[r, 0], &lo[r, 0], &hi[r, 0], False, found, 1)
             out += [(r, i, j) for i, j in found]
         return np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    cdef int _split(self, int a, int b, int* a_stack, int* b_stack, int top) except -1:
+        """Push the children of the node with the larger box (or of the inner one) paired with
+        the other node; the new stack top."""
+        if top + 2 > _STACK:
+            raise RuntimeError("box tree deeper than the traversal stack")
+        if self.b_count[b] > 0 or (self.a_count[a] == 0 and (
+                self.a_hi[a, 0] - self.a_lo[a, 0] + self.a_hi[a, 1] - self.a_lo[a, 1]
+                + self.a_hi[a, 2] - self.a_lo[a, 2]
+                >= self.b_hi[b, 0] - self.b_lo[b, 0] + self.b_hi[b, 1] - self.b_lo[b, 1]
+                + self.b_hi[b, 2] - self.b_lo[b, 2])):
+            a_stack[top], b_stack[top] = self.a_first[a] + 1, b
+            a_stack[top + 1], b_stack[top + 1] = self.a_first[a], b
+        else:
+            a_stack[top], b_stack[top] = a, self.b_first[b] + 1
+            a_stack[top + 1], b_stack[top + 1] = a, self.b_first[b]
+        return top + 2
 
     cdef int _traverse(self, const double* qlo, const double* qhi, const double* q0,
                        const double* q1, bint segment, list found, int mode) except -1:
@@ -624,19 +633,5 @@ cdef class PairSet:
                             status = 2
                             found.append((i, j))
                 continue
-            if top + 2 > _STACK:
-                raise RuntimeError("box tree deeper than the traversal stack")
-            # split the node with the larger box (or the inner one)
-            if b_leaf or (not a_leaf and (self.a_hi[a, 0] - self.a_lo[a, 0]
-                                          + self.a_hi[a, 1] - self.a_lo[a, 1]
-                                          + self.a_hi[a, 2] - self.a_lo[a, 2]
-                                          >= self.b_hi[b, 0] - self.b_lo[b, 0]
-                                          + self.b_hi[b, 1] - self.b_lo[b, 1]
-                                          + self.b_hi[b, 2] - self.b_lo[b, 2])):
-                a_stack[top], b_stack[top] = self.a_first[a] + 1, b
-                a_stack[top + 1], b_stack[top + 1] = self.a_first[a], b
-            else:
-                a_stack[top], b_stack[top] = a, self.b_first[b] + 1
-                a_stack[top + 1], b_stack[top + 1] = a, self.b_first[b]
-            top += 2
+            top = self._split(a, b, a_stack, b_stack, top)
         return status
