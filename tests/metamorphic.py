@@ -234,7 +234,7 @@ def judge(ours: np.ndarray, Q: np.ndarray, oracle, error_bound: float) -> Verdic
 @contextlib.contextmanager
 def shifted_piece_boxes():
     """Re-introduce the bug of issue #27 while inside: triangle-pair boxes (the obstacle's box
-    tree) shifted by the grid's origin (added twice). A check that passes with it is a check that cannot fail."""
+    tree's k-DOPs) shifted by the grid's origin (added twice). A check that passes with it is a check that cannot fail."""
     import cspace.cobstacle.pairs as pairs
 
     from cspace.geometry.boxes import BoxTree
@@ -243,7 +243,7 @@ def shifted_piece_boxes():
 
     def shifted(self, S, T, grid, *, closed, margin=(0, 0, 0)):
         init(self, S, T, grid, closed=closed, margin=margin)
-        o = np.asarray(grid.origin, dtype=np.float64)
+        o = (np.asarray(grid.origin, dtype=np.int64) @ self.directions.T).astype(np.float64)
         self._set = self._pair_set(BoxTree(self.tree_s.box_lo + o, self.tree_s.box_hi + o),
                                    self.tree_r)
 

@@ -67,9 +67,14 @@ def test_the_compiled_engine_answers_as_the_reference(offset, closed, margin):
     inside = ref.contains(q)
     assert 50 < inside.sum() < len(q) - 50
     assert np.array_equal(new.contains(q), inside)
+    # one state at a time (the planner's path: no arrays through the kernel)
+    assert [bool(new.contains(x[None])[0]) for x in q] == inside.tolist()
     q1 = q + rng.normal(scale=0.2, size=q.shape)
     q1[::7] = q[::7]  # points as segments
-    assert np.array_equal(new.segments(q, q1, False)[0], ref.segments(q, q1, False)[0])
+    free = ref.segments(q, q1, False)[0]
+    assert np.array_equal(new.segments(q, q1, False)[0], free)
+    assert [bool(new.segments(a[None], b[None], False)[0][0]) for a, b in zip(q, q1)] \
+        == free.tolist()
     h_new, t_new = new.segments(q[:120], q1[:120], True)
     h_ref, t_ref = ref.segments(q[:120], q1[:120], True)
     assert np.array_equal(h_new, h_ref) and np.array_equal(t_new, t_ref, equal_nan=True)
@@ -94,21 +99,49 @@ def test_box_tree_nodes_hold_their_boxes():
         assert (t.lo[k] <= lo[idx]).all() and (hi[idx] <= t.hi[k]).all() and t.count[k] <= 3
 
 
-def test_candidates_are_every_pair_whose_box_meets():
-    """The trees' candidates equal a brute-force box test over every pair."""
+def test_candidates_are_every_pair_whose_dop_meets():
+    """The trees' candidates hold every pair whose k-DOP meets the query box's (brute force in
+    integers over every pair), and nothing whose axis box misses it: the diagonals only prune."""
     grid, o_ints, o_faces, r_ints, r_faces = _operands(OFF, 5)
     c_ints = np.zeros(3, np.int64)
     S = o_ints[o_faces] + np.asarray(grid.origin)
     T = c_ints - r_ints[r_faces]
     new = _TreePairsCO(o_ints[o_faces], T, grid, closed=False)
+    D = new.directions
+    assert len(D) == 13
     rng = np.random.default_rng(1)
     Q = np.ldexp(rng.uniform(new.lo[0], new.hi[0], (60, 3)), -grid.exponent)
     lo, hi = np.floor(Q - 300), np.ceil(Q + 300)
     got = {tuple(x) for x in new._set.candidates(lo, hi).tolist()}
-    p_lo = S.min(axis=1)[:, None] + T.min(axis=1)[None]
-    p_hi = S.max(axis=1)[:, None] + T.max(axis=1)[None]
-    want = set()
+    # the query box's k-DOP: its corners' projections (integers, exact)
+    corners = np.array([[a, b, c] for a in (0, 1) for b in (0, 1) for c in (0, 1)])
+    box = np.where(corners[None], hi[:, None], lo[:, None]).astype(np.int64) @ D.T
+    ps, pt = S @ D.T, T @ D.T  # (n, 3, k)
+    p_lo = ps.min(axis=1)[:, None] + pt.min(axis=1)[None]
+    p_hi = ps.max(axis=1)[:, None] + pt.max(axis=1)[None]
+    want, axes = set(), set()
     for r in range(len(Q)):
-        m = ((p_lo <= hi[r]) & (lo[r] <= p_hi)).all(axis=2)
-        want |= {(r, i, j) for i, j in zip(*np.nonzero(m))}
-    assert got == want and len(want) > 100
+        meet = (p_lo <= box[r].max(axis=0)) & (box[r].min(axis=0) <= p_hi)
+        want |= {(r, i, j) for i, j in zip(*np.nonzero(meet.all(axis=2)))}
+        axes |= {(r, i, j) for i, j in zip(*np.nonzero(meet[..., :3].all(axis=2)))}
+    assert want <= got <= axes and len(want) > 100 and len(axes) > len(want)
+
+
+@pytest.mark.parametrize("offset", [np.zeros(3), OFF], ids=["origin", "off-origin"])
+def test_the_box_index_finds_every_box_a_query_meets(offset):
+    """The union's broad phase (a compiled walk of one box tree) against brute force, with
+    boxes touching the queries exactly (closed boxes: touching counts)."""
+    from cspace.geometry._kernels import load
+
+    rng = np.random.default_rng(4)
+    lo = rng.uniform(-50, 50, (300, 3)) + offset
+    hi = lo + rng.uniform(0, 8, (300, 3))
+    index = load("pairquery").BoxIndex(BoxTree(lo, hi, leaf=3))
+    q_lo = np.vstack([rng.uniform(-60, 60, (200, 3)) + offset, hi[:50], lo[50:100]])
+    q_hi = q_lo + np.vstack([rng.uniform(0, 5, (200, 3)), np.zeros((100, 3))])
+    rows, items = index.overlaps(q_lo, q_hi)
+    want = ((lo[None] <= q_hi[:, None]) & (q_lo[:, None] <= hi[None])).all(axis=2)
+    assert {(int(r), int(i)) for r, i in zip(rows, items)} == set(zip(*map(list, np.nonzero(want))))
+    assert want.sum() > 100
+    for r in range(200, 300):  # corners: the point queries
+        assert sorted(index.point(*q_lo[r])) == np.flatnonzero(want[r]).tolist()

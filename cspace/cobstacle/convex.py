@@ -8,6 +8,7 @@ C-obstacle stored as exact grid-integer half-spaces: float-filtered plane signs
 
 from __future__ import annotations
 
+import math
 from fractions import Fraction
 
 import numpy as np
@@ -36,6 +37,9 @@ def _translations(q, what: str = "q") -> tuple[np.ndarray, bool]:
                                 f"{type(q).__name__}") from None
     single = a.ndim == 1
     if single:
+        # one state, as a planner asks: three float checks cost less than a ufunc's call
+        if a.shape == (3,) and all(map(math.isfinite, a.tolist())):
+            return a[None, :], True
         a = a[None, :]
     if a.ndim != 2 or a.shape[1] != 3:
         raise InvalidQueryError(f"{what} must be (3,) or (k, 3), got shape {np.shape(q)}")

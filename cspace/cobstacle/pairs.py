@@ -103,9 +103,10 @@ _KEEP = 1 << 15
 
 #: Bytes a triangle-pair C-obstacle takes per triangle of its two operands (obstacle triangles
 #: plus robot triangles) while it lives (``held``) and while it is built (``peak``), its share of
-#: the scene model included: tracemalloc measured 523-543 and 726-745 (tests/test_memory.py
-#: holds them to it). Linear: no pair is stored.
-TRIANGLE_BYTES = {"held": 640, "peak": 1024}
+#: the scene model included: tracemalloc measured 1003 and 1207 (tests/test_memory.py holds
+#: them to it; the trees' 26-DOPs take 13 bounds a side where boxes took 3). Linear: no pair
+#: is stored.
+TRIANGLE_BYTES = {"held": 1152, "peak": 1408}
 
 
 def pairs_memory(n_triangles: int) -> tuple[int, int]:
@@ -481,7 +482,7 @@ class _TreePairsCO:
 
     def __init__(self, S: np.ndarray, T: np.ndarray, grid, *, closed: bool,
                  margin=(0, 0, 0)):
-        from ..geometry.boxes import BoxTree
+        from ..geometry.boxes import BoxTree, dop_bounds
 
         # S (obstacle triangles, in grid's frame) moved to the scene frame by the grid's
         # origin, exactly: T holds vectors (c - t), so every piece is in the scene frame and a
@@ -495,13 +496,19 @@ class _TreePairsCO:
         self.grown = bool(self.g.any())
         self.closed = bool(closed)
         self.n_slabs = 38 if self.grown else 17
-        s_lo, s_hi = self.S.min(axis=1) - self.g, self.S.max(axis=1) + self.g
-        r_lo, r_hi = -self.T.max(axis=1), -self.T.min(axis=1)  # boxes of -T = t - c
+        # k-DOPs of the obstacle's grown triangles and of -T = t - c, on directions both share
+        s_lo, s_hi, D = dop_bounds(self.S, self.g)
+        r_lo, r_hi, D_r = dop_bounds(-self.T)
+        if len(D_r) < len(D):
+            s_lo, s_hi, D = s_lo[:, :3], s_hi[:, :3], D_r
+        r_lo, r_hi = r_lo[:, :len(D)], r_hi[:, :len(D)]
+        self.directions = D
         self.tree_s, self.tree_r = BoxTree(s_lo, s_hi), BoxTree(r_lo, r_hi)
-        # the union's box (grid units, scene frame)
-        self.lo = self.grid.to_float(s_lo.min(axis=0) - r_hi.max(axis=0))[None]
-        self.hi = self.grid.to_float(s_hi.max(axis=0) - r_lo.min(axis=0))[None]
+        # the union's box (grid units, scene frame): the axis columns
+        self.lo = self.grid.to_float(self.tree_s.lo[0, :3] - self.tree_r.hi[0, :3])[None]
+        self.hi = self.grid.to_float(self.tree_s.hi[0, :3] - self.tree_r.lo[0, :3])[None]
         self._set = self._pair_set(self.tree_s, self.tree_r)
+        self._scale = float(np.ldexp(1.0, -self.exponent))  # scene units to grid units, exact
 
     def _pair_set(self, tree_s, tree_r):
         """The compiled engine's view of the operands and the two trees."""
@@ -509,7 +516,7 @@ class _TreePairsCO:
         return _pairquery.PairSet(
             self.S.reshape(-1, 9), self.T.reshape(-1, 9), _primitive_normals(self.S),
             _primitive_normals(-self.T), raw(self.S).ravel(), raw(self.T).ravel(),
-            self.g, self.closed, tree_s, tree_r)
+            self.g, self.closed, tree_s, tree_r, self.directions)
 
     @property
     def nbytes(self) -> int:
@@ -525,25 +532,42 @@ class _TreePairsCO:
     def _halfspaces(self, i: int, j: int) -> list:
         return _pair_halfspaces(self.S[i], self.T[j], self.g)
 
+    def _in_piece(self, i: int, j: int, x: list) -> bool:
+        """Exactly: the point ``x`` (scene frame, floats) lies in the piece of pair ``(i, j)``."""
+        return all(exact_plane_sign(n, d, self.exponent, x) <= 0
+                   for n, d in self._halfspaces(i, j))
+
+    def _meets_piece(self, i: int, j: int, x0: list, x1: list) -> bool:
+        """Exactly: the closed segment ``x0 x1`` meets the piece of pair ``(i, j)``."""
+        return exact_segment_entry(self._halfspaces(i, j), self.exponent, x0, x1) is not None
+
     def contains(self, q: np.ndarray) -> np.ndarray:
+        if len(q) == 1:  # one state, as a planner asks: no array round trips
+            x = q[0].tolist()
+            status, todo = self._set.contains_one(*x, self._scale)
+            return np.array([status == 1 or (status == 2 and any(
+                self._in_piece(i, j, x) for i, j in todo))])
         status, todo = self._set.contains(self._grid_units(q))
         out = status == 1
         for r, i, j in todo.tolist():
             if not out[r]:
-                x = q[r].tolist()
-                out[r] = all(exact_plane_sign(n, d, self.exponent, x) <= 0
-                             for n, d in self._halfspaces(i, j))
+                out[r] = self._in_piece(i, j, q[r].tolist())
         return out
 
     def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
         hit = np.zeros(len(q0), dtype=bool)
         tout = np.full(len(q0), np.nan)
+        if not want_t and len(q0) == 1:
+            x0, x1 = q0[0].tolist(), q1[0].tolist()
+            status, todo = self._set.segment_one(*x0, *x1, self._scale)
+            hit[0] = status == 1 or (status == 2 and any(
+                self._meets_piece(i, j, x0, x1) for i, j in todo))
+            return hit, tout
         if not want_t:
             status, todo = self._set.segments(self._grid_units(q0), self._grid_units(q1))
             hit[status == 1] = True
             for r, i, j in todo.tolist():
-                if not hit[r] and exact_segment_entry(self._halfspaces(i, j), self.exponent,
-                                                      q0[r].tolist(), q1[r].tolist()) is not None:
+                if not hit[r] and self._meets_piece(i, j, q0[r].tolist(), q1[r].tolist()):
                     hit[r] = True
             return hit, tout
         # first contact: the exact entry of every pair the filter does not rule out

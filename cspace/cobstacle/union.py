@@ -8,7 +8,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..geometry._kernels import load
+from ..geometry.boxes import BoxTree
 from ..mesh.operands import _Mesh
+
+_pairquery = load("pairquery")
 
 
 class _UnionOf:
@@ -24,23 +28,24 @@ class _UnionOf:
         # Broad phase: each C-obstacle's box, widened by 2**-40 of its coordinates (float
         # vertices of rational points are off by an ulp at most): a query outside a box is
         # outside that C-obstacle. Only prunes; each engine still decides exactly.
+        self._index = None
         if self.cos:
             B = np.array([np.asarray(co.bounds, dtype=np.float64) for co in self.cos])
             pad = np.ldexp(np.abs(B).max(axis=1), -40) + 1e-300
-            self._lo, self._hi = B[:, 0] - pad, B[:, 1] + pad
-        else:
-            self._lo = self._hi = np.zeros((0, 3))
+            self._index = _pairquery.BoxIndex(BoxTree(B[:, 0] - pad, B[:, 1] + pad))
 
     def _near(self, lo: np.ndarray, hi: np.ndarray):
-        """Per engine, the rows whose box ``[lo, hi]`` meets the engine's box."""
-        step = max(1, (1 << 18) // max(1, len(self.engines)))
-        hits = []
-        for s in range(0, len(lo), step):
-            m = ((self._lo[None] <= hi[s:s + step, None])
-                 & (lo[s:s + step, None] <= self._hi[None])).all(axis=2)
-            hits.append(m)
-        M = np.concatenate(hits) if hits else np.zeros((0, len(self.engines)), bool)
-        return [(k, np.nonzero(M[:, k])[0]) for k in np.nonzero(M.any(axis=0))[0].tolist()]
+        """Per engine, the rows whose box ``[lo, hi]`` meets the engine's box (a box tree over
+        the engines' boxes, compiled)."""
+        if self._index is None or not len(lo):
+            return []
+        rows, items = self._index.overlaps(np.ascontiguousarray(lo, dtype=np.float64),
+                                           np.ascontiguousarray(hi, dtype=np.float64))
+        order = np.lexsort((rows, items))
+        rows, items = rows[order], items[order]
+        cut = np.flatnonzero(np.diff(items)) + 1
+        return [(int(k[0]), r) for k, r in zip(np.split(items, cut), np.split(rows, cut))
+                if len(k)]
 
     @property
     def vertices(self) -> np.ndarray:
@@ -55,6 +60,9 @@ class _UnionOf:
         return self._joined.faces
 
     def contains(self, q: np.ndarray) -> np.ndarray:
+        if len(q) == 1 and self._index is not None:  # one state, as a planner asks
+            ks = self._index.point(*q[0].tolist())
+            return np.array([any(self.engines[k].contains(q)[0] for k in ks)])
         out = np.zeros(len(q), dtype=bool)
         for k, rows in self._near(q, q):
             rest = rows[~out[rows]]
@@ -64,6 +72,11 @@ class _UnionOf:
 
     def segments(self, q0: np.ndarray, q1: np.ndarray, want_t: bool):
         hit, t = np.zeros(len(q0), dtype=bool), np.full(len(q0), np.nan)
+        if len(q0) == 1 and not want_t and self._index is not None:  # one motion
+            ks = self._index.box(*np.minimum(q0[0], q1[0]).tolist(),
+                                 *np.maximum(q0[0], q1[0]).tolist())
+            hit[0] = any(self.engines[k].segments(q0, q1, False)[0][0] for k in ks)
+            return hit, t
         for k, rows in self._near(np.minimum(q0, q1), np.maximum(q0, q1)):
             e = self.engines[k]
             if want_t:  # the earliest contact over all

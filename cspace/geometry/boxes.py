@@ -12,7 +12,7 @@ import numpy as np
 from ._kernels import load
 from .tritri import _check_soup
 
-__all__ = ["candidate_pairs", "box_pairs", "BoxSweep", "BoxTree"]
+__all__ = ["candidate_pairs", "box_pairs", "BoxSweep", "BoxTree", "DOP_DIRECTIONS", "dop_bounds"]
 
 
 # The box sweep, the pair classification and the endpoint coordinates run compiled
@@ -152,37 +152,42 @@ class BoxSweep:
 
 
 class BoxTree:
-    """A binary tree of integer boxes (a BVH): each node's box holds its children's.
+    """A binary tree of integer boxes or k-DOPs (a BVH): each node's bounds hold its children's.
 
-    Built top-down, splitting at the median box centre along the node's longest axis, with
-    at most ``leaf`` boxes a leaf. Node ``k``'s box is ``lo[k], hi[k]`` (float64 of grid
-    integers below 2**53, so exact); an inner node's children are ``first[k]`` and
-    ``first[k] + 1`` (``count[k] == 0``); a leaf holds the boxes ``order[first[k]:first[k] +
-    count[k]]``. Node 0 is the root. Only prunes: what a query keeps is decided exactly after.
+    ``lo, hi (n, k)`` bound each item on ``k >= 3`` directions, the first three the axes (a box
+    when ``k == 3``; :func:`dop_bounds` gives the k-DOPs of triangles). Built top-down,
+    splitting at the median centre along the node's longest axis, with at most ``leaf`` items a
+    leaf. Node ``k``'s bounds are ``lo[k], hi[k]`` (float64 of grid integers below 2**53, so
+    exact); an inner node's children are ``first[k]`` and ``first[k] + 1`` (``count[k] == 0``);
+    a leaf holds the items ``order[first[k]:first[k] + count[k]]``. Node 0 is the root. Only
+    prunes: what a query keeps is decided exactly after.
     """
 
     def __init__(self, lo: np.ndarray, hi: np.ndarray, leaf: int = 4):
-        lo = np.asarray(lo, dtype=np.float64).reshape(-1, 3)
-        hi = np.asarray(hi, dtype=np.float64).reshape(-1, 3)
+        lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+        k = lo.shape[-1] if lo.ndim == 2 else 3
+        lo, hi = lo.reshape(-1, k), hi.reshape(-1, k)
+        if k < 3 or hi.shape != lo.shape:
+            raise ValueError(f"box tree bounds must be (n, k >= 3) pairs, got {lo.shape}, {hi.shape}")
         if not len(lo):
             raise ValueError("a box tree needs at least one box")
-        centre = lo + hi
+        centre = lo[:, :3] + hi[:, :3]
         order = np.arange(len(lo), dtype=np.int64)
         n_max = 2 * len(lo)
-        nlo, nhi = np.empty((n_max, 3)), np.empty((n_max, 3))
+        nlo, nhi = np.empty((n_max, k)), np.empty((n_max, k))
         first, count = np.zeros(n_max, np.int64), np.zeros(n_max, np.int64)
         stack, n = [(0, 0, len(lo))], 1  # (node, start, end) into order
         while stack:
-            k, a, b = stack.pop()
+            node, a, b = stack.pop()
             idx = order[a:b]
-            nlo[k], nhi[k] = lo[idx].min(axis=0), hi[idx].max(axis=0)
+            nlo[node], nhi[node] = lo[idx].min(axis=0), hi[idx].max(axis=0)
             if b - a <= leaf:
-                first[k], count[k] = a, b - a
+                first[node], count[node] = a, b - a
                 continue
-            axis = int(np.argmax(nhi[k] - nlo[k]))
+            axis = int(np.argmax(nhi[node, :3] - nlo[node, :3]))
             half = (b - a) // 2
             order[a:b] = idx[np.argpartition(centre[idx, axis], half, kind="introselect")]
-            first[k] = n
+            first[node] = n
             stack += [(n, a, a + half), (n + 1, a + half, b)]
             n += 2
         self.lo, self.hi = np.ascontiguousarray(nlo[:n]), np.ascontiguousarray(nhi[:n])
@@ -195,3 +200,29 @@ class BoxTree:
 
     def __repr__(self) -> str:
         return f"BoxTree(boxes={len(self.order)}, nodes={len(self.first)})"
+
+
+# The directions the pair trees bound triangles on: the 3 axes, the 6 face diagonals and the
+# 4 body diagonals (a 26-DOP). Only translations move a robot's tree, so a k-DOP stays a
+# k-DOP under every query; on the alpha puzzle's near-contact states it keeps 16x fewer
+# triangle pairs than the axis boxes (37 against 594 per free state).
+DOP_DIRECTIONS = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1],
+                           [1, 1, 0], [1, -1, 0], [1, 0, 1], [1, 0, -1], [0, 1, 1], [0, 1, -1],
+                           [1, 1, 1], [1, 1, -1], [1, -1, 1], [-1, 1, 1]], dtype=np.int64)
+
+
+def dop_bounds(tris: np.ndarray, grow=(0, 0, 0)) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The k-DOPs of grid-integer triangles ``tris (n, m, 3)`` grown by the box ``[-grow,
+    grow]``: ``lo, hi (n, k)`` float64 and the directions ``(k, 3)`` used.
+
+    The projections are integers, exact in float64 while every one stays below 2**52 in
+    magnitude; beyond that (a grid origin near its 2**53 limit) only the axes are used, which
+    is the plain box.
+    """
+    tris = np.asarray(tris, dtype=np.int64)
+    g = np.abs(np.asarray(grow, dtype=np.int64).reshape(3))
+    D = DOP_DIRECTIONS if np.abs(tris).max(initial=0) + g.max() < 2 ** 50 else DOP_DIRECTIONS[:3]
+    P = tris @ D.T  # (n, m, k) exact integers
+    G = np.abs(D) @ g
+    return ((P.min(axis=1) - G).astype(np.float64), (P.max(axis=1) + G).astype(np.float64),
+            np.ascontiguousarray(D))

@@ -4,11 +4,13 @@ without enumerating the pairs.
 
 The C-obstacle is ``∪ S_i ⊕ T_j ⊕ box`` over obstacle triangles ``S_i`` and robot vectors
 ``T_j = c - t_j`` (grid integers, held as exact float64; ``box = [-g, g]``). The piece of pair
-``(i, j)`` holds a query ``Q`` only if the box of ``S_i`` grown by ``g`` meets the box of
-``Q - T_j``: two box trees (:class:`cspace.geometry.boxes.BoxTree`, one over the obstacle's
-grown triangle boxes, one over the boxes of ``-T_j``) are traversed together with the query
-box added to the robot side. Every box comparison is between a difference of two grid
-integers (exact in float64 below 2**53) and the query: exact, no candidate is missed.
+``(i, j)`` holds a query ``Q`` only if the k-DOP of ``S_i`` grown by ``g`` meets the k-DOP of
+``Q - T_j``: two trees (:class:`cspace.geometry.boxes.BoxTree`, one over the obstacle's
+grown triangle k-DOPs, one over those of ``-T_j``, on the directions ``D`` of
+:func:`cspace.geometry.boxes.dop_bounds`) are traversed together with the query's k-DOP
+added to the robot side. Every comparison is between a difference of two grid integers
+(exact in float64 below 2**53) and the query's projection, widened by that projection's
+rounding bound: no candidate is missed.
 
 Each candidate is then tested on the slabs of :func:`cspace.cobstacle.pairs.pair_planes`
 with the same float filter as the numpy engine (``cspace.cobstacle.pairs_reference._PairsCO``, the reference these are tested
@@ -27,14 +29,16 @@ cdef double _EPS = 2.0 ** -53
 cdef double _FILTER = 16.0 * _EPS
 cdef double _TINY = 2.0 ** -1000
 cdef int _STACK = 512
+cdef int _MAXK = 13
 
 
 cdef inline bint _boxes_meet(const double* slo, const double* shi, const double* rlo,
-                             const double* rhi, const double* qlo, const double* qhi) noexcept nogil:
-    # the box [slo, shi] meets [qlo + rlo, qhi + rhi], as slo - rhi <= qhi and qlo <= shi - rlo:
-    # differences of grid integers below 2**53, exact
+                             const double* rhi, const double* qlo, const double* qhi,
+                             int K) noexcept nogil:
+    # the k-DOP [slo, shi] meets [qlo + rlo, qhi + rhi], as slo - rhi <= qhi and
+    # qlo <= shi - rlo on every direction: differences of grid integers below 2**53, exact
     cdef int k
-    for k in range(3):
+    for k in range(K):
         if slo[k] - rhi[k] > qhi[k] or qlo[k] > shi[k] - rlo[k]:
             return False
     return True
@@ -43,7 +47,7 @@ cdef inline bint _boxes_meet(const double* slo, const double* shi, const double*
 cdef inline double _box_gap2(const double* slo, const double* shi, const double* rlo,
                             const double* rhi, const double* q) noexcept nogil:
     # squared distance between the box [slo, shi] and [q + rlo, q + rhi] (a lower bound for
-    # any two triangles in them)
+    # any two triangles in them); the k-DOPs' first three directions are the axes
     cdef double g, s = 0.0
     cdef int k
     for k in range(3):
@@ -53,14 +57,6 @@ cdef inline double _box_gap2(const double* slo, const double* shi, const double*
         if g > 0.0:
             s += g * g
     return s
-
-
-cdef inline void _segment_box(const double* q0, const double* q1, double* lo,
-                              double* hi) noexcept nogil:
-    cdef int k
-    for k in range(3):
-        lo[k] = q0[k] if q0[k] < q1[k] else q1[k]
-        hi[k] = q1[k] if q0[k] < q1[k] else q0[k]
 
 
 cdef inline void _cross(const int64_t* a, const int64_t* b, int64_t* out) noexcept nogil:
@@ -351,9 +347,22 @@ cdef class PairSet:
     cdef const double[:, ::1] b_blo
     cdef const double[:, ::1] b_bhi
     cdef object _keep
+    cdef double D[3 * 13]
+    cdef int nz[13]
+    cdef int K
 
-    def __init__(self, S, T, ns, nt, nsf, ntf, g, bint closed, tree_s, tree_r):
+    def __init__(self, S, T, ns, nt, nsf, ntf, g, bint closed, tree_s, tree_r, D):
         self._keep = (S, T, ns, nt, nsf, ntf, tree_s, tree_r)
+        D = np.asarray(D, dtype=np.int64).reshape(-1, 3)
+        if not 3 <= len(D) <= _MAXK or tree_s.lo.shape[1] != len(D) \
+                or tree_r.lo.shape[1] != len(D) or (np.abs(D) > 1).any():
+            raise ValueError("the trees' bounds must have one column per direction of D "
+                             "(3 to 13 directions, entries -1, 0, 1)")
+        self.K = len(D)
+        for k in range(self.K):
+            self.nz[k] = int((D[k] != 0).sum())
+            for c in range(3):
+                self.D[3 * k + c] = float(D[k, c])
         self.S, self.T = S, T
         self.Sf, self.Tf = S.astype(np.float64), T.astype(np.float64)
         self._keep += (self.Sf, self.Tf)
@@ -368,6 +377,42 @@ cdef class PairSet:
         self.b_lo, self.b_hi, self.b_first, self.b_count, self.b_order = (
             tree_r.lo, tree_r.hi, tree_r.first, tree_r.count, tree_r.order)
         self.b_blo, self.b_bhi = tree_r.box_lo, tree_r.box_hi
+
+    cdef void _dop(self, const double* lo, const double* hi, double* out_lo,
+                   double* out_hi) noexcept nogil:
+        """The query's bounds on every direction: of the box ``[lo, hi]`` (a point when
+        ``lo == hi``), widened on a diagonal by the rounding of its two sums (each within
+        2**-53 of a partial sum below ``m``; 2**-50 m covers them and the widening's own)."""
+        cdef int k, c
+        cdef double a, b, m, d, e
+        for k in range(self.K):
+            a, b, m = 0.0, 0.0, 0.0
+            for c in range(3):
+                d = self.D[3 * k + c]
+                if d > 0:
+                    a += lo[c]
+                    b += hi[c]
+                elif d < 0:
+                    a -= hi[c]
+                    b -= lo[c]
+                if d != 0:
+                    m += fabs(lo[c]) if fabs(lo[c]) > fabs(hi[c]) else fabs(hi[c])
+            e = m * 2.0 ** -50 if self.nz[k] > 1 else 0.0
+            out_lo[k], out_hi[k] = a - e, b + e
+
+    cdef void _dop_segment(self, const double* q0, const double* q1, double* out_lo,
+                           double* out_hi) noexcept nogil:
+        """The bounds of the segment ``q0 q1`` on every direction (of its two ends)."""
+        cdef double lo1[13]
+        cdef double hi1[13]
+        cdef int k
+        self._dop(q0, q0, out_lo, out_hi)
+        self._dop(q1, q1, lo1, hi1)
+        for k in range(self.K):
+            if lo1[k] < out_lo[k]:
+                out_lo[k] = lo1[k]
+            if hi1[k] > out_hi[k]:
+                out_hi[k] = hi1[k]
 
     cdef inline bint _flat_skipped(self, Py_ssize_t i, Py_ssize_t j) noexcept nogil:
         if not self.closed:
@@ -475,25 +520,54 @@ cdef class PairSet:
         cdef signed char[::1] st = status
         out = []
         cdef list found
+        cdef double lo[13]
+        cdef double hi[13]
         for r in range(nq):
             found = []
-            st[r] = self._traverse(&Q[r, 0], &Q[r, 0], &Q[r, 0], &Q[r, 0], False, found, 0)
+            self._dop(&Q[r, 0], &Q[r, 0], lo, hi)
+            st[r] = self._traverse(lo, hi, &Q[r, 0], &Q[r, 0], False, found, 0)
             if st[r] == 2:
                 out += [(r, i, j) for i, j in found]
         return status, np.array(out, dtype=np.int64).reshape(-1, 3)
+
+    def contains_one(self, double x, double y, double z, double scale):
+        """One query ``(x, y, z)`` in the scene's units, times ``scale`` (a power of two: exact)
+        into grid units: ``(status, pairs)`` as one row of :meth:`contains`, the undecided
+        pairs ``(i, j)`` a list. A planner's single state without array round trips."""
+        cdef double q[3]
+        cdef double lo[13]
+        cdef double hi[13]
+        q[0], q[1], q[2] = x * scale, y * scale, z * scale
+        found = []
+        self._dop(q, q, lo, hi)
+        return self._traverse(lo, hi, q, q, False, found, 0), found
+
+    def segment_one(self, double x0, double y0, double z0, double x1, double y1, double z1,
+                    double scale):
+        """One segment, as :meth:`contains_one`: ``(status, pairs)`` as one row of
+        :meth:`segments`."""
+        cdef double q0[3]
+        cdef double q1[3]
+        cdef double lo[13]
+        cdef double hi[13]
+        q0[0], q0[1], q0[2] = x0 * scale, y0 * scale, z0 * scale
+        q1[0], q1[1], q1[2] = x1 * scale, y1 * scale, z1 * scale
+        found = []
+        self._dop_segment(q0, q1, lo, hi)
+        return self._traverse(lo, hi, q0, q1, True, found, 0), found
 
     def segments(self, const double[:, ::1] Q0, const double[:, ::1] Q1):
         """Per segment row: status 0 free, 1 certainly hits, 2 undecided, and the undecided
         pairs ``(row, i, j)`` of the rows with status 2."""
         cdef Py_ssize_t r, nq = Q0.shape[0]
-        cdef double lo[3]
-        cdef double hi[3]
+        cdef double lo[13]
+        cdef double hi[13]
         status = np.zeros(nq, dtype=np.int8)
         cdef signed char[::1] st = status
         out = []
         cdef list found
         for r in range(nq):
-            _segment_box(&Q0[r, 0], &Q1[r, 0], lo, hi)
+            self._dop_segment(&Q0[r, 0], &Q1[r, 0], lo, hi)
             found = []
             st[r] = self._traverse(lo, hi, &Q0[r, 0], &Q1[r, 0], True, found, 0)
             if st[r] == 2:
@@ -504,12 +578,12 @@ cdef class PairSet:
         """Every pair ``(row, i, j)`` the segment filter does not rule out (certain hits
         included): the pairs whose exact entry parameter gives the first contact."""
         cdef Py_ssize_t r
-        cdef double lo[3]
-        cdef double hi[3]
+        cdef double lo[13]
+        cdef double hi[13]
         out = []
         cdef list found
         for r in range(Q0.shape[0]):
-            _segment_box(&Q0[r, 0], &Q1[r, 0], lo, hi)
+            self._dop_segment(&Q0[r, 0], &Q1[r, 0], lo, hi)
             found = []
             self._traverse(lo, hi, &Q0[r, 0], &Q1[r, 0], True, found, 2)
             out += [(r, i, j) for i, j in found]
@@ -562,14 +636,17 @@ cdef class PairSet:
         return best ** 0.5
 
     def candidates(self, const double[:, ::1] lo, const double[:, ::1] hi):
-        """Every pair ``(row, i, j)`` whose piece box meets the query box ``lo[row], hi[row]``
+        """Every pair ``(row, i, j)`` whose piece k-DOP meets the query box ``lo[row], hi[row]``
         (flat pairs of a closed operand left out); no slab is evaluated."""
         cdef Py_ssize_t r
+        cdef double qlo[13]
+        cdef double qhi[13]
         out = []
         cdef list found
         for r in range(lo.shape[0]):
             found = []
-            self._traverse(&lo[r, 0], &hi[r, 0], &lo[r, 0], &hi[r, 0], False, found, 1)
+            self._dop(&lo[r, 0], &hi[r, 0], qlo, qhi)
+            self._traverse(qlo, qhi, &lo[r, 0], &hi[r, 0], False, found, 1)
             out += [(r, i, j) for i, j in found]
         return np.array(out, dtype=np.int64).reshape(-1, 3)
 
@@ -606,7 +683,7 @@ cdef class PairSet:
             top -= 1
             a, b = a_stack[top], b_stack[top]
             if not _boxes_meet(&self.a_lo[a, 0], &self.a_hi[a, 0], &self.b_lo[b, 0],
-                               &self.b_hi[b, 0], qlo, qhi):
+                               &self.b_hi[b, 0], qlo, qhi, self.K):
                 continue
             a_leaf, b_leaf = self.a_count[a] > 0, self.b_count[b] > 0
             if a_leaf and b_leaf:
@@ -615,7 +692,8 @@ cdef class PairSet:
                     for y in range(self.b_first[b], self.b_first[b] + self.b_count[b]):
                         j = self.b_order[y]
                         if not _boxes_meet(&self.a_blo[i, 0], &self.a_bhi[i, 0],
-                                           &self.b_blo[j, 0], &self.b_bhi[j, 0], qlo, qhi):
+                                           &self.b_blo[j, 0], &self.b_bhi[j, 0], qlo, qhi,
+                                           self.K):
                             continue
                         if self._flat_skipped(i, j):
                             continue
@@ -635,3 +713,81 @@ cdef class PairSet:
                 continue
             top = self._split(a, b, a_stack, b_stack, top)
         return status
+
+
+cdef class BoxIndex:
+    """Queries on one :class:`cspace.geometry.boxes.BoxTree` (its first three columns, the
+    axes): which items' closed boxes meet a query box. The broad phase of a C-space's union
+    (float comparisons of the stored bounds against the query, no arithmetic: exact)."""
+
+    cdef const double[:, ::1] lo
+    cdef const double[:, ::1] hi
+    cdef const double[:, ::1] blo
+    cdef const double[:, ::1] bhi
+    cdef const int64_t[::1] first
+    cdef const int64_t[::1] count
+    cdef const int64_t[::1] order
+    cdef object _keep
+
+    def __init__(self, tree):
+        self._keep = tree
+        self.lo, self.hi, self.first, self.count, self.order = (
+            tree.lo, tree.hi, tree.first, tree.count, tree.order)
+        self.blo, self.bhi = tree.box_lo, tree.box_hi
+
+    cdef inline bint _meets(self, const double* lo, const double* hi, const double* qlo,
+                            const double* qhi) noexcept nogil:
+        return not (lo[0] > qhi[0] or lo[1] > qhi[1] or lo[2] > qhi[2]
+                    or qlo[0] > hi[0] or qlo[1] > hi[1] or qlo[2] > hi[2])
+
+    cdef int _collect(self, const double* qlo, const double* qhi, list out) except -1:
+        cdef int stack[512]
+        cdef int top = 1, a
+        cdef Py_ssize_t x, i
+        stack[0] = 0
+        while top > 0:
+            top -= 1
+            a = stack[top]
+            if not self._meets(&self.lo[a, 0], &self.hi[a, 0], qlo, qhi):
+                continue
+            if self.count[a] > 0:
+                for x in range(self.first[a], self.first[a] + self.count[a]):
+                    i = self.order[x]
+                    if self._meets(&self.blo[i, 0], &self.bhi[i, 0], qlo, qhi):
+                        out.append(i)
+                continue
+            if top + 2 > _STACK:
+                raise RuntimeError("box tree deeper than the traversal stack")
+            stack[top], stack[top + 1] = self.first[a] + 1, self.first[a]
+            top += 2
+        return 0
+
+    def point(self, double x, double y, double z):
+        """The items whose box holds the point, as a list."""
+        cdef double q[3]
+        q[0], q[1], q[2] = x, y, z
+        out = []
+        self._collect(q, q, out)
+        return out
+
+    def box(self, double x0, double y0, double z0, double x1, double y1, double z1):
+        """The items whose box meets the box ``[(x0, y0, z0), (x1, y1, z1)]``, as a list."""
+        cdef double lo[3]
+        cdef double hi[3]
+        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2] = x0, y0, z0, x1, y1, z1
+        out = []
+        self._collect(lo, hi, out)
+        return out
+
+    def overlaps(self, const double[:, ::1] qlo, const double[:, ::1] qhi):
+        """``(rows, items)`` int64: every query row and item whose boxes meet."""
+        cdef Py_ssize_t r, n0
+        rows, items = [], []
+        cdef list found
+        for r in range(qlo.shape[0]):
+            found = []
+            self._collect(&qlo[r, 0], &qhi[r, 0], found)
+            if found:
+                items += found
+                rows += [r] * len(found)
+        return np.array(rows, dtype=np.int64), np.array(items, dtype=np.int64)
