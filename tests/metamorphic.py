@@ -82,7 +82,7 @@ CASES = {c.name: c for c in [
     Case("CVMS", (_box((1.0, 1.0, 1.0)),), SMALL_BOX),
     Case("NCC-CVMS", (L_BRACKET,), SMALL_BOX),
     Case("convex obstacle x solid robot", (POST,), _u_robot()),
-    Case("surface pieces", (OPEN_BOX,), SMALL_BOX),
+    Case("open obstacle x convex robot", (OPEN_BOX,), SMALL_BOX),
     Case("convex obstacle x open robot", (POST,), _open(_u_robot())),
     Case("triangle pairs", (L_BRACKET,), _u_robot(0.4)),
     Case("triangle pairs, open obstacle", (OPEN_BOX,), _u_robot(0.4)),

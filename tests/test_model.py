@@ -131,55 +131,65 @@ def test_surface_triangles_that_cannot_reach_the_bounds_are_left_out():
     (b,) = m.bodies
     assert b.kind == "surface" and b.pieces == 8  # 4 quads start at x <= 3.125
     assert "32 more cannot reach the bounds" in b.reason
-    assert len(b.co.pieces) == 8
+    (co,) = b.cos  # triangle pairs; an open strip encloses nothing: no containment term
+    assert co.kind == "pairs" and len(co.S) == 8
 
 
 # --------------------------------------------------------------------------------------
 # surface C-obstacles
 
 
-def test_surface_co_agrees_with_fcl_mesh_collision_and_with_its_pieces():
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (250.0, 150.0, -300.0)])
+def test_surface_co_agrees_with_fcl_mesh_collision_and_with_its_pieces(offset):
+    """An open body against a convex robot is built as triangle pairs (the robot's facets as
+    its triangles): the same set, exactly, as the union of one exact hull t ⊕ (c - R) per
+    obstacle triangle (SurfaceObstacle.build, the reference), and FCL's answers."""
+    from cspace.cobstacle.surface import SurfaceObstacle
+
     V, F = torus(1.0, 0.3, 24, 12)
     keep = np.arange(len(F)) % 7 != 0  # punch holes: an open surface
-    scene = make_scene([Body("open-torus", V, F[keep], "test")], robot_extent=0.25,
-                       bounds=((-1.6, -1.6, -0.6), (1.6, 1.6, 0.6)))
+    off = np.asarray(offset)
+    scene = make_scene([Body("open-torus", np.asarray(V) + off, F[keep], "test")],
+                       robot_extent=0.25, bounds=((-1.6, -1.6, -0.6) + off, (1.6, 1.6, 0.6) + off))
     m = model_scene(scene)
     (b,) = m.bodies
     assert b.kind == "surface" and b.pieces == int(keep.sum())
-    co = b.co
+    assert [p.construction for p in b.pairs] == ["triangle pairs"]
+    co = m.cspace()
+    (part,) = m.robot_parts
+    ref = SurfaceObstacle.build((b.vertices, b.faces[b._keep]),
+                                m.margin.grow(part.operand), scene.reference_point, grid=m.grid)
     rng = np.random.default_rng(0)
     Q = rng.uniform(scene.bounds[0], scene.bounds[1], (3000, 3))
     ours = co.contains(Q)
-    brute = np.zeros(len(Q), bool)
-    for piece in co._impl.impl:
-        brute |= piece.contains(Q)
-    np.testing.assert_array_equal(ours, brute)
+    np.testing.assert_array_equal(ours, ref.contains(Q))
     # FCL on the raw scene (SceneOracle: the open torus a surface by its own rule), not the
     # C-obstacle's snapped pieces. Exact agreement on these samples (the stated one-sided
     # error, error_bound 7.5e-8, is not hit by uniform samples).
     fcl_hit = SceneOracle(scene).collides(Q)
     assert 300 < ours.sum() < 2700
     assert (ours != fcl_hit).sum() == 0
-    # Segments: exact against the pieces one by one.
+    # Segments and first contact: exact, as the reference's.
     a, b2 = Q[:300], Q[300:600]
-    hit = np.zeros(300, bool)
-    for piece in co._impl.impl:
-        hit |= piece.segments(a, b2, False)[0]
-    np.testing.assert_array_equal(co.segment_free(a, b2), ~hit)
-    t = co.first_contact(a, b2)
-    assert np.isnan(t[~hit]).all() and (t[hit] >= 0).all()
-    # Signed distance: sign exact, magnitude equals the nearest piece.
+    free = ref.segment_free(a, b2)
+    np.testing.assert_array_equal(co.segment_free(a, b2), free)
+    np.testing.assert_array_equal([co.segment_free(x, y) for x, y in zip(a, b2)], free)
+    np.testing.assert_array_equal(co.first_contact(a[:100], b2[:100]),
+                                  ref.first_contact(a[:100], b2[:100]))
+    # Signed distance: sign exact; outside, the distance to the nearest piece (pieces grown
+    # by the margin box: a lower bound within the box's half-diagonal).
     d = co.signed_distance(Q[:200])
     assert ((d <= 0) == ours[:200]).all()
     out = ~ours[:200]
-    ref = np.min([p.distance_outside(Q[:200][out]) for p in co._impl.impl], axis=0)
-    np.testing.assert_allclose(d[out], ref, rtol=0, atol=1e-12)
+    slack = float(np.linalg.norm(m.margin.steps)) * m.grid.step + 1e-12
+    gap = ref.signed_distance(Q[:200][out]) - d[out]
+    assert (gap >= -1e-12).all() and (gap <= slack).all()
 
 
 def test_surface_co_touching_counts():
     V, F = sheet(z=0.0)
     m = model_scene(make_scene([Body("sheet", V, F, "test")]))
-    co = m.bodies[0].co
+    co = m.cspace()
     # Robot half-extent 0.125: touching the sheet from above at z = 0.125, free just above.
     assert co.contains([0.2, 0.2, 0.125])
     assert not co.contains([0.2, 0.2, np.nextafter(0.125, 1)])
@@ -413,8 +423,11 @@ def test_fcl_environment_builds_and_agrees_with_fcl(shared_data):
     scene = fcl_env_scene(shared_data)
     m = model_scene(scene, robot_hull=True)
     cs = m.cspace()
-    assert len(cs) == 14  # 13 convex and the 21 surfaces joined in one
-    assert [o.kind for o in cs.obstacles].count("surface") == 1
+    # 13 convex bodies (CVMS); 21 open ones as triangle pairs against the hull's facets, each
+    # with the containment term of a sheet the robot could swallow whole
+    kinds = [o.kind for o in cs.obstacles]
+    assert kinds.count("convex") == 13 and kinds.count("pairs") == 21
+    assert len(kinds) == 13 + 2 * 21 and kinds.count("mesh") == 21
     # FCL with each body's semantics: fcl.Convex solids for the convex parts, plain mesh
     # collision for the open ones; membership and distance on uniform and near-surface points.
     from cspace.check.cross_check import cross_check

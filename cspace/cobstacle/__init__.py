@@ -3,8 +3,8 @@
 - :mod:`.obstacle` — :class:`~cspace.cobstacle.obstacle.CSpaceObstacle`: one C-obstacle, built
   once (convex, mesh, or grown mesh sum), queried many times;
 - :mod:`.convex` — the convex C-obstacle's queries; :mod:`.union` a union of engines, not built;
-- :mod:`.surface` — surface pieces for open bodies; :mod:`.pairs` — triangle pairs and
-  containment terms for a non-convex robot;
+- :mod:`.pairs` — triangle pairs and containment terms (an open body, or a non-convex robot
+  part); :mod:`.surface` — one hull per triangle of an open body, their reference;
 - :mod:`.margin` — :class:`~cspace.cobstacle.margin.Margin`, the outward rounding that makes a
   stored C-obstacle hold the true one (no false free).
 

@@ -18,7 +18,7 @@ Invariants, per axis ``i`` with grid step ``s`` (:class:`Margin`):
   snapped once): every point of ``CO`` is within ``deviation`` (per axis) of a point of ``CO'``.
 - ``steps[i] * s >= deviation[i] + rounding``, where ``rounding`` bounds the float64 rounding
   of an output mesh's vertices (zero for outputs kept as exact integers: convex polytopes,
-  surface pieces, triangle pairs). Hence ``CO ⊆`` the stored C-obstacle: **no false free**.
+  triangle pairs). Hence ``CO ⊆`` the stored C-obstacle: **no false free**.
 - Conversely every stored point is within ``deviation + steps * s + rounding`` (per axis) of
   ``CO``: :attr:`Margin.error_bound` is that box's half-diagonal, the largest distance by which
   a reported collision can be false.

@@ -24,7 +24,7 @@ class _PairsCO:
 
     Each pair's piece is the intersection of 17 slabs (:func:`~cspace.cobstacle.pairs.pair_planes`; 38 for pieces grown
     by the margin box ``[-g, g]``). Queries find the
-    pairs whose piece box holds them (a uniform grid of cells, as for surface pieces), compute
+    pairs whose piece box holds them (a uniform grid of cells, as the surface reference's), compute
     the slab values in float with a rigorous bound (16 unit roundoffs of the sum of absolute
     products, the normals and supports rounded to float included), and settle what the bound
     leaves with Python integers. Touching counts as inside.

@@ -1,4 +1,4 @@
-"""C-obstacles of open surfaces: ``CO = ∪_t t ⊕ (c - R)``, a union of convex pieces.
+"""Open surfaces against a convex robot as a union of exact hulls: the reference construction.
 
 An open (or non-manifold) obstacle surface bounds no solid: the robot meets it exactly when
 it meets one of its triangles ``t``, i.e. when its reference point ``q`` lies in the convex
@@ -6,13 +6,16 @@ piece ``t ⊕ (c - R)`` (the exact hull of the ``3 |R|`` vertex sums on the scen
 the semantics of FCL's mesh (BVH) collision: a robot entirely inside a closed-looking but
 unclosed surface touches nothing.
 
-:class:`SurfaceObstacle` answers the four queries of :class:`cspace.CSpaceObstacle` over the
-union, each piece decided exactly by the convex engine of :mod:`cspace.cobstacle.convex`. A broad
-phase keeps big meshes cheap: the pieces' bounding boxes (exact: grid coordinates) are binned
-into a uniform grid of cells, so a point query looks at the few pieces registered in its
-cell. Binning uses one monotone float function for boxes and queries, so a piece whose box
-holds ``q`` is always found; every candidate is then tested exactly (boxes first, then the
-piece's facet planes with the float filter and the integer fallback).
+Scenes no longer build this (one hull per triangle, about a millisecond each: minutes for an
+apartment-class world); they build the same set as triangle pairs
+(:mod:`cspace.cobstacle.pairs`). :class:`SurfaceObstacle` stays as the pure-Python reference
+those are tested against: any union of exact convex pieces (:meth:`SurfaceObstacle.build` for a
+surface and a convex robot, or the hulls of :func:`cspace.cobstacle.pairs.triangle_pair_pieces`),
+each decided by the convex engine of :mod:`cspace.cobstacle.convex`. Its broad phase bins the
+pieces' bounding boxes (exact: grid coordinates) into a uniform grid of cells
+(:class:`_CellGrid`, shared with :mod:`cspace.cobstacle.pairs_reference`), so a point query
+looks at the few pieces registered in its cell; every candidate is then tested exactly.
+:class:`SurfaceMesh` is the snapped surface a C-obstacle names as its obstacle.
 
 Queries take ``(k, 3)`` float64 translations (scene units, world frame), like every CO.
 """
@@ -326,23 +329,6 @@ class SurfaceObstacle(CSpaceObstacle):
         self.margin = Margin.none(grid)  # set by model_scene when the robot was grown
         self._impl = _UnionCO(self.pieces, _impl)
         self.stats: dict = {}
-
-    @classmethod
-    def union(cls, parts: list["SurfaceObstacle"]) -> "SurfaceObstacle":
-        """One surface C-obstacle for several (same robot and grid): one broad phase over all
-        their pieces, so a query costs one cell lookup instead of one per body."""
-        if len(parts) == 1:
-            return parts[0]
-        offsets = np.cumsum([0] + [len(p.obstacle.vertices) for p in parts[:-1]])
-        mesh = SurfaceMesh(np.vstack([p.obstacle.vertices for p in parts]),
-                           np.vstack([p.obstacle.faces + o for p, o in zip(parts, offsets)]),
-                           ", ".join(p.obstacle.name for p in parts))
-        first = parts[0]
-        out = cls([q for p in parts for q in p.pieces], obstacle=mesh, robot=first.robot,
-                  reference_point=first.reference_point, grid=first.grid,
-                  _impl=[c for p in parts for c in p._impl.impl])
-        out.margin = max((p.margin for p in parts), key=lambda m: m.error_bound)
-        return out
 
     @classmethod
     def build(cls, obstacle, robot: ConvexPolytope, reference_point=(0.0, 0.0, 0.0), *,

@@ -3,8 +3,8 @@
 :func:`_build_with` runs the builds locally or on an executor in batches
 (:func:`build_pair_batch`), each C-obstacle keyed (:func:`_key`, :func:`_pair_key`) and stored in
 the disk cache (:mod:`cspace.scene.cache`); :func:`_pair_cos` and :func:`_containment_cos` are the
-triangle-pair and containment constructions; :func:`_add_enclosed` adds what a folded closed
-surface encloses.
+triangle-pair and containment constructions (a folded closed surface's enclosed region is
+a containment term).
 """
 
 from __future__ import annotations
@@ -26,9 +26,10 @@ from ..cobstacle.pairs import (
     _meets,
     component_points,
     containment_meshes,
+    is_sum,
     pair_construction,
 )
-from ..cobstacle.surface import SurfaceMesh, SurfaceObstacle
+from ..cobstacle.surface import SurfaceMesh
 from ..geometry.exact import Grid
 from .cache import COCache, co_key, pack_polytopes, unpack_polytopes
 from .classify import BodyModel, PairModel, RobotPart, _excess
@@ -43,8 +44,6 @@ __all__ = ["build_pair_batch"]
 def _to_arrays(co) -> dict:
     if co.kind == "convex":
         out = pack_polytopes([co.polytope, co.obstacle], "p_")
-    elif co.kind == "surface":
-        out = pack_polytopes(co.pieces, "p_")
     else:
         out = {"vertices": np.asarray(co.vertices), "faces": np.asarray(co.faces)}
     return out | _margin_arrays(co.margin)
@@ -75,13 +74,6 @@ def _from_arrays_of(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
     if body.kind == "convex":
         co, obs = unpack_polytopes(a, "p_", grid)
         return CSpaceObstacle(co, obstacle=obs, robot=robot, reference_point=c, margin=m)
-    if body.kind == "surface":
-        F = body.faces[body._keep]
-        co = SurfaceObstacle(unpack_polytopes(a, "p_", grid),
-                             obstacle=SurfaceMesh(body.vertices, F, body.name), robot=robot,
-                             reference_point=c, grid=grid)
-        co.margin = m
-        return co
     return CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
                                     robot=robot, reference_point=c, grid=grid, name=body.name,
                                     margin=m)
@@ -99,12 +91,7 @@ def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None
         co.excess = robot.excess
         return co
     grown = margin.grow(robot) if grown is None else grown
-    if body.kind == "surface":
-        F = body.faces[body._keep]
-        co = SurfaceObstacle.build((body.vertices, F), grown, c, grid=grid, name=body.name,
-                                   progress=progress)
-    else:
-        co = CSpaceObstacle.build(body._solid, grown, c, grid=grid, conservative=False)
+    co = CSpaceObstacle.build(body._solid, grown, c, grid=grid, conservative=False)
     co.robot, co.margin = robot, margin
     co.excess = _excess(body) + robot.excess  # the grown robot's hull has lost its excess
     return co
@@ -118,10 +105,19 @@ def _key(body: BodyModel, robot, c_ints, grid) -> str:
 def _pair_key(construction, body: BodyModel, part: RobotPart, c_ints, grid,
               margin: Margin) -> str:
     faces = body.faces[body._keep] if body.kind == "surface" else body.faces
-    robot = np.vstack([part.ints, part.faces])
+    robot = np.vstack(_part_triangles(part))
     # "trees": triangle pairs are stored as the triangles in reach, not as enumerated pairs
     return co_key(f"{construction} trees robot {len(part.ints)} margin {list(margin.steps)}", grid,
                   body._ints, faces, robot, c_ints)
+
+
+def _part_triangles(part: RobotPart):
+    """The robot part's exact grid vertices and triangles: a convex part's are its polytope's
+    facets, fanned (its mesh may be a bent body the polytope stands for); another's its
+    welded mesh."""
+    if part.kind == "convex":
+        return part.operand.ints, part.operand.faces
+    return part.ints, part.faces
 
 
 def _body_operand(body: BodyModel):
@@ -139,7 +135,8 @@ def _pair_cos(construction, arrays, body: BodyModel, part: RobotPart, c_ints, gr
                 if body.kind == "surface" else body._solid)
     name = f"{body.name} x {part.name}"
     o_ints, o_faces = _body_operand(body)
-    S, T = _pair_operands(o_ints[o_faces], c_ints - part.ints[part.faces], arrays)
+    r_ints, r_faces = _part_triangles(part)
+    S, T = _pair_operands(o_ints[o_faces], c_ints - r_ints[r_faces], arrays)
     cos = [PairObstacle(S, T, closed=bool(arrays["closed"]), margin=arrays["margin"],
                         obstacle=obstacle, robot=part, reference_point=c,
                         grid=grid)] if len(S) and len(T) else []
@@ -163,7 +160,7 @@ def _containment_cos(body: BodyModel, part: RobotPart, c_ints, grid, bounds_g, o
     A convex side needs none (its pieces are solid), nor does NCC-CVMS (its sum is).
     """
     c = part.grid.to_float(c_ints)
-    held_by_robot = ((part.ints, part.faces) if part.kind == "solid" else
+    held_by_robot = (_part_triangles(part) if part.kind in ("solid", "convex") else
                      (part.encloses.ints, part.encloses.faces) if part.encloses is not None
                      else None)
     held_by_body = ((body._solid.ints, body._solid.faces) if body.kind in ("solid", "convex") else
@@ -174,7 +171,8 @@ def _containment_cos(body: BodyModel, part: RobotPart, c_ints, grid, bounds_g, o
         points = component_points(*_body_operand(body), fits_in=np.ptp(held_by_robot[0], axis=0))
         terms += containment_meshes(points, *held_by_robot, c_ints, robot_solid=True)
     if held_by_body is not None:  # robot components small enough for the body to hold
-        points = component_points(part.ints, part.faces, fits_in=np.ptp(held_by_body[0], axis=0))
+        points = component_points(*_part_triangles(part),
+                                  fits_in=np.ptp(held_by_body[0], axis=0))
         terms += containment_meshes(points, *held_by_body, c_ints, robot_solid=False)
     return [CSpaceObstacle.from_mesh(grid.to_float(ints), faces, obstacle=obstacle, robot=part,
                                      reference_point=c, grid=grid, name=f"{name} (containment)")
@@ -188,10 +186,11 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
     through two box trees (PairObstacle). Kept: the triangles whose pieces can meet the
     bounds at all."""
     o_ints, o_faces = _body_operand(body)
-    S, T = o_ints[o_faces], c_ints - part.ints[part.faces]
+    r_ints, r_faces = _part_triangles(part)
+    S, T = o_ints[o_faces], c_ints - r_ints[r_faces]
     s_keep, t_keep = _in_reach(S, T, margin.g, bounds_g)
     return {"s_keep": s_keep, "t_keep": t_keep, "margin": margin.g,
-            "closed": np.array(body.kind != "surface" or part.kind == "solid"),
+            "closed": np.array(body.kind != "surface" or part.kind != "surface"),
             "counts": np.array([int(s_keep.sum()), int(t_keep.sum()),
                                 len(S) - int(s_keep.sum())], dtype=np.int64)}
 
@@ -247,7 +246,7 @@ def _lookup(ctx: _Context, construction, b: BodyModel, part: RobotPart, pair: Pa
     store = ctx.store
     if store is None:
         key = None
-    elif part.kind == "convex":  # the grown robot names the growth
+    elif is_sum(construction):  # the grown robot names the growth
         key = _key(b, _grown(ctx.grown, ctx.margin, part), ctx.c_ints, ctx.grid)
     else:
         key = _pair_key(construction, b, part, ctx.c_ints, ctx.grid, ctx.margin)
@@ -259,25 +258,13 @@ def _lookup(ctx: _Context, construction, b: BodyModel, part: RobotPart, pair: Pa
 def _assemble(ctx: _Context, construction, b: BodyModel, part: RobotPart, pair: PairModel,
               arrays: dict) -> None:
     """The pair's C-obstacles from built or cached arrays (the one way for both)."""
-    if part.kind == "convex":
+    if is_sum(construction):
         pair.cos = [_from_arrays(arrays, b, part.operand, ctx.c_snapped, ctx.grid, ctx.margin)]
-        _add_enclosed(ctx, b, part, pair)
         return
     pair.cos = _pair_cos(construction, arrays, b, part, ctx.c_ints, ctx.grid, ctx.bounds_g)
     pair.detail = _pair_detail(construction, arrays)
     for co in pair.cos:  # one margin for the pair's union
         co.margin = _margin_from(arrays, ctx.margin)
-
-
-def _add_enclosed(ctx: _Context, b: BodyModel, part: RobotPart, pair: PairModel) -> None:
-    """A closed surface body that encloses a region holds a convex robot part there too:
-    its containment term beside the surface pieces (built, never cached: one mesh)."""
-    if b._encloses is not None and pair.cos:
-        terms = _containment_cos(b, part, ctx.c_ints, ctx.grid, ctx.bounds_g,
-                                 pair.cos[0].obstacle, f"{b.name} x {part.name}")
-        for co in terms:
-            co.margin = pair.cos[0].margin
-        pair.cos += terms
 
 
 def _store(ctx: _Context, key, pair: PairModel, arrays) -> None:
@@ -299,7 +286,7 @@ def _failed(ctx: _Context, b: BodyModel, part: RobotPart, pair: PairModel, parts
 def _pair_arrays(construction, body: BodyModel, part: RobotPart, c, c_ints, grid, bounds_g,
                  margin: Margin, grown: dict) -> dict:
     """Build one pair: the arrays the cache stores (what :func:`_assemble` reads)."""
-    if part.kind == "convex":
+    if is_sum(construction):
         return _to_arrays(_build(body, part.operand, c, grid, margin, None,
                                  _grown(grown, margin, part)))
     return _build_pair_arrays(construction, body, part, c_ints, grid, bounds_g, margin, None)

@@ -233,7 +233,7 @@ def _closed_kind(name, P, F, grid):
     A closed body whose snapped surface meets itself is never left as a bare surface: that
     would count its inside as free. Snapping moves every point of the surface by at most the
     snapping bound, so away from the surface the snapped winding number is the input's; near
-    it, the (grown) surface pieces hold every contact.
+    it, the (grown) triangle pairs hold every contact.
     """
     from ..mesh.query import unbalanced_edge
 

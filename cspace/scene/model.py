@@ -20,9 +20,9 @@ scene grid (``scene.grid()``, centred on the scene):
    with the bounds, before anything is built.
 5. **Classify**: ``convex`` (a closed convex mesh: CVMS), ``solid`` (closed, oriented
    2-manifold, not convex: NCC-CVMS through :meth:`CSpaceObstacle.build`), ``surface``
-   (open, or closed but not a valid solid, e.g. non-manifold: the union of the pieces
-   ``t ⊕ (c - R)`` of its triangles, :class:`~cspace.cobstacle.surface.SurfaceObstacle`; triangles
-   whose piece cannot meet the bounds are left out), or ``dropped``. Each decision carries a
+   (open, or closed but not a valid solid, e.g. non-manifold: triangle pairs, the union of
+   ``s ⊕ (c - t)`` over its triangles s and the robot's t, :class:`~cspace.cobstacle.pairs.PairObstacle`;
+   triangles whose pieces cannot meet the bounds are left out), or ``dropped``. Each decision carries a
    human-readable reason.
 6. **Build** (``build=True``) each kept body's C-obstacle, through the disk cache
    (:mod:`cspace.scene.cache`) when one is given.
@@ -48,8 +48,7 @@ import numpy as np
 from ..cobstacle.convex import _translations
 from ..cobstacle.margin import Margin
 from ..cobstacle.obstacle import CSpaceObstacle
-from ..cobstacle.pairs import CONSTRUCTIONS, pair_construction, pairs_memory
-from ..cobstacle.surface import SurfaceObstacle
+from ..cobstacle.pairs import CONSTRUCTIONS, is_sum, pair_construction, pairs_memory
 from ..cobstacle.union import _UnionOf
 from ..errors import BuildError, InvalidArgumentError, InvalidMeshError, MemoryBudgetError
 from ..geometry.exact import Grid
@@ -59,7 +58,6 @@ from ..mesh.components import split_parts, weld_dedupe
 from ..mesh.convex import ConvexPolytope
 from .build import (
     _Context,
-    _add_enclosed,
     _assemble,
     _body_operand,
     _build,
@@ -68,6 +66,7 @@ from .build import (
     _failed,
     _grown,
     _lookup,
+    _part_triangles,
     _store,
     _to_arrays,
 )
@@ -155,8 +154,7 @@ class SceneModel:
         return {k: len(self.of_kind(k)) for k in KINDS}
 
     def cspace(self) -> CSpace:
-        """The :class:`CSpace` of the built bodies (dropped ones cannot matter); the surface
-        bodies' C-obstacles are joined into one (:meth:`SurfaceObstacle.union`).
+        """The :class:`CSpace` of the built bodies (dropped ones cannot matter).
 
         Raises
         ------
@@ -173,17 +171,7 @@ class SceneModel:
         if missing:
             raise BuildError(f"scene {self.scene.name!r}: bodies {missing} were modelled "
                              "without building (build=False)")
-        # Surface pieces of one robot part share one broad phase (one cell lookup per query
-        # for all of them); every other C-obstacle stands alone.
-        cos, surfaces = [], {}
-        for b in kept:
-            for p in b.pairs:
-                for co in p.cos:
-                    if isinstance(co, SurfaceObstacle) and p.construction == "surface pieces":
-                        surfaces.setdefault(p.part, []).append(co)
-                    else:
-                        cos.append(co)
-        cos += [SurfaceObstacle.union(group) for group in surfaces.values()]
+        cos = [co for b in kept for co in b.cos]
         return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name, scene=self.scene,
                       robot_hull=self.robot_hull, memory=self.memory)
 
@@ -404,11 +392,10 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
             b.pairs.append(pair)
             try:
                 key, arrays = _lookup(ctx, construction, b, part, pair)
-                if part.kind == "convex" and arrays is None:
+                if is_sum(construction) and arrays is None:
                     pair.cos = [_build(b, part.operand, c, grid, margin, sub,
                                        _grown(ctx.grown, margin, part))]
                     arrays = _to_arrays(pair.cos[0]) if store is not None else None
-                    _add_enclosed(ctx, b, part, pair)
                 else:
                     if arrays is None:
                         arrays = _build_pair_arrays(construction, b, part, c_ints, grid,
@@ -421,7 +408,8 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
             b.seconds += pair.seconds
             b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"
         for b in bodies:  # one convex part: the body's one C-obstacle, as before parts
-            if len(parts) == 1 and parts[0].kind == "convex" and b.pairs and b.pairs[0].cos:
+            if (len(parts) == 1 and b.pairs and b.pairs[0].cos
+                    and is_sum(b.pairs[0].construction)):
                 b.co = b.pairs[0].cos[0]
         if progress is not None:
             progress(1.0, f"{len(todo)} C-obstacles" if len(parts) == 1
@@ -440,7 +428,8 @@ def _memory_check(scene, todo, memory) -> int:
     triangle of each (body, robot part) pair: the robot's triangles count once per body),
     the constructions whose size grows with bodies times robot triangles; the others are
     linear in a body's triangles."""
-    items = [(b, part, len(_body_operand(b)[1]) + len(part.faces)) for b, part in todo
+    items = [(b, part, len(_body_operand(b)[1]) + len(_part_triangles(part)[1]))
+             for b, part in todo
              if pair_construction(b.kind, part.kind) == "triangle pairs"]
     if not items:
         return 0
