@@ -364,3 +364,20 @@ def test_general_ear_clipping_is_identical(monkeypatch):
         P = [H[k] for k in ring]
         assert compiled_planar.clip_general(P, ring) == triangulation._clip_general(P, ring)
         assert len(triangulation._clip_general(P, ring)) == 8
+
+
+@pytest.mark.parametrize("n,k,leaf", [(257, 3, 3), (600, 13, 4), (5, 3, 4), (64, 3, 1)])
+def test_box_tree_build_is_identical(n, k, leaf):
+    """BoxTree's compiled median split against boxes._tree_reference: the same order, node
+    bounds and children, with many tied centres (the selection's equal keys)."""
+    from cspace.geometry.boxes import BoxTree, _tree_reference
+
+    rng = np.random.default_rng(n + k)
+    lo = rng.integers(-1000, 1000, (n, k)).astype(np.float64)
+    lo[::7] = lo[0]                  # tied boxes
+    lo[1::5, 0] = lo[1, 0]           # tied centres on one axis only
+    hi = lo + rng.integers(0, 50, (n, k))
+    t = BoxTree(lo, hi, leaf=leaf)
+    for got, want in zip((t.order, t.lo, t.hi, t.first, t.count), _tree_reference(lo, hi, leaf)):
+        assert np.array_equal(got, want)
+    assert sorted(t.order.tolist()) == list(range(n)) and t.count.max() <= leaf

@@ -136,7 +136,7 @@ def test_the_box_index_finds_every_box_a_query_meets(offset):
     rng = np.random.default_rng(4)
     lo = rng.uniform(-50, 50, (300, 3)) + offset
     hi = lo + rng.uniform(0, 8, (300, 3))
-    index = load("pairquery").BoxIndex(BoxTree(lo, hi, leaf=3))
+    index = load("boxtree").BoxIndex(BoxTree(lo, hi, leaf=3))
     q_lo = np.vstack([rng.uniform(-60, 60, (200, 3)) + offset, hi[:50], lo[50:100]])
     q_hi = q_lo + np.vstack([rng.uniform(0, 5, (200, 3)), np.zeros((100, 3))])
     rows, items = index.overlaps(q_lo, q_hi)

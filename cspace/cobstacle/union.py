@@ -12,7 +12,7 @@ from ..geometry._kernels import load
 from ..geometry.boxes import BoxTree
 from ..mesh.operands import _Mesh
 
-_pairquery = load("pairquery")
+_boxtree = load("boxtree")
 
 
 class _UnionOf:
@@ -32,7 +32,7 @@ class _UnionOf:
         if self.cos:
             B = np.array([np.asarray(co.bounds, dtype=np.float64) for co in self.cos])
             pad = np.ldexp(np.abs(B).max(axis=1), -40) + 1e-300
-            self._index = _pairquery.BoxIndex(BoxTree(B[:, 0] - pad, B[:, 1] + pad))
+            self._index = _boxtree.BoxIndex(BoxTree(B[:, 0] - pad, B[:, 1] + pad))
 
     def _near(self, lo: np.ndarray, hi: np.ndarray):
         """Per engine, the rows whose box ``[lo, hi]`` meets the engine's box (a box tree over

@@ -19,6 +19,8 @@ __all__ = ["candidate_pairs", "box_pairs", "BoxSweep", "BoxTree", "DOP_DIRECTION
 # (cspace.geometry._kernels.arrangement); their numpy references are BoxSweep._pairs_reference,
 # _intersect_pairs_reference and _endpoint_coordinates_reference, which they match exactly.
 _compiled = load("arrangement")
+# BoxTree's build (cspace.geometry._kernels.boxtree); its reference is _tree_reference.
+_boxtree = load("boxtree")
 
 
 # Default bound on the number of expanded candidate pairs held at once (~8 int64 arrays).
@@ -171,28 +173,10 @@ class BoxTree:
             raise ValueError(f"box tree bounds must be (n, k >= 3) pairs, got {lo.shape}, {hi.shape}")
         if not len(lo):
             raise ValueError("a box tree needs at least one box")
-        centre = lo[:, :3] + hi[:, :3]
-        order = np.arange(len(lo), dtype=np.int64)
-        n_max = 2 * len(lo)
-        nlo, nhi = np.empty((n_max, k)), np.empty((n_max, k))
-        first, count = np.zeros(n_max, np.int64), np.zeros(n_max, np.int64)
-        stack, n = [(0, 0, len(lo))], 1  # (node, start, end) into order
-        while stack:
-            node, a, b = stack.pop()
-            idx = order[a:b]
-            nlo[node], nhi[node] = lo[idx].min(axis=0), hi[idx].max(axis=0)
-            if b - a <= leaf:
-                first[node], count[node] = a, b - a
-                continue
-            axis = int(np.argmax(nhi[node, :3] - nlo[node, :3]))
-            half = (b - a) // 2
-            order[a:b] = idx[np.argpartition(centre[idx, axis], half, kind="introselect")]
-            first[node] = n
-            stack += [(n, a, a + half), (n + 1, a + half, b)]
-            n += 2
-        self.lo, self.hi = np.ascontiguousarray(nlo[:n]), np.ascontiguousarray(nhi[:n])
-        self.first, self.count = first[:n], count[:n]
-        self.order = order
+        if leaf < 1:
+            raise ValueError("a leaf holds at least one item")
+        lo, hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
+        self.order, self.lo, self.hi, self.first, self.count = _boxtree.build(lo, hi, int(leaf))
         self.box_lo, self.box_hi = np.ascontiguousarray(lo), np.ascontiguousarray(hi)
 
     def __len__(self) -> int:
@@ -200,6 +184,63 @@ class BoxTree:
 
     def __repr__(self) -> str:
         return f"BoxTree(boxes={len(self.order)}, nodes={len(self.first)})"
+
+
+def _tree_reference(lo: np.ndarray, hi: np.ndarray, leaf: int):
+    """Pure-Python reference of :func:`cspace.geometry._kernels.boxtree.build`, step for step:
+    ``(order, node_lo, node_hi, first, count)``."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    n, k = lo.shape
+    centre = (lo[:, :3] + hi[:, :3]).tolist()
+    L, H = lo.tolist(), hi.tolist()
+    order = list(range(n))
+    nlo, nhi, first, count = [], [], [], []
+
+    def select(a: int, b: int, kth: int, axis: int) -> None:
+        # Hoare's selection with a median-of-three pivot on order[a:b], as the kernel's
+        left, right = a, b - 1
+        kth += a
+        key = lambda x: centre[order[x]][axis]  # noqa: E731
+        while right > left:
+            m = left + (right - left) // 2
+            pivot = sorted((key(left), key(m), key(right)))[1]
+            i, j = left, right
+            while i <= j:
+                while key(i) < pivot:
+                    i += 1
+                while key(j) > pivot:
+                    j -= 1
+                if i <= j:
+                    order[i], order[j] = order[j], order[i]
+                    i, j = i + 1, j - 1
+            if kth <= j:
+                right = j
+            elif kth >= i:
+                left = i
+            else:
+                return
+
+    stack, nodes = [(0, 0, n)], 1
+    while stack:
+        node, a, b = stack.pop()
+        while len(nlo) <= node:
+            nlo.append(None), nhi.append(None), first.append(0), count.append(0)
+        items = order[a:b]
+        nlo[node] = [min(L[x][c] for x in items) for c in range(k)]
+        nhi[node] = [max(H[x][c] for x in items) for c in range(k)]
+        if b - a <= leaf:
+            first[node], count[node] = a, b - a
+            continue
+        ext = [nhi[node][c] - nlo[node][c] for c in range(3)]
+        axis = max(range(3), key=lambda c: (ext[c], -c))
+        half = (b - a) // 2
+        select(a, b, half, axis)
+        first[node] = nodes
+        stack += [(nodes, a, a + half), (nodes + 1, a + half, b)]
+        nodes += 2
+    return (np.array(order, dtype=np.int64), np.array(nlo, dtype=np.float64).reshape(-1, k),
+            np.array(nhi, dtype=np.float64).reshape(-1, k), np.array(first, dtype=np.int64),
+            np.array(count, dtype=np.int64))
 
 
 # The directions the pair trees bound triangles on: the 3 axes, the 6 face diagonals and the

@@ -219,39 +219,16 @@ def _exact_area_signs(T: np.ndarray) -> np.ndarray:
 
 
 def _build_bvh(lo: np.ndarray, hi: np.ndarray):
-    """Median-split BVH over triangle boxes; leaves hold contiguous runs of ``order``."""
-    m = len(lo)
-    cent = (lo + hi) / 2.0
-    order = np.arange(m)
-    nlo, nhi, left, right, start, count = [], [], [], [], [], []
+    """Median-split BVH over triangle boxes (:class:`cspace.geometry.boxes.BoxTree`, built
+    compiled), as the kernels walk it: ``(order, node_lo, node_hi, left, right, start,
+    count)``, leaves (``left == -1``) holding the runs ``order[start:start + count]``."""
+    from ..geometry.boxes import BoxTree
 
-    def new(s, e):
-        idx = order[s:e]
-        nlo.append(lo[idx].min(axis=0))
-        nhi.append(hi[idx].max(axis=0))
-        left.append(-1)
-        right.append(-1)
-        start.append(s)
-        count.append(e - s)
-        return len(nlo) - 1
-
-    todo = [(new(0, m), 0, m)]
-    while todo:
-        node, s, e = todo.pop()
-        if e - s <= _LEAF:
-            continue
-        c = cent[order[s:e]]
-        axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
-        mid = (s + e) // 2
-        part = np.argpartition(c[:, axis], mid - s)
-        order[s:e] = order[s:e][part]
-        a, b = new(s, mid), new(mid, e)
-        left[node], right[node] = a, b
-        count[node] = 0
-        todo += [(a, s, mid), (b, mid, e)]
-    as_i = lambda x: np.asarray(x, dtype=np.int64)  # noqa: E731
-    return (order, np.asarray(nlo), np.asarray(nhi), as_i(left), as_i(right), as_i(start),
-            as_i(count))
+    t = BoxTree(lo, hi, leaf=_LEAF)
+    inner = t.count == 0
+    left = np.where(inner, t.first, -1)
+    right = np.where(inner, t.first + 1, -1)
+    return t.order, t.lo, t.hi, left, right, np.where(inner, 0, t.first), t.count
 
 
 def _closed_mesh_arrays(vertices, faces, name: str):
