@@ -290,3 +290,31 @@ def test_cli_turns_by_default_when_the_goal_does(tmp_path):
     fixed = subprocess.run(base + ["--no-turns", "--time", "1"], capture_output=True, text=True,
                            timeout=300)
     assert fixed.returncode == 1 and "36 orientation slices" not in fixed.stderr
+
+
+@pytest.mark.parametrize("move", [0, 1], ids=["as given", "at (250, 150, -300)"])
+@pytest.mark.parametrize("case", ["NCC-CVMS", "convex robot off its origin", "triangle pairs"])
+def test_turns_as_triangle_pairs_answer_as_the_sums(case, move):
+    """A turn's C-space is built as triangle pairs (sums=False: nothing built per closed
+    body): the same set, exactly, as the NCC-CVMS sums of the swept hull on the same grid;
+    and the orientation slices share one modelling of the obstacles."""
+    from metamorphic import CASES, GRID_MOVES, moved_scene, samples
+
+    from cspace.scene.model import model_scene
+
+    scene = moved_scene(CASES[case], GRID_MOVES[move])
+    t = TurningCSpace(scene, Slices.about(6))
+    t.slice(0)
+    welds = sorted(k for k in t._memo if k[0] == "weld")
+    t.slice(1)
+    assert sorted(k for k in t._memo if k[0] == "weld") == welds and welds  # modelled once
+    turn = t.turn(0, 1)
+    hull = turn.obstacles[0].robot
+    swept = t._scene_with("swept", hull.vertices, hull.faces)
+    sums = model_scene(swept, grid=t.grid, robot_hull=True).cspace()
+    if case == "NCC-CVMS":  # the closed L: one sum against pairs and containment terms
+        assert [co.kind for co in sums.obstacles] == ["mesh"]
+        assert sorted(co.kind for co in turn.obstacles) == ["mesh", "pairs"]
+    Q = samples(swept, 900, 3)
+    assert np.array_equal(turn.contains(Q), sums.contains(Q))
+    assert 0 < turn.contains(Q).sum() < len(Q)

@@ -4,7 +4,8 @@
   once (convex, mesh, or grown mesh sum), queried many times;
 - :mod:`.convex` — the convex C-obstacle's queries; :mod:`.union` a union of engines, not built;
 - :mod:`.pairs` — triangle pairs and containment terms (an open body, or a non-convex robot
-  part); :mod:`.surface` — one hull per triangle of an open body, their reference;
+  part), their operands shared by content in :mod:`.pair_sides`; :mod:`.surface` — one hull
+  per triangle of an open body, their reference;
 - :mod:`.margin` — :class:`~cspace.cobstacle.margin.Margin`, the outward rounding that makes a
   stored C-obstacle hold the true one (no false free).
 

@@ -79,6 +79,7 @@ from ..errors import DegenerateError
 from ..geometry.exact import _FILTER, _TINY
 from ..geometry.graphs import component_labels
 from .margin import Margin
+from .pair_sides import _primitive_normals, _side
 from ..geometry.snapping import grow_points
 from .obstacle import CSpaceObstacle
 from .convex import exact_plane_sign, exact_segment_entry
@@ -109,10 +110,10 @@ _KEEP = 1 << 15
 
 #: Bytes a triangle-pair C-obstacle takes per triangle of its two operands (obstacle triangles
 #: plus robot triangles) while it lives (``held``) and while it is built (``peak``), its share of
-#: the scene model included: tracemalloc measured 1003 and 1207 (tests/test_memory.py holds
+#: the scene model included: tracemalloc measured 682 and 1222 (tests/test_memory.py holds
 #: them to it; the trees' 26-DOPs take 13 bounds a side where boxes took 3). Linear: no pair
-#: is stored.
-TRIANGLE_BYTES = {"held": 1152, "peak": 1408}
+#: is stored, and a side shared by several engines (_side) is counted in each.
+TRIANGLE_BYTES = {"held": 768, "peak": 1408}
 
 
 def pairs_memory(n_triangles: int) -> tuple[int, int]:
@@ -121,9 +122,14 @@ def pairs_memory(n_triangles: int) -> tuple[int, int]:
     return TRIANGLE_BYTES["held"] * int(n_triangles), TRIANGLE_BYTES["peak"] * int(n_triangles)
 
 
-def pair_construction(obstacle_kind: str, robot_kind: str) -> str:
-    """The construction an (obstacle body, robot part) pair gets (a key of CONSTRUCTIONS)."""
-    if robot_kind == "convex" and obstacle_kind != "surface":
+def pair_construction(obstacle_kind: str, robot_kind: str, sums: bool = True) -> str:
+    """The construction an (obstacle body, robot part) pair gets (a key of CONSTRUCTIONS).
+
+    ``sums=False``: a solid body against a convex part is triangle pairs too, not NCC-CVMS
+    (the same set, exactly, with nothing built: for a C-space asked a few queries, such as a
+    turn in place, where building a sum per body costs more than all its queries)."""
+    if robot_kind == "convex" and (obstacle_kind == "convex"
+                                   or (obstacle_kind == "solid" and sums)):
         return {"convex": "CVMS", "solid": "NCC-CVMS"}[obstacle_kind]
     return "triangle pairs"
 
@@ -158,17 +164,6 @@ class PairPieces:
 def _meets(lo: np.ndarray, hi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> np.ndarray:
     """Exact: do the boxes ``[lo, hi]`` (grid ints, (k, 3)) meet ``[blo, bhi]`` (grid units)?"""
     return ((lo.astype(np.float64) <= bhi) & (blo <= hi.astype(np.float64))).all(axis=-1)
-
-
-def _primitive_normals(tri: np.ndarray) -> np.ndarray:
-    """``(m, 3)`` int64 primitive normals of grid triangles, sign made canonical (first
-    non-zero component positive); zero for collinear corners. Exact: edges of 28-bit grid
-    coordinates give cross products below 2**60."""
-    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
-    g = np.gcd.reduce(np.abs(n), axis=1)
-    n = n // np.maximum(g, 1)[:, None]
-    first = np.where(n[:, 0] != 0, n[:, 0], np.where(n[:, 1] != 0, n[:, 1], n[:, 2]))
-    return n * np.where(first < 0, -1, 1)[:, None]
 
 
 def _flat(tp: "TrianglePairs", i: np.ndarray, j: np.ndarray) -> np.ndarray:
@@ -493,28 +488,28 @@ class _TreePairsCO:
 
     def __init__(self, S: np.ndarray, T: np.ndarray, grid, *, closed: bool,
                  margin=(0, 0, 0)):
-        from ..geometry.boxes import BoxTree, dop_bounds
-
         # S (obstacle triangles, in grid's frame) moved to the scene frame by the grid's
         # origin, exactly: T holds vectors (c - t), so every piece is in the scene frame and a
         # query is only scaled (by a power of two), never shifted.
-        self.S = np.ascontiguousarray(np.asarray(S, np.int64) + np.asarray(grid.origin, np.int64))
-        self.T = np.ascontiguousarray(np.asarray(T, np.int64))
-        if not len(self.S) or not len(self.T):
+        S = np.asarray(S, np.int64) + np.asarray(grid.origin, np.int64)
+        T = np.asarray(T, np.int64)
+        if not len(S) or not len(T):
             raise ValueError("a triangle-pair C-obstacle needs triangles on both sides")
         self.grid, self.exponent = grid.vectors, grid.exponent
         self.g = np.asarray(margin, dtype=np.int64).reshape(3)
         self.grown = bool(self.g.any())
         self.closed = bool(closed)
         self.n_slabs = 38 if self.grown else 17
-        # k-DOPs of the obstacle's grown triangles and of -T = t - c, on directions both share
-        s_lo, s_hi, D = dop_bounds(self.S, self.g)
-        r_lo, r_hi, D_r = dop_bounds(-self.T)
-        if len(D_r) < len(D):
-            s_lo, s_hi, D = s_lo[:, :3], s_hi[:, :3], D_r
-        r_lo, r_hi = r_lo[:, :len(D)], r_hi[:, :len(D)]
-        self.directions = D
-        self.tree_s, self.tree_r = BoxTree(s_lo, s_hi), BoxTree(r_lo, r_hi)
+        # Each side (triangles, normals, k-DOP tree) is shared by every engine with the same
+        # operand: the robot's by every body of a build, a body's by every orientation on
+        # one grid (_side). k-DOPs on the directions both sides share.
+        self.side_s, self.side_t = _side(S, self.g, False), _side(T, np.zeros(3, np.int64), True)
+        if len(self.side_s.directions) != len(self.side_t.directions):
+            k = min(len(self.side_s.directions), len(self.side_t.directions))
+            self.side_s, self.side_t = self.side_s.on(k), self.side_t.on(k)
+        self.S, self.T = self.side_s.X, self.side_t.X
+        self.directions = self.side_s.directions
+        self.tree_s, self.tree_r = self.side_s.tree, self.side_t.tree
         # the union's box (grid units, scene frame): the axis columns
         self.lo = self.grid.to_float(self.tree_s.lo[0, :3] - self.tree_r.hi[0, :3])[None]
         self.hi = self.grid.to_float(self.tree_s.hi[0, :3] - self.tree_r.lo[0, :3])[None]
@@ -523,18 +518,16 @@ class _TreePairsCO:
 
     def _pair_set(self, tree_s, tree_r):
         """The compiled engine's view of the operands and the two trees."""
-        raw = lambda X: np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0]).astype(np.float64)
-        return _pairquery.PairSet(
-            self.S.reshape(-1, 9), self.T.reshape(-1, 9), _primitive_normals(self.S),
-            _primitive_normals(-self.T), raw(self.S).ravel(), raw(self.T).ravel(),
-            self.g, self.closed, tree_s, tree_r, self.directions)
+        s, t = self.side_s, self.side_t
+        return _pairquery.PairSet(s.flat, t.flat, s.flat_f, t.flat_f, s.normals, t.normals,
+                                  s.raw, t.raw, self.g, self.closed, tree_s, tree_r,
+                                  self.directions)
 
     @property
     def nbytes(self) -> int:
-        """Bytes this engine holds (triangles, normals, trees)."""
-        trees = sum(a.nbytes for t in (self.tree_s, self.tree_r)
-                    for a in (t.lo, t.hi, t.first, t.count, t.order, t.box_lo, t.box_hi))
-        return 4 * (self.S.nbytes + self.T.nbytes) + trees
+        """Bytes this engine's two sides hold (triangles, normals, trees; a side shared with
+        other engines counted in each)."""
+        return self.side_s.nbytes + self.side_t.nbytes
 
     def _grid_units(self, q: np.ndarray) -> np.ndarray:
         with np.errstate(over="ignore", under="ignore"):

@@ -16,7 +16,7 @@ import numpy as np
 from ..errors import InvalidArgumentError
 from ..geometry.transform import axis_angle, transform
 
-__all__ = ["slice_scene", "Slices", "Orientations", "swept_points"]
+__all__ = ["slice_scene", "turning_frame", "Slices", "Orientations", "swept_points"]
 
 
 def slice_scene(scene, slices, k: int):
@@ -30,6 +30,34 @@ def slice_scene(scene, slices, k: int):
              else f"{math.degrees(slices.angles[k]):.6g} deg")
     turned = Body(f"{robot.name} at {label}", V, robot.faces, robot.source)
     return dataclasses.replace(scene, robot=turned)
+
+
+def turning_frame(scene):
+    """What every orientation of the robot shares: ``(modelled, grid)``, the scene without the
+    obstacle parts no orientation can reach, and one grid for all orientations and turns.
+
+    At any orientation, and through a turn in place (:func:`swept_points`: both ends within
+    ``reach`` of the reference point, grown by at most ``reach`` more), the robot lies in the
+    cube of half-side ``3 reach`` about the reference point (``reach``: its farthest vertex).
+    That cube stands for the robot when far parts are left out
+    (:func:`cspace.scene.classify._without_far_parts`) and the grid is chosen
+    (:meth:`cspace.Scene.grid`), so every slice's and turn's C-obstacles fit the grid and each
+    obstacle body is welded, split and classified once for all of them
+    (:func:`cspace.scene.model.model_scene`'s ``memo``) instead of once per orientation. The
+    grid's step may be one power of two coarser than one robot box alone would give.
+    """
+    from ..scene.classify import _without_far_parts
+    from ..scene.scene import Body
+
+    c = np.asarray(scene.reference_point, dtype=np.float64)
+    reach = float(np.sqrt(((np.asarray(scene.robot.vertices) - c) ** 2).sum(axis=1)).max())
+    unit = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+    cube = Body(f"{scene.robot.name} at any orientation", c + 3.0 * max(reach, 1e-300) * unit,
+                np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                          [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]],
+                         dtype=np.int64), scene.robot.source)
+    modelled, _ = _without_far_parts(dataclasses.replace(scene, robot=cube))
+    return dataclasses.replace(modelled, robot=scene.robot), modelled.grid()
 
 
 # Relative slack over the float64 rounding of a rotated point (Rodrigues' matrix and the

@@ -22,7 +22,7 @@ import threading
 from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 
 from ..errors import BuildError, InvalidArgumentError, MissingDependencyError
-from .orientations import slice_scene
+from .orientations import slice_scene, turning_frame
 
 __all__ = ["executor_for", "DaskExecutor", "build_slices"]
 
@@ -143,7 +143,8 @@ def build_slices(scene, slices, executor=None, *, ks=None, cache=None,
 
     n = len(slices)
     ks = list(range(n)) if ks is None else sorted({int(k) % n for k in ks})
-    memo: dict = {}  # step 5 once per body for all slices that share a grid
+    frame, grid = turning_frame(scene)  # one grid, one modelling of the obstacles
+    memo: dict = {}  # steps 1-3 and 5 once per body for all slices
     done: dict = {}
     lock = threading.Lock()
 
@@ -153,8 +154,8 @@ def build_slices(scene, slices, executor=None, *, ks=None, cache=None,
                 with lock:
                     done[k] = f
                     progress(sum(done.values()) / len(ks), f"slice {k}: {message}")
-        s = slice_scene(scene, slices, k)
-        m = model_scene(s, cache=cache, robot_hull=robot_hull, executor=executor,
+        s = slice_scene(frame, slices, k)
+        m = model_scene(s, grid=grid, cache=cache, robot_hull=robot_hull, executor=executor,
                         memo=memo, progress=sub)
         try:
             return k, m.cspace()

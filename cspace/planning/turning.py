@@ -34,7 +34,7 @@ import dataclasses
 
 import numpy as np
 
-from .orientations import _turned, swept_points
+from .orientations import _turned, swept_points, turning_frame
 from ..errors import MemoryBudgetError
 from ..memory import budget_and_source, format_size
 
@@ -100,6 +100,10 @@ class TurningCSpace:
         self._box_lo, self._box_hi = boxes[:, 0], boxes[:, 1]
         self._reach = float(np.sqrt(((V - c) ** 2).sum(axis=1)).max()) * (1 + 1e-9) + 1e-9 * size
         self.far_answers = 0
+        # One grid and one modelling of the obstacles for every slice and turn
+        # (orientations.turning_frame): only the robot is modelled and summed per orientation.
+        self._frame, self.grid = turning_frame(scene)
+        self._memo: dict = {}
 
     def __repr__(self) -> str:
         return (f"TurningCSpace({self.scene.name!r}, {self.slices!r}, built: "
@@ -111,16 +115,17 @@ class TurningCSpace:
         from ..scene.scene import Body
 
         robot = Body(name, vertices, faces, self.scene.robot.source)
-        return dataclasses.replace(self.scene, robot=robot)
+        return dataclasses.replace(self._frame, robot=robot)
 
-    def _cspace(self, scene, hull: bool):
-        from ..scene.model import CSpace
+    def _cspace(self, scene, hull: bool, sums: bool = True):
+        from ..scene.model import model_scene
 
         while True:
             held = sum(cs.memory for cs in self.built_slices.values())
             try:
-                return CSpace.from_scene(scene, cache=self.cache, robot_hull=hull,
-                                         memory=max(1, self.memory - held))
+                return model_scene(scene, grid=self.grid, cache=self.cache, robot_hull=hull,
+                                   memory=max(1, self.memory - held), memo=self._memo,
+                                   sums=sums).cspace()
             except MemoryBudgetError as exc:
                 holding = [j for j, cs in self.built_slices.items() if cs.memory]
                 if self.cache not in (None, False) and holding:
@@ -199,7 +204,9 @@ class TurningCSpace:
                 name = (f"{self.scene.robot.name} part {p} turning from "
                         f"{self.slices.label(key[0])} to {self.slices.label(key[1])}")
                 scene = self._scene_with(name, P, _outward(P, hull))
-                obstacles += list(self._cspace(scene, True).obstacles)
+                # A turn is asked a few queries: triangle pairs against the swept hull
+                # build nothing, where one NCC-CVMS sum per closed body took most of a turn.
+                obstacles += list(self._cspace(scene, True, sums=False).obstacles)
             cs = self.built_turns[key] = CSpace(obstacles, bounds=self.bounds, name="turn")
         return cs
 

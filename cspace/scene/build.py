@@ -230,6 +230,7 @@ class _Context:
     bounds_g: tuple
     margin: Margin
     store: COCache | None
+    sums: bool = True    # pair_construction's: NCC-CVMS for a solid body and a convex part
     grown: dict = field(default_factory=dict)  # per robot part: its grown polytope
 
 
@@ -338,7 +339,7 @@ def _build_with(executor, todo: list, parts: list, ctx: _Context, progress) -> N
     pairs, keys, pending = [], [], []
     errors = {}  # pair index -> error text, recorded in todo's order at the end (as locally)
     for i, (b, part) in enumerate(todo):
-        construction = pair_construction(b.kind, part.kind)
+        construction = pair_construction(b.kind, part.kind, ctx.sums)
         pair = PairModel(part.name, construction)
         b.pairs.append(pair)
         pairs.append(pair)

@@ -248,7 +248,7 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
 def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                 grid: Grid | None = None, robot_hull: bool = False,
                 conservative: bool = True, executor=None,
-                memo: dict | None = None, memory=None) -> SceneModel:
+                memo: dict | None = None, memory=None, sums: bool = True) -> SceneModel:
     """Decide, per obstacle body, what to build and why; build it.
 
     Parameters
@@ -292,9 +292,14 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     memory : int or str, optional
         The memory budget of the build (bytes or a size such as ``"6G"``; default
         ``$CSPACE_MEMORY``, else half of the memory available: :mod:`cspace.memory`). The
-        constructions quadratic in the triangle counts (triangle pairs of a non-convex robot
-        part and a non-convex body) are estimated before anything is built; a build over the
-        budget raises :class:`~cspace.errors.MemoryBudgetError` saying what it needed.
+        triangle-pair C-obstacles are estimated before anything is built (per triangle:
+        :data:`cspace.cobstacle.pairs.TRIANGLE_BYTES`); a build over the budget raises
+        :class:`~cspace.errors.MemoryBudgetError` saying what it needed.
+    sums : bool, default True
+        Build a solid body against a convex robot part as one NCC-CVMS sum (an exact mesh,
+        drawable and exportable). False: as triangle pairs, the same set with nothing built,
+        for a C-space asked only a few queries (:class:`cspace.planning.turning.TurningCSpace`'s
+        turns in place).
 
     Returns
     -------
@@ -355,7 +360,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         for k, faces in enumerate(split):
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
             bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
-                                    len(parts) == 1 and parts[0].kind == "convex", memo,
+                                    sums and len(parts) == 1 and parts[0].kind == "convex", memo,
                                     sheet=bool(two_sided[faces].all())))
         if sb.name in far:
             bodies.append(_far_body(sb.name, *far[sb.name]))
@@ -374,12 +379,12 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     held = 0
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
-        held = _memory_check(scene, todo, memory)
-        ctx = _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store)
+        held = _memory_check(scene, todo, memory, sums)
+        ctx = _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store, sums)
         if executor is not None:
             _build_with(executor, todo, parts, ctx, progress)
         for i, (b, part) in enumerate(todo if executor is None else ()):
-            construction = pair_construction(b.kind, part.kind)
+            construction = pair_construction(b.kind, part.kind, sums)
 
             def sub(f, stage=None, i=i, b=b, part=part):
                 if progress is not None:
@@ -420,29 +425,31 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                       robot_hull=robot_hull, margin=margin, memory=held)
 
 
-def _memory_check(scene, todo, memory) -> int:
+def _memory_check(scene, todo, memory, sums: bool = True) -> int:
     """Bytes the C-obstacles of ``todo`` will hold; raises :class:`MemoryBudgetError` before
     anything is built when they, and the largest construction's own peak, exceed the budget.
 
     Counted: the triangle-pair C-obstacles (:func:`cspace.cobstacle.pairs.pairs_memory`, per
-    triangle of each (body, robot part) pair: the robot's triangles count once per body),
-    the constructions whose size grows with bodies times robot triangles; the others are
-    linear in a body's triangles."""
+    triangle of each side: a body's triangles once per pair, a robot part's once, since every
+    body of the build shares its side). The other constructions are linear in a body's
+    triangles."""
     items = [(b, part, len(_body_operand(b)[1]) + len(_part_triangles(part)[1]))
              for b, part in todo
-             if pair_construction(b.kind, part.kind) == "triangle pairs"]
+             if pair_construction(b.kind, part.kind, sums) == "triangle pairs"]
     if not items:
         return 0
     budget, source = budget_and_source(memory)
     ns = [n for _, _, n in items]
-    held = sum(pairs_memory(n)[0] for n in ns)
+    parts = {id(part): len(_part_triangles(part)[1]) for _, part, _ in items}
+    n_held = sum(len(_body_operand(b)[1]) for b, _, _ in items) + sum(parts.values())
+    held = pairs_memory(n_held)[0]
     needed = held + max(pairs_memory(n)[1] - pairs_memory(n)[0] for n in ns)
     if needed > budget:
         k = max(range(len(ns)), key=ns.__getitem__)
         raise MemoryBudgetError(
             f"scene {scene.name!r}: building its C-obstacles needs about "
             f"{format_size(needed)} ({len(items):,} triangle-pair C-obstacles over "
-            f"{sum(ns):,} triangles; the largest: body {items[k][0].name!r} x robot part "
+            f"{n_held:,} triangles; the largest: body {items[k][0].name!r} x robot part "
             f"{items[k][1].name!r}, {ns[k]:,} triangles), over the memory budget of "
             f"{format_size(budget)} ({source}); nothing was built. Use the robot's convex hull "
             "(robot_hull=True, --robot-hull: conservative), a smaller scene or bounds, or a "

@@ -317,7 +317,7 @@ cdef class PairSet:
     """The operands of one triangle-pair C-obstacle, as the kernels read them.
 
     ``S (m, 9)`` obstacle triangles and ``T (l, 9)`` robot vectors ``c - t`` (grid integers,
-    scene frame, int64 and the same as float64); ``ns, nt`` their canonical primitive normals
+    scene frame, int64, and ``Sf, Tf`` the same as float64); ``ns, nt`` their canonical primitive normals
     (flat pairs are skipped when ``closed``); ``g (3,)`` the margin box; the two trees'
     arrays (obstacle boxes grown by ``g``; robot boxes of ``-T``).
     """
@@ -351,8 +351,8 @@ cdef class PairSet:
     cdef int nz[13]
     cdef int K
 
-    def __init__(self, S, T, ns, nt, nsf, ntf, g, bint closed, tree_s, tree_r, D):
-        self._keep = (S, T, ns, nt, nsf, ntf, tree_s, tree_r)
+    def __init__(self, S, T, Sf, Tf, ns, nt, nsf, ntf, g, bint closed, tree_s, tree_r, D):
+        self._keep = (S, T, Sf, Tf, ns, nt, nsf, ntf, tree_s, tree_r)
         D = np.asarray(D, dtype=np.int64).reshape(-1, 3)
         if not 3 <= len(D) <= _MAXK or tree_s.lo.shape[1] != len(D) \
                 or tree_r.lo.shape[1] != len(D) or (np.abs(D) > 1).any():
@@ -363,9 +363,7 @@ cdef class PairSet:
             self.nz[k] = int((D[k] != 0).sum())
             for c in range(3):
                 self.D[3 * k + c] = float(D[k, c])
-        self.S, self.T = S, T
-        self.Sf, self.Tf = S.astype(np.float64), T.astype(np.float64)
-        self._keep += (self.Sf, self.Tf)
+        self.S, self.T, self.Sf, self.Tf = S, T, Sf, Tf
         self.ns, self.nt, self.nsf, self.ntf = ns, nt, nsf, ntf
         for k in range(3):
             self.g[k] = float(g[k])
@@ -714,80 +712,3 @@ cdef class PairSet:
             top = self._split(a, b, a_stack, b_stack, top)
         return status
 
-
-cdef class BoxIndex:
-    """Queries on one :class:`cspace.geometry.boxes.BoxTree` (its first three columns, the
-    axes): which items' closed boxes meet a query box. The broad phase of a C-space's union
-    (float comparisons of the stored bounds against the query, no arithmetic: exact)."""
-
-    cdef const double[:, ::1] lo
-    cdef const double[:, ::1] hi
-    cdef const double[:, ::1] blo
-    cdef const double[:, ::1] bhi
-    cdef const int64_t[::1] first
-    cdef const int64_t[::1] count
-    cdef const int64_t[::1] order
-    cdef object _keep
-
-    def __init__(self, tree):
-        self._keep = tree
-        self.lo, self.hi, self.first, self.count, self.order = (
-            tree.lo, tree.hi, tree.first, tree.count, tree.order)
-        self.blo, self.bhi = tree.box_lo, tree.box_hi
-
-    cdef inline bint _meets(self, const double* lo, const double* hi, const double* qlo,
-                            const double* qhi) noexcept nogil:
-        return not (lo[0] > qhi[0] or lo[1] > qhi[1] or lo[2] > qhi[2]
-                    or qlo[0] > hi[0] or qlo[1] > hi[1] or qlo[2] > hi[2])
-
-    cdef int _collect(self, const double* qlo, const double* qhi, list out) except -1:
-        cdef int stack[512]
-        cdef int top = 1, a
-        cdef Py_ssize_t x, i
-        stack[0] = 0
-        while top > 0:
-            top -= 1
-            a = stack[top]
-            if not self._meets(&self.lo[a, 0], &self.hi[a, 0], qlo, qhi):
-                continue
-            if self.count[a] > 0:
-                for x in range(self.first[a], self.first[a] + self.count[a]):
-                    i = self.order[x]
-                    if self._meets(&self.blo[i, 0], &self.bhi[i, 0], qlo, qhi):
-                        out.append(i)
-                continue
-            if top + 2 > _STACK:
-                raise RuntimeError("box tree deeper than the traversal stack")
-            stack[top], stack[top + 1] = self.first[a] + 1, self.first[a]
-            top += 2
-        return 0
-
-    def point(self, double x, double y, double z):
-        """The items whose box holds the point, as a list."""
-        cdef double q[3]
-        q[0], q[1], q[2] = x, y, z
-        out = []
-        self._collect(q, q, out)
-        return out
-
-    def box(self, double x0, double y0, double z0, double x1, double y1, double z1):
-        """The items whose box meets the box ``[(x0, y0, z0), (x1, y1, z1)]``, as a list."""
-        cdef double lo[3]
-        cdef double hi[3]
-        lo[0], lo[1], lo[2], hi[0], hi[1], hi[2] = x0, y0, z0, x1, y1, z1
-        out = []
-        self._collect(lo, hi, out)
-        return out
-
-    def overlaps(self, const double[:, ::1] qlo, const double[:, ::1] qhi):
-        """``(rows, items)`` int64: every query row and item whose boxes meet."""
-        cdef Py_ssize_t r, n0
-        rows, items = [], []
-        cdef list found
-        for r in range(qlo.shape[0]):
-            found = []
-            self._collect(&qlo[r, 0], &qhi[r, 0], found)
-            if found:
-                items += found
-                rows += [r] * len(found)
-        return np.array(rows, dtype=np.int64), np.array(items, dtype=np.int64)
