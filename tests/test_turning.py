@@ -300,6 +300,7 @@ def test_turns_as_triangle_pairs_answer_as_the_sums(case, move):
     and the orientation slices share one modelling of the obstacles."""
     from metamorphic import CASES, GRID_MOVES, moved_scene, samples
 
+    from cspace.planning.turning import _outward
     from cspace.scene.model import model_scene
 
     scene = moved_scene(CASES[case], GRID_MOVES[move])
@@ -309,12 +310,16 @@ def test_turns_as_triangle_pairs_answer_as_the_sums(case, move):
     t.slice(1)
     assert sorted(k for k in t._memo if k[0] == "weld") == welds and welds  # modelled once
     turn = t.turn(0, 1)
-    hull = turn.obstacles[0].robot
-    swept = t._scene_with("swept", hull.vertices, hull.faces)
+    assert not turn.obstacles  # built lazily, where queries come
+    (part,) = t._robot_parts()
+    P = swept_points(part, scene.reference_point, t.slices, 0, 1)
+    swept = t._scene_with("swept", P, _outward(P, ConvexHull(P)))
     sums = model_scene(swept, grid=t.grid, robot_hull=True).cspace()
+    Q = samples(swept, 900, 3)
+    inside = turn.contains(Q)
+    assert np.array_equal(inside, sums.contains(Q))
+    assert 0 < inside.sum() < len(Q)
+    assert [bool(turn.contains(q)) for q in Q[:200]] == inside[:200].tolist()
     if case == "NCC-CVMS":  # the closed L: one sum against pairs and containment terms
         assert [co.kind for co in sums.obstacles] == ["mesh"]
         assert sorted(co.kind for co in turn.obstacles) == ["mesh", "pairs"]
-    Q = samples(swept, 900, 3)
-    assert np.array_equal(turn.contains(Q), sums.contains(Q))
-    assert 0 < turn.contains(Q).sum() < len(Q)

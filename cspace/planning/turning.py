@@ -118,14 +118,17 @@ class TurningCSpace:
         return dataclasses.replace(self._frame, robot=robot)
 
     def _cspace(self, scene, hull: bool, sums: bool = True):
-        from ..scene.model import model_scene
+        """The C-space of ``scene`` (a slice or a swept part), modelled on the shared grid and
+        built lazily: a pair's C-obstacles the first time a query comes near them."""
+        from ..scene.model import LazyCSpace, model_scene
 
         while True:
             held = sum(cs.memory for cs in self.built_slices.values())
             try:
-                return model_scene(scene, grid=self.grid, cache=self.cache, robot_hull=hull,
-                                   memory=max(1, self.memory - held), memo=self._memo,
-                                   sums=sums).cspace()
+                model = model_scene(scene, grid=self.grid, robot_hull=hull, memo=self._memo,
+                                    build=False)
+                return LazyCSpace(model, cache=self.cache, sums=sums,
+                                  memory=max(1, self.memory - held))
             except MemoryBudgetError as exc:
                 holding = [j for j, cs in self.built_slices.items() if cs.memory]
                 if self.cache not in (None, False) and holding:
@@ -189,15 +192,13 @@ class TurningCSpace:
         hulls (:func:`swept_points`). Built on first use."""
         from scipy.spatial import ConvexHull
 
-        from ..scene.model import CSpace
-
         n = len(self.slices)
         i, j = int(i) % n, int(j) % n
         key = (min(i, j), max(i, j))
         cs = self.built_turns.get(key)
         if cs is None:
             self.slices.step(i, j)  # neighbours, or a named error
-            obstacles = []
+            spaces = []
             for p, V in enumerate(self._robot_parts()):
                 P = swept_points(V, self.scene.reference_point, self.slices, *key)
                 hull = ConvexHull(P)
@@ -206,8 +207,9 @@ class TurningCSpace:
                 scene = self._scene_with(name, P, _outward(P, hull))
                 # A turn is asked a few queries: triangle pairs against the swept hull
                 # build nothing, where one NCC-CVMS sum per closed body took most of a turn.
-                obstacles += list(self._cspace(scene, True, sums=False).obstacles)
-            cs = self.built_turns[key] = CSpace(obstacles, bounds=self.bounds, name="turn")
+                spaces.append(self._cspace(scene, True, sums=False))
+            cs = spaces[0] if len(spaces) == 1 else _union_of(spaces, self.bounds)
+            self.built_turns[key] = cs
         return cs
 
     # ---------------------------------------------------------------- queries
@@ -301,6 +303,19 @@ class TurningCSpace:
             if Q[i] @ Q[i - 1] < 0:
                 Q[i] = -Q[i]
         return Q
+
+
+def _union_of(spaces: list, bounds: np.ndarray):
+    """One C-space over several lazily built ones (a turn's robot parts), each asked only
+    where a query meets its box."""
+    from ..cobstacle.union import _UnionOf
+    from ..scene.model import CSpace
+
+    cs = CSpace((), bounds=bounds, name="turn")
+    lo = np.array([s.box[0] for s in spaces])
+    hi = np.array([s.box[1] for s in spaces])
+    cs._union = _UnionOf((), lazy=(lo, hi, lambda k: spaces[k]._union))
+    return cs
 
 
 def _outward(P: np.ndarray, hull) -> np.ndarray:

@@ -370,48 +370,22 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                                     f"on the grid (step 2**{grid.exponent})",
                                     np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)))
     t1 = time.perf_counter()
-    if isinstance(cache, COCache):
-        store = cache
-    elif cache is None or cache is False:
-        store = None
-    else:
-        store = COCache(None if cache is True else cache)
+    store = _store_of(cache)
     held = 0
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
         held = _memory_check(scene, todo, memory, sums)
-        ctx = _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store, sums)
+        ctx = _context(scene, grid, rgrid, margin, store, sums)
         if executor is not None:
             _build_with(executor, todo, parts, ctx, progress)
         for i, (b, part) in enumerate(todo if executor is None else ()):
-            construction = pair_construction(b.kind, part.kind, sums)
-
             def sub(f, stage=None, i=i, b=b, part=part):
                 if progress is not None:
                     progress((i + f) / len(todo), f"{b.name} ({b.kind})"
                              + (f" x {part.name}" if len(parts) > 1 else "")
                              + (f": {stage}" if stage else ""))
             sub(0.0)
-            t = time.perf_counter()
-            pair = PairModel(part.name, construction)
-            b.pairs.append(pair)
-            try:
-                key, arrays = _lookup(ctx, construction, b, part, pair)
-                if is_sum(construction) and arrays is None:
-                    pair.cos = [_build(b, part.operand, c, grid, margin, sub,
-                                       _grown(ctx.grown, margin, part))]
-                    arrays = _to_arrays(pair.cos[0]) if store is not None else None
-                else:
-                    if arrays is None:
-                        arrays = _build_pair_arrays(construction, b, part, c_ints, grid,
-                                                    bounds_g, margin, sub)
-                    _assemble(ctx, construction, b, part, pair, arrays)
-                _store(ctx, key, pair, arrays)
-            except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
-                _failed(ctx, b, part, pair, parts, f"{type(exc).__name__}: {exc}")
-            pair.seconds = time.perf_counter() - t
-            b.seconds += pair.seconds
-            b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"
+            _build_one(ctx, b, part, parts, sub)
         for b in bodies:  # one convex part: the body's one C-obstacle, as before parts
             if (len(parts) == 1 and b.pairs and b.pairs[0].cos
                     and is_sum(b.pairs[0].construction)):
@@ -423,6 +397,49 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     return SceneModel(scene=scene, grid=grid, robot=robot, bodies=bodies, sources=sources,
                       seconds={"model": t1 - t0, "build": t2 - t1}, robot_parts=parts,
                       robot_hull=robot_hull, margin=margin, memory=held)
+
+
+def _context(scene, grid: Grid, rgrid: Grid, margin: Margin, store, sums: bool) -> _Context:
+    """What every pair of one scene's build shares (:class:`cspace.scene.build._Context`)."""
+    c = np.asarray(scene.reference_point, dtype=np.float64)
+    c_ints = rgrid.snap(c)
+    bounds_g = grid.inner_box(*np.asarray(scene.bounds, dtype=np.float64))
+    return _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store, sums)
+
+
+def _store_of(cache):
+    if isinstance(cache, COCache):
+        return cache
+    if cache is None or cache is False:
+        return None
+    return COCache(None if cache is True else cache)
+
+
+def _build_one(ctx: _Context, b: BodyModel, part: RobotPart, parts: list, sub=None) -> PairModel:
+    """Build (or read from the cache) the C-obstacles of one (body, robot part) pair; a
+    failure is recorded on the body (:meth:`SceneModel.cspace` raises it)."""
+    construction = pair_construction(b.kind, part.kind, ctx.sums)
+    t = time.perf_counter()
+    pair = PairModel(part.name, construction)
+    b.pairs.append(pair)
+    try:
+        key, arrays = _lookup(ctx, construction, b, part, pair)
+        if is_sum(construction) and arrays is None:
+            pair.cos = [_build(b, part.operand, ctx.c, ctx.grid, ctx.margin, sub,
+                               _grown(ctx.grown, ctx.margin, part))]
+            arrays = _to_arrays(pair.cos[0]) if ctx.store is not None else None
+        else:
+            if arrays is None:
+                arrays = _build_pair_arrays(construction, b, part, ctx.c_ints, ctx.grid,
+                                            ctx.bounds_g, ctx.margin, sub)
+            _assemble(ctx, construction, b, part, pair, arrays)
+        _store(ctx, key, pair, arrays)
+    except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
+        _failed(ctx, b, part, pair, parts, f"{type(exc).__name__}: {exc}")
+    pair.seconds = time.perf_counter() - t
+    b.seconds += pair.seconds
+    b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"
+    return pair
 
 
 def _memory_check(scene, todo, memory, sums: bool = True) -> int:
@@ -583,3 +600,70 @@ class CSpace:
         a, b, single = CSpaceObstacle._pair(q0, q1)
         t = self._union.segments(a, b, want_t=True)[1]
         return float(t[0]) if single else t
+
+
+class LazyCSpace(CSpace):
+    """A scene's :class:`CSpace` whose C-obstacles are built the first time a query comes near
+    them: the same constructions, cache and answers as ``model_scene(...).cspace()``, built only
+    where asked (a planner that visits a few places of an orientation slice builds the bodies
+    there, not the scene).
+
+    Made from a model without builds (``model_scene(scene, build=False)``). Each (body, robot
+    part) pair's C-obstacles lie in the exact grid box ``O ⊕ (c - R)`` grown by the widest
+    margin (as step 4 drops bodies); a query meeting that box builds the pair (through the disk
+    cache). ``obstacles`` holds what is built so far; ``signed_distance`` and drawing build
+    everything. ``memory`` is the estimate for all pairs, as for the eager build.
+
+    Raises
+    ------
+    BuildError
+        From the query that first needs a pair whose build fails (it names the body).
+    MemoryBudgetError
+        At construction, when all pairs together would not fit the budget.
+    """
+
+    def __init__(self, model: SceneModel, *, cache=None, sums: bool = True, memory=None):
+        scene, parts = model.scene, model.robot_parts
+        rgrid = parts[0].grid
+        self.model = model
+        self._ctx = _context(scene, model.grid, rgrid, model.margin, _store_of(cache), sums)
+        self._todo = [(b, p) for b in model.bodies if b.kind != "dropped" for p in parts]
+        held = _memory_check(scene, self._todo, memory, sums)
+        super().__init__((), bounds=scene.bounds, name=scene.name, scene=scene,
+                         robot_hull=model.robot_hull, memory=held)
+        # Boxes in grid integers, exact: the body's box plus the box of c - R, grown by the
+        # margin and one step (a float64 surface's rounding), as minus_r_box in model_scene.
+        g = model.margin.g + 1
+        lo, hi = np.zeros((len(self._todo), 3)), np.zeros((len(self._todo), 3))
+        for k, (b, part) in enumerate(self._todo):
+            o_ints, o_faces = _body_operand(b)
+            o = o_ints[np.unique(o_faces)]
+            r_ints, _ = _part_triangles(part)
+            v_lo = self._ctx.c_ints - r_ints.max(axis=0) - g  # vectors: robot grid's step
+            v_hi = self._ctx.c_ints - r_ints.min(axis=0) + g
+            lo[k] = model.grid.to_float(o.min(axis=0)) + np.ldexp(v_lo.astype(float),
+                                                                   rgrid.exponent)
+            hi[k] = model.grid.to_float(o.max(axis=0)) + np.ldexp(v_hi.astype(float),
+                                                                   rgrid.exponent)
+        # each sum rounded once: widened by 2**-40 of its size, far beyond an ulp
+        pad = np.ldexp(np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, initial=0.0), -40)[:, None]
+        lo, hi = lo - pad - 1e-300, hi + pad + 1e-300
+        self._union = _UnionOf((), lazy=(lo, hi, self._make))
+        #: (2, 3): the box every C-obstacle of this C-space lies in
+        self.box = (np.stack([lo.min(axis=0), hi.max(axis=0)]) if len(lo)
+                    else np.zeros((2, 3)))
+        self._built = 0
+
+    def _make(self, k: int) -> _UnionOf:
+        b, part = self._todo[k]
+        pair = _build_one(self._ctx, b, part, self.model.robot_parts)
+        if b.error:
+            raise BuildError(f"scene {self.name!r}: cannot build the C-obstacle of body "
+                             f"{b.name!r} ({b.kind}: {b.reason}): {b.error}")
+        self.obstacles += tuple(pair.cos)
+        self._built += 1
+        return _UnionOf(pair.cos)
+
+    def __repr__(self) -> str:
+        return (f"LazyCSpace(name={self.name!r}, pairs={len(self._todo)}, "
+                f"built={self._built})")
