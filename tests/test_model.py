@@ -537,3 +537,30 @@ def test_surface_distance_with_no_candidates_left():
     from cspace.cobstacle.surface import _UnionCO
 
     assert list(_UnionCO._by_piece(np.zeros(0, np.int64), np.zeros(0, np.int64))) == []
+
+
+@pytest.mark.parametrize("move", [0, 1], ids=["as given", "at (250, 150, -300)"])
+@pytest.mark.parametrize("case", ["NCC-CVMS", "several bodies", "open obstacle x convex robot",
+                                  "folded closed body"])
+def test_lazy_cspace_answers_as_the_built_one(case, move):
+    """LazyCSpace builds a pair only when a query meets its box: the same answers as the
+    eager build, one state at a time and in batches, with only the pairs near queries built."""
+    from metamorphic import CASES, GRID_MOVES, moved_scene, samples
+
+    from cspace.scene.model import LazyCSpace
+
+    scene = moved_scene(CASES[case], GRID_MOVES[move])
+    eager = model_scene(scene).cspace()
+    lazy = LazyCSpace(model_scene(scene, build=False))
+    assert not lazy.obstacles and lazy.memory == model_scene(scene).memory
+    Q = samples(scene, 600, 5)
+    want = eager.contains(Q)
+    assert [bool(lazy.contains(q)) for q in Q[:150]] == want[:150].tolist()
+    assert np.array_equal(lazy.contains(Q), want)
+    Q1 = Q[::-1].copy()
+    assert np.array_equal(lazy.segment_free(Q, Q1), eager.segment_free(Q, Q1))
+    assert [bool(lazy.segment_free(a, b)) for a, b in zip(Q[:100], Q1[:100])] \
+        == eager.segment_free(Q[:100], Q1[:100]).tolist()
+    assert np.array_equal(lazy.first_contact(Q[:80], Q1[:80]), eager.first_contact(Q[:80], Q1[:80]),
+                          equal_nan=True)
+    assert 0 < want.sum() < len(Q)
