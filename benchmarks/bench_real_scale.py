@@ -215,8 +215,8 @@ def planning(scene) -> list[dict]:
 
 
 def turn_build(scene, slices) -> dict:
-    """Seconds to build the start orientation's slice, then one turn in place from it to a
-    neighbour (no disk cache): what a turning planner pays the first time it reaches each."""
+    """Seconds to make the start orientation's slice, then one turn in place from it to a
+    neighbour (no disk cache; both lazy: bodies are built at the first query near them)."""
     from cspace.planning.turning import TurningCSpace
 
     tc = TurningCSpace(scene, slices, cache=None)
@@ -241,7 +241,7 @@ def main():
     lines = ["## Real scale: non-convex robots in OMPL.app-class worlds (issue #29)", "",
              f"`python benchmarks/bench_real_scale.py`; {platform.processor() or platform.machine()}, "
              f"{os.cpu_count()} cores, load average at start {', '.join(f'{x:.2f}' for x in load0)}. "
-             "Triangle pairs are found per query by two box trees (no pair is enumerated); "
+             "Triangle pairs are found per query by two k-DOP trees (26-DOPs; no pair is enumerated); "
              "every answer exact. Builds in a fresh process with an empty disk cache (cold) and "
              "again with it filled (cached); queries one state at a time in one process, FCL "
              "(`fcl.collide`, robot BVH against one world BVH, raw meshes) on the same states "
@@ -284,18 +284,19 @@ def main():
         for name, rows in plans:
             for r in rows:
                 if r.get("turn"):
-                    turns.append(f"- {name}: one orientation slice {r['slice_s']:.1f} s, one "
+                    turns.append(f"- {name}: one orientation slice {r['slice_s']:.2f} s, one "
                                  f"turn in place to a neighbour ({r['step_deg']:.0f}°) "
-                                 f"{r['turn_s']:.1f} s")
+                                 f"{r['turn_s']:.2f} s")
                     continue
                 mean = f"{r['mean_s']:.2f}" if r["mean_s"] is not None else "–"
                 lines.append(f"| {name} | {r['method']} | {r['solved']}/{r['runs']} | {mean} | "
                              f"{r['clipping']}/{r['solved']} |")
     if plans:
         lines += ["", "What a turning planner pays the first time it reaches a slice or a turn "
-                  "(built in this process, no disk cache; a turn's C-obstacles are the robot "
-                  "parts' swept hulls against every body, open bodies as triangle pairs "
-                  "against the hull's facets):", ""] + turns
+                  "(in this process, no disk cache; the first slice also models the obstacles, "
+                  "once for all orientations; both are lazy, a body's C-obstacles built at the "
+                  "first query near it; a turn's are the robot parts' swept hulls against "
+                  "every body as triangle pairs, convex bodies by CVMS):", ""] + turns
     lines.append("")
     report = ROOT / "benchmarks" / "reports" / "planning.md"
     text = report.read_text() if report.exists() else ""
