@@ -98,8 +98,8 @@ def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None
 
 
 def _key(body: BodyModel, robot, c_ints, grid) -> str:
-    faces = body.faces[body._keep] if body.kind == "surface" else body.faces
-    return co_key(body.kind, grid, body._ints, faces, robot.ints, c_ints)
+    """Cache key of a sum (CVMS, NCC-CVMS): a convex or solid body, never a surface."""
+    return co_key(body.kind, grid, body._ints, body.faces, robot.ints, c_ints)
 
 
 def _pair_key(construction, body: BodyModel, part: RobotPart, c_ints, grid,

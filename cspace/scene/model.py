@@ -261,7 +261,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         ``$CSPACE_CACHE`` or ``~/.cache/cspace``); None or False: no disk cache.
     progress : callable, optional
         ``progress(fraction, message)`` with the overall fraction in ``[0, 1]``: once per
-        body, during long surface builds, and per stage of a non-convex (NCC-CVMS) build.
+        body, and per stage of a non-convex (NCC-CVMS) build.
     grid : Grid, optional
         Default ``Scene.grid`` of what is modelled: obstacle parts that cannot reach the
         bounds and lie beyond everything else are dropped first, so that an obstacle far away

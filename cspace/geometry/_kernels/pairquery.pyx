@@ -104,6 +104,23 @@ cdef int _normals(const int64_t* s, const int64_t* t, bint grown, int64_t* N) no
         m = unit[k] if unit[k] >= 0 else -unit[k]
         if m > best:
             axis, best = k, m
+    n = _turned_edges(axis, es, et, N, n)
+    if grown:
+        for a in range(3):
+            for k in range(3):
+                N[3 * n + k] = 1 if k == a else 0
+            n += 1
+        for a in range(3):
+            n = _turned_edges(a, es, et, N, n)
+    return n
+
+
+cdef inline int _turned_edges(int axis, const int64_t* es, const int64_t* et, int64_t* N,
+                              int n) noexcept nogil:
+    """Append ``e_axis x edge`` for the three edges of each triangle at ``N[3 n]``; the new
+    count."""
+    cdef int64_t unit[3]
+    cdef int a
     unit[0], unit[1], unit[2] = 0, 0, 0
     unit[axis] = 1
     for a in range(3):
@@ -112,20 +129,6 @@ cdef int _normals(const int64_t* s, const int64_t* t, bint grown, int64_t* N) no
     for a in range(3):
         _cross(unit, &et[3 * a], &N[3 * n])
         n += 1
-    if grown:
-        for a in range(3):
-            for k in range(3):
-                N[3 * n + k] = 1 if k == a else 0
-            n += 1
-        for a in range(3):
-            unit[0], unit[1], unit[2] = 0, 0, 0
-            unit[a] = 1
-            for b in range(3):
-                _cross(unit, &es[3 * b], &N[3 * n])
-                n += 1
-            for b in range(3):
-                _cross(unit, &et[3 * b], &N[3 * n])
-                n += 1
     return n
 
 
