@@ -450,6 +450,11 @@ def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_ou
           f"{r.time:.2f} s; {len(r.path)} waypoints ({turns} turns between neighbouring "
           f"orientations), length {r.length:.4g}; exact re-check: "
           f"{'valid' if r.valid else 'INVALID'}")
+    first = r.built.get("start_orientation_only")
+    if first is not None:
+        print("  start and goal share an orientation: "
+              + ("translations at it found the path" if first else
+                 "translations at it found no path; the turning planner had the rest of the time"))
     if args.explain:
         print(f"  {slices!r}")
         print(f"  built lazily: {r.built['slices']} of {r.built['of'][0]} orientations' "

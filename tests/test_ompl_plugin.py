@@ -181,6 +181,33 @@ def test_checker_and_motion_validator_return_bools(scenes):
     assert mv.calls >= 5
 
 
+def test_checker_and_motion_validator_build_a_lazy_cspace_where_they_ask(scenes):
+    """A lazy C-space holds no C-obstacle until a query meets one: the checker and motion
+    validator must ask the C-space (which builds), not the C-obstacles built so far (none,
+    so everything would pass as free)."""
+    from cspace.planning.ompl_plugin import CSpaceMotionValidator, CSpaceValidityChecker
+    from cspace.scene.model import LazyCSpace, model_scene
+
+    s, _, _ = scenes["window"]
+    lazy = LazyCSpace(model_scene(s, build=False))
+    si = _si(lazy, s.bounds)
+    chk = CSpaceValidityChecker(si, lazy, bounds=s.bounds)
+    mv = CSpaceMotionValidator(si, lazy, chk)
+    a, b, wall = (si.allocState() for _ in range(3))
+    a[0:3] = s.start.tolist()
+    b[0:3] = s.goal.tolist()
+    wall[0:3] = [0.0, -1.1275, 1.5]      # inside the left post's C-obstacle
+    assert not lazy.obstacles
+    assert chk.isValid(wall) is False and lazy.obstacles
+    assert mv.checkMotion(a, b) is False
+    with pytest.raises(cspace.InvalidArgumentError, match="in collision"):
+        plan(LazyCSpace(model_scene(s, build=False)), [0.0, -1.1275, 1.5], s.goal,
+             bounds=s.bounds)
+    r = plan(LazyCSpace(model_scene(s, build=False)), s.start, s.goal, bounds=s.bounds,
+             time=2.0, seed=1, sampler="uniform")
+    assert not r.exact or r.solved  # an exact OMPL solution is never refused by the re-proof
+
+
 def test_seed_reproducible(scenes):
     s, _, _ = scenes["comb"]
     r1 = plan(s, seed=7, time=0.5, simplify=False)

@@ -147,12 +147,38 @@ def test_planned_turns_pass_fcl_along_every_motion(piano, seed):
     assert set(np.diff(r.slices).tolist()) - {0} and (np.diff(r.slices) != 0).sum() >= 2
     assert np.array_equal(r.path[0], piano.start) and np.array_equal(r.path[-1], piano.goal)
     assert r.built["slices"] <= 8 and r.built["turns"] <= 8
+    assert r.built["start_orientation_only"] is False  # tried first, found nothing
     # each step is a translation within a slice or a turn in place between neighbours
     for (q0, k0), (q1, k1) in zip(zip(r.path, r.slices), zip(r.path[1:], r.slices[1:])):
         assert k0 == k1 or (np.array_equal(q0, q1) and (int(k1) - int(k0)) % 8 in (1, 7))
     bad, n = pose_path_collisions(piano, r.path, _relative(piano, r.orientations),
                                   per_metre=1e3, per_degree=1e3)
     assert bad == 0 and n > 10**5
+
+
+@pytest.mark.parametrize("move", [(0, 0, 0), (250, 150, -300)])
+def test_translations_at_the_shared_orientation_come_first(piano, move):
+    """Start and goal on one side of the wall, one orientation: the path is translations at
+    it alone, with no other orientation and no turn built (a planner over every orientation
+    would spend its samples turning)."""
+    m = np.array(move, dtype=np.float64)
+    scene = dataclasses.replace(
+        piano, obstacles=tuple(dataclasses.replace(o, vertices=o.vertices + m)
+                               for o in piano.obstacles),
+        robot=dataclasses.replace(piano.robot, vertices=piano.robot.vertices + m),
+        reference_point=piano.reference_point + m, bounds=piano.bounds + m,
+        start=piano.start + m, goal=np.array([1.2, -1.6, 0.5]) + m)
+    r = plan(scene, slices=8, time=4.0, seed=1)
+    assert r.solved and r.built["start_orientation_only"] is True
+    assert (r.slices == 0).all() and r.built["slices"] == 1 and r.built["turns"] == 0
+    assert np.array_equal(r.path[0], scene.start) and np.array_equal(r.path[-1], scene.goal)
+    bad, n = pose_path_collisions(scene, r.path, _relative(scene, r.orientations),
+                                  per_metre=1e3)
+    assert bad == 0 and n > 1000
+    # a goal that needs a turn: the shared orientation is tried, then the turning planner
+    through = dataclasses.replace(scene, goal=piano.goal + m)
+    r = plan(through, slices=8, time=10.0, seed=1)
+    assert r.solved and r.built["start_orientation_only"] is False and (r.slices != 0).any()
 
 
 @pytest.mark.slow

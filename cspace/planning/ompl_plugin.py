@@ -59,21 +59,6 @@ def _bounds(bounds) -> np.ndarray:
     return b
 
 
-def _boxes(cspace: CSpace) -> list:
-    """``(obstacle, lo, hi)`` per C-obstacle: its bounding box as Python floats, grown outward.
-
-    A broad phase only: the box is a superset of the C-obstacle (float vertices may be rounded,
-    so it is grown by ``2**-40`` relative plus ``2**-1000``), and every query that meets it is
-    decided exactly by the obstacle itself.
-    """
-    out = []
-    for o in cspace.obstacles:
-        lo, hi = o.bounds
-        pad = (np.abs(lo) + np.abs(hi)) * 2.0**-40 + 2.0**-1000
-        out.append((o, (lo - pad).tolist(), (hi + pad).tolist()))
-    return out
-
-
 def _in_bounds(q: np.ndarray, b: np.ndarray) -> np.ndarray:
     q = np.atleast_2d(q)
     return ((b[0] <= q) & (q <= b[1])).all(axis=1)
@@ -116,7 +101,6 @@ def _classes() -> dict[str, type]:
             b = _bounds(cspace.bounds if bounds is None else bounds)
             self._lo, self._hi = b[0].tolist(), b[1].tolist()
             self._clearance = bool(clearance)
-            self._boxes = _boxes(cspace)
             self.calls = 0
 
         def isValid(self, state) -> bool:
@@ -125,14 +109,9 @@ def _classes() -> dict[str, type]:
             x, y, z = state[0], state[1], state[2]
             if not (lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1] and lo[2] <= z <= hi[2]):
                 return False
-            q = None
-            for o, a, b in self._boxes:  # broad phase, then the exact test
-                if a[0] <= x <= b[0] and a[1] <= y <= b[1] and a[2] <= z <= b[2]:
-                    if q is None:
-                        q = np.array([x, y, z])
-                    if o.contains(q):
-                        return False
-            return True
+            # The C-space's own broad phase (a box tree over its C-obstacles), which also
+            # builds a lazy C-space's pairs where the state meets them.
+            return not self.cspace.contains(np.array((x, y, z)))
 
         def clearance(self, state) -> float:
             if not self._clearance:
@@ -165,26 +144,14 @@ def _classes() -> dict[str, type]:
             # Holding ``si`` here would make a reference cycle through C++ (a leak).
             self.checker = checker if checker is not None else CSpaceValidityChecker(si, cspace)
             self.cspace = cspace
-            self._boxes = _boxes(cspace)
             self.calls = 0
 
         def checkMotion(self, s1, s2, *last_valid) -> bool:
             self.calls += 1
             if not self.checker.isValid(s2):
                 return False
-            x0, y0, z0, x1, y1, z1 = s1[0], s1[1], s1[2], s2[0], s2[1], s2[2]
-            lx, hx = (x0, x1) if x0 <= x1 else (x1, x0)
-            ly, hy = (y0, y1) if y0 <= y1 else (y1, y0)
-            lz, hz = (z0, z1) if z0 <= z1 else (z1, z0)
-            a = b = None
-            for o, lo, hi in self._boxes:  # broad phase on the segment's box, then exact
-                if (lo[0] <= hx and lx <= hi[0] and lo[1] <= hy and ly <= hi[1]
-                        and lo[2] <= hz and lz <= hi[2]):
-                    if a is None:
-                        a, b = np.array([x0, y0, z0]), np.array([x1, y1, z1])
-                    if not o.segment_free(a, b):
-                        return False
-            return True
+            return bool(self.cspace.segment_free(np.array((s1[0], s1[1], s1[2])),
+                                                 np.array((s2[0], s2[1], s2[2]))))
 
     _CLASSES["CSpaceValidityChecker"] = CSpaceValidityChecker
     _CLASSES["CSpaceMotionValidator"] = CSpaceMotionValidator
