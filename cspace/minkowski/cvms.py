@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..geometry import exact
+from ..geometry._kernels import load
 from ..geometry.exact import Grid
 from ..mesh.convex import ConvexPolytope, _facet_polygon
 
@@ -30,6 +31,8 @@ FACET_KINDS = ("translated", "corner", "edge")
 
 
 TRANSLATED, CORNER, EDGE = 0, 1, 2
+
+_compiled = load("convexsum")
 
 
 # --------------------------------------------------------------------------------------
@@ -153,11 +156,43 @@ def convex_minkowski_sum(A, B) -> MinkowskiSum:
     Notes
     -----
     Cost: the support of every facet normal of A among B's vertices and vice versa
-    (``O(f_A v_B + f_B v_A)``, one BLAS product each), and the Gauss-arc crossing test on
-    the pairs of edges whose two facets have different contributing vertices. All decisions
-    go through float filters with exact fallbacks (:mod:`cspace.geometry.exact`).
+    (``O(f_A v_B + f_B v_A)``), and the Gauss-arc crossing test on the pairs of edges whose
+    two facets have different contributing vertices. The work is one call of the compiled
+    kernel (:mod:`cspace.geometry._kernels.convexsum`), every decision exact in ``__int128``
+    (no filter needed); :func:`_convex_minkowski_sum_reference` is the same steps in numpy
+    (float filters with exact fallbacks, :mod:`cspace.geometry.exact`), identical output
+    (``tests/test_kernels.py``), and runs where the kernel's range does not hold.
     """
     A, B = _common_grid(A, B)
+    out = _compiled.facets(*_arrays(A), *_arrays(B))
+    if out is None:  # outside the kernel's range, or facets that do not close up
+        return _convex_minkowski_sum_reference(A, B)
+    labels, offsets, flat, normals, source_a, source_b, edges, edge_facets = out
+    poly = ConvexPolytope(grid=A.grid.plus(B.grid), ints=A.ints[labels[:, 0]] + B.ints[labels[:, 1]],
+                          facet_offsets=offsets, facet_indices=flat, normals=normals,
+                          edges=edges, edge_facets=edge_facets, name=f"{A.name}+{B.name}")
+    return _with_kinds(poly, labels, source_a, source_b)
+
+
+def _arrays(P: ConvexPolytope) -> tuple:
+    """The polytope's arrays as the kernel takes them (C-contiguous int64)."""
+    c = np.ascontiguousarray
+    return (c(P.ints, np.int64), c(P.facet_offsets, np.int64), c(P.facet_indices, np.int64),
+            c(P.normals, np.int64), c(P.edges, np.int64), c(P.edge_facets, np.int64))
+
+
+def _with_kinds(poly: ConvexPolytope, labels, source_a, source_b) -> MinkowskiSum:
+    """The sum with each facet's kind, from its provenance: a facet of A is translated, a
+    facet of B a corner, the rest edge facets."""
+    kind = np.where(source_a[:, 0] == 2, TRANSLATED,
+                    np.where(source_b[:, 0] == 2, CORNER, EDGE)).astype(np.int8)
+    return MinkowskiSum(polytope=poly, labels=labels, kind=kind, source_a=source_a,
+                        source_b=source_b)
+
+
+def _convex_minkowski_sum_reference(A, B) -> MinkowskiSum:
+    """:func:`convex_minkowski_sum` in numpy, step for step what the compiled kernel does
+    (operands on one grid already)."""
     nA, nB = A.normals, B.normals
     SB = exact.support_mask(B.ints, nA)  # (fA, vB): contributing vertices of A's facets
     SA = exact.support_mask(A.ints, nB)  # (fB, vA): contributing vertices of B's facets
@@ -260,10 +295,9 @@ def convex_minkowski_sum(A, B) -> MinkowskiSum:
     ints = A.ints[labels[:, 0]] + B.ints[labels[:, 1]]
     offsets = np.zeros(len(sizes) + 1, dtype=np.int64)
     np.cumsum(sizes, out=offsets[1:])
-    poly = ConvexPolytope._from_csr(ints, offsets, flat.reshape(-1), normals, grid=A.grid.plus(B.grid),
-                                   name=f"{A.name}+{B.name}")
-    kind = np.where(source_a[:, 0] == 2, TRANSLATED, np.where(source_b[:, 0] == 2, CORNER, EDGE)).astype(np.int8)
-    return MinkowskiSum(polytope=poly, labels=labels, kind=kind, source_a=source_a, source_b=source_b)
+    poly = ConvexPolytope._from_csr(ints, offsets, flat.reshape(-1), normals,
+                                   grid=A.grid.plus(B.grid), name=f"{A.name}+{B.name}")
+    return _with_kinds(poly, labels, source_a, source_b)
 
 
 def _gather(offsets: np.ndarray, indices: np.ndarray, sel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

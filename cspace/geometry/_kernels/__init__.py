@@ -5,6 +5,8 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
   (exact triangle-pair classes), :mod:`cspace.geometry.endpoints` (their endpoints);
 - ``boxtree`` — :class:`cspace.geometry.boxes.BoxTree` (the median-split build, reference
   ``boxes._tree_reference``; one tree's box queries, the C-space's broad phase);
+- ``convexsum`` — :mod:`cspace.minkowski.cvms` (CVMS in one call; reference
+  ``cvms._convex_minkowski_sum_reference``);
 - ``meshquery`` — :mod:`cspace.mesh.query` (references in :mod:`cspace.mesh.query_reference`);
 - ``pairquery`` — :mod:`cspace.cobstacle.pairs` (triangle pairs found by two box trees; reference
   :mod:`cspace.cobstacle.pairs_reference`, every pair enumerated, tested in

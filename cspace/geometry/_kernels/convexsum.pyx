@@ -1,0 +1,655 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
+"""Compiled CVMS: the facets of the exact Minkowski sum of two convex polytopes, in one call.
+
+:func:`facets` is :func:`cspace.minkowski.cvms._convex_minkowski_sum_reference` step for step
+(the same facets, in the same order, with the same labels and provenance;
+``tests/test_kernels.py`` holds them identical): supports of each operand's facet normals
+among the other's vertices, the facet normals of both merged in lexicographic order, the
+translated, corner and planar-sum facets, the edge facets of crossing Gauss arcs, and the
+vertex labels (sorted ``(a, b)`` codes).
+
+Exactness: every decision is an integer computation in ``__int128``, without rounding, within
+the range the caller checks: ``|coordinate| < 2**40`` and ``|normal component| < 2**61``, so a
+dot product is below ``3 * 2**101`` and a 2D turn below ``2**83``. An edge facet's normal is
+the cross product of two edge vectors (below ``2**82``, in ``__int128``) divided by its
+components' gcd; the result must fit int64 (the reference's range check: twice the largest
+selected edge coordinates' product below ``2**61``), else :func:`facets` returns None and the
+caller runs the reference, which raises the same named error.
+"""
+
+import numpy as np
+
+from libc.stdint cimport int64_t, uint8_t
+from libc.stdlib cimport malloc, realloc, free, qsort
+
+cdef extern from *:
+    """
+    typedef __int128 cs_cvms_i128;
+    """
+    # Cython sees it as a 64-bit type; it is only ever used in C arithmetic here.
+    ctypedef long long i128 "cs_cvms_i128"
+
+
+# --------------------------------------------------------------------------------------------
+# growable int64 buffers
+
+cdef struct Buf:
+    int64_t* data
+    Py_ssize_t n
+    Py_ssize_t cap
+
+
+cdef int _push(Buf* b, int64_t x) except -1:
+    cdef int64_t* grown
+    if b.n == b.cap:
+        b.cap = 2 * b.cap + 16
+        grown = <int64_t*> realloc(b.data, b.cap * sizeof(int64_t))
+        if grown == NULL:
+            raise MemoryError()
+        b.data = grown
+    b.data[b.n] = x
+    b.n += 1
+    return 0
+
+
+cdef object _array(Buf* b):
+    out = np.empty(b.n, dtype=np.int64)
+    cdef int64_t[::1] o = out
+    cdef Py_ssize_t i
+    for i in range(b.n):
+        o[i] = b.data[i]
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# stable merge sort of indices by integer keys (lexicographic over ``nk`` columns)
+
+cdef inline int _cmp(const int64_t* keys, int nk, int64_t a, int64_t b) noexcept nogil:
+    cdef int c
+    cdef int64_t x, y
+    for c in range(nk):
+        x = keys[a * nk + c]
+        y = keys[b * nk + c]
+        if x < y:
+            return -1
+        if x > y:
+            return 1
+    return 0
+
+
+cdef void _msort(int64_t* idx, int64_t* tmp, Py_ssize_t n, const int64_t* keys,
+                 int nk) noexcept nogil:
+    """Bottom-up merge sort: equal keys keep their order (as Python's ``sorted``)."""
+    cdef Py_ssize_t width = 1, lo, mid, hi, i, j, k
+    cdef int64_t* src = idx
+    cdef int64_t* dst = tmp
+    cdef int64_t* t
+    while width < n:
+        lo = 0
+        while lo < n:
+            mid = lo + width if lo + width < n else n
+            hi = lo + 2 * width if lo + 2 * width < n else n
+            i, j, k = lo, mid, lo
+            while i < mid and j < hi:
+                if _cmp(keys, nk, src[j], src[i]) < 0:
+                    dst[k] = src[j]
+                    j += 1
+                else:
+                    dst[k] = src[i]
+                    i += 1
+                k += 1
+            while i < mid:
+                dst[k] = src[i]
+                i += 1
+                k += 1
+            while j < hi:
+                dst[k] = src[j]
+                j += 1
+                k += 1
+            lo = hi
+        t = src
+        src = dst
+        dst = t
+        width *= 2
+    if src != idx:
+        for i in range(n):
+            idx[i] = src[i]
+
+
+cdef int _cmp64(const void* a, const void* b) noexcept nogil:
+    cdef int64_t x = (<const int64_t*> a)[0], y = (<const int64_t*> b)[0]
+    return (x > y) - (x < y)
+
+
+# --------------------------------------------------------------------------------------------
+# exact helpers
+
+# The range in which every product below fits __int128 (see the module's docstring).
+cdef int64_t COORD = 1LL << 40
+cdef int64_t NORMAL = 1LL << 61
+
+
+cdef bint _within(const int64_t[:, ::1] X, int64_t bound) noexcept nogil:
+    cdef Py_ssize_t i, c
+    for i in range(X.shape[0]):
+        for c in range(X.shape[1]):
+            if not (-bound < X[i, c] < bound):
+                return False
+    return True
+
+cdef inline int _sign128(i128 v) noexcept nogil:
+    return (v > 0) - (v < 0)
+
+
+cdef inline i128 _dot(const int64_t* u, const int64_t* v) noexcept nogil:
+    return <i128> u[0] * v[0] + <i128> u[1] * v[1] + <i128> u[2] * v[2]
+
+
+cdef inline int64_t _gcd(int64_t a, int64_t b) noexcept nogil:
+    if a < 0:
+        a = -a
+    if b < 0:
+        b = -b
+    while b:
+        a, b = b, a % b
+    return a
+
+
+cdef void _support(const int64_t[:, ::1] P, const int64_t[:, ::1] D, uint8_t* mask,
+                   int64_t* count, int64_t* first) noexcept nogil:
+    """``mask[j, i]``: point ``i`` maximises ``<p, D[j]>`` (exact); per direction the number
+    of maximisers and the first."""
+    cdef Py_ssize_t n = P.shape[0], m = D.shape[0], i, j
+    cdef i128 best, v
+    for j in range(m):
+        best = _dot(&P[0, 0], &D[j, 0])
+        for i in range(1, n):
+            v = _dot(&P[i, 0], &D[j, 0])
+            if v > best:
+                best = v
+        count[j] = 0
+        first[j] = -1
+        for i in range(n):
+            v = _dot(&P[i, 0], &D[j, 0])
+            mask[j * n + i] = v == best
+            if v == best:
+                count[j] += 1
+                if first[j] < 0:
+                    first[j] = i
+
+
+cdef int _hull2d(const int64_t* xy, Py_ssize_t n, int64_t* out, int64_t* idx,
+                 int64_t* tmp) noexcept nogil:
+    """Strictly convex hull of 2D integer points ``xy`` (interleaved), counter-clockwise, as
+    indices: :func:`cspace.mesh.convex._hull2d` (stable sort, first of duplicates, monotone
+    chain dropping collinear points). Returns the count; ``out`` holds up to ``2 n``."""
+    cdef Py_ssize_t i, m = 0, h, k
+    cdef int64_t o, a, b
+    cdef i128 turn
+    for i in range(n):
+        idx[i] = i
+    _msort(idx, tmp, n, xy, 2)
+    # drop exact duplicates, keep the first
+    for i in range(n):
+        if m == 0 or xy[2 * idx[i]] != xy[2 * tmp[m - 1]] or xy[2 * idx[i] + 1] != xy[2 * tmp[m - 1] + 1]:
+            tmp[m] = idx[i]
+            m += 1
+    if m < 3:
+        for i in range(m):
+            out[i] = tmp[i]
+        return <int> m
+    # lower chain
+    h = 0
+    for i in range(m):
+        while h >= 2:
+            o, a, b = out[h - 2], out[h - 1], tmp[i]
+            turn = ((<i128> xy[2 * a] - xy[2 * o]) * (<i128> xy[2 * b + 1] - xy[2 * o + 1])
+                    - (<i128> xy[2 * a + 1] - xy[2 * o + 1]) * (<i128> xy[2 * b] - xy[2 * o]))
+            if turn > 0:
+                break
+            h -= 1
+        out[h] = tmp[i]
+        h += 1
+    # upper chain from the lower one's last point (never popped), over the others reversed
+    k = h - 1
+    for i in range(m - 2, -1, -1):
+        while h - k >= 2:
+            o, a, b = out[h - 2], out[h - 1], tmp[i]
+            turn = ((<i128> xy[2 * a] - xy[2 * o]) * (<i128> xy[2 * b + 1] - xy[2 * o + 1])
+                    - (<i128> xy[2 * a + 1] - xy[2 * o + 1]) * (<i128> xy[2 * b] - xy[2 * o]))
+            if turn > 0:
+                break
+            h -= 1
+        out[h] = tmp[i]
+        h += 1
+    return <int> (h - 1)
+
+
+cdef void _feature(const uint8_t* supp, Py_ssize_t n, const int64_t[:, ::1] edges,
+                   const int64_t[::1] f_off, const int64_t[::1] f_idx,
+                   int64_t* dim, int64_t* index) noexcept nogil:
+    """``(dimension, index)`` of the face spanned by the support mask (as ``cvms._feature``):
+    a vertex, an edge of ``edges`` (either way round) or the facet with that vertex set."""
+    cdef Py_ssize_t i, c = 0, e, f, first = -1, second = -1, ok
+    for i in range(n):
+        if supp[i]:
+            c += 1
+            if first < 0:
+                first = i
+            elif second < 0:
+                second = i
+    if c == 1:
+        dim[0], index[0] = 0, first
+        return
+    if c == 2:
+        for e in range(edges.shape[0]):
+            if ((edges[e, 0] == first and edges[e, 1] == second)
+                    or (edges[e, 0] == second and edges[e, 1] == first)):
+                dim[0], index[0] = 1, e
+                return
+        dim[0], index[0] = 1, -1
+        return
+    index[0] = -1
+    for f in range(f_off.shape[0] - 1):
+        if f_off[f + 1] - f_off[f] != c:
+            continue
+        ok = 1
+        for i in range(f_off[f], f_off[f + 1]):
+            if not supp[f_idx[i]]:
+                ok = 0
+                break
+        if ok:
+            index[0] = f  # the reference's dict keeps the last facet of a vertex set
+    dim[0] = 2
+
+
+# --------------------------------------------------------------------------------------------
+# the sum's facets
+
+cdef struct Out:
+    Buf fa
+    Buf fb
+    Buf size
+    Buf normal
+    Buf src_a
+    Buf src_b
+
+
+cdef int _facet(Out* o, int64_t n0, int64_t n1, int64_t n2, int64_t da, int64_t ia,
+                int64_t db, int64_t ib) except -1:
+    _push(&o.normal, n0)
+    _push(&o.normal, n1)
+    _push(&o.normal, n2)
+    _push(&o.src_a, da)
+    _push(&o.src_a, ia)
+    _push(&o.src_b, db)
+    _push(&o.src_b, ib)
+    return 0
+
+
+def facets(const int64_t[:, ::1] A, const int64_t[::1] a_off, const int64_t[::1] a_idx,
+           const int64_t[:, ::1] nA, const int64_t[:, ::1] a_edges, const int64_t[:, ::1] a_ef,
+           const int64_t[:, ::1] B, const int64_t[::1] b_off, const int64_t[::1] b_idx,
+           const int64_t[:, ::1] nB, const int64_t[:, ::1] b_edges, const int64_t[:, ::1] b_ef):
+    """The facets of ``A ⊕ B`` from both polytopes' arrays (vertices, CSR facets, normals,
+    edges, edge facets): ``(labels (n, 2), offsets, flat, normals (f, 3), source_a (f, 2),
+    source_b (f, 2), edges (e, 2), edge_facets (e, 2))``, or None outside the kernel's range
+    (coordinates, normals, an edge facet's normal) or when the facets do not close up (the
+    caller then runs the reference, which answers or raises the named error)."""
+    if not (_within(A, COORD) and _within(B, COORD) and _within(nA, NORMAL)
+            and _within(nB, NORMAL)):
+        return None
+    cdef Py_ssize_t vA = A.shape[0], vB = B.shape[0], fA = nA.shape[0], fB = nB.shape[0]
+    cdef Py_ssize_t eA = a_edges.shape[0], eB = b_edges.shape[0]
+    cdef Py_ssize_t nc = fA + fB, i, j, k, c, m, h, r, nu, la, lb, p, q, na, nb, most
+    cdef int64_t f
+    cdef int64_t d1, i1, d2, i2
+    cdef Out o
+    cdef int axis
+    o.fa = Buf(NULL, 0, 0)
+    o.fb = Buf(NULL, 0, 0)
+    o.size = Buf(NULL, 0, 0)
+    o.normal = Buf(NULL, 0, 0)
+    o.src_a = Buf(NULL, 0, 0)
+    o.src_b = Buf(NULL, 0, 0)
+    SB_arr = np.empty(max(fA * vB, 1), dtype=np.uint8)
+    SA_arr = np.empty(max(fB * vA, 1), dtype=np.uint8)
+    cdef uint8_t[::1] SB = SB_arr, SA = SA_arr
+    work = np.empty(11 * nc + eA + eB + 8, dtype=np.int64)
+    cdef int64_t[::1] w = work
+    cdef int64_t* cnt_b = &w[0]
+    cdef int64_t* b_of = cnt_b + fA
+    cdef int64_t* cnt_a = b_of + fA
+    cdef int64_t* a_of = cnt_a + fB
+    cdef int64_t* order = a_of + fB
+    cdef int64_t* tmp = order + nc
+    cdef int64_t* keys = tmp + nc          # 3 per candidate normal
+    cdef int64_t* owner_a = keys + 3 * nc   # per distinct normal
+    cdef int64_t* owner_b = owner_a + nc
+    cdef int64_t* ukey = owner_b + nc       # the distinct normal's first candidate
+    cdef int64_t* planar = ukey + nc
+    cdef int64_t* ia = planar + nc          # live A edges
+    cdef int64_t* ib = ia + eA              # live B edges
+    cdef int64_t* xy = NULL                 # per planar facet: its candidate points, ...
+    cdef int64_t* pa = NULL
+    cdef int64_t* pb = NULL
+    cdef int64_t* ring = NULL
+    cdef int64_t* hidx = NULL
+    cdef int64_t* htmp = NULL
+    cdef int64_t[::1] pw
+    cdef uint8_t* supp_a
+    cdef uint8_t* supp_b
+    cdef const int64_t* key
+    fa_mask = np.zeros(max(vA, 1), dtype=np.uint8)
+    fb_mask = np.zeros(max(vB, 1), dtype=np.uint8)
+    cdef uint8_t[::1] fam = fa_mask, fbm = fb_mask
+    cdef signed char[:, ::1] T
+    try:
+        _support(B, nA, &SB[0] if fA * vB else NULL, cnt_b, b_of)
+        _support(A, nB, &SA[0] if fB * vA else NULL, cnt_a, a_of)
+        # the candidate normals, sorted; one key per distinct normal with its owners
+        for i in range(fA):
+            keys[3 * i], keys[3 * i + 1], keys[3 * i + 2] = nA[i, 0], nA[i, 1], nA[i, 2]
+        for i in range(fB):
+            keys[3 * (fA + i)], keys[3 * (fA + i) + 1], keys[3 * (fA + i) + 2] = nB[i, 0], nB[i, 1], nB[i, 2]
+        for i in range(nc):
+            order[i] = i
+        _msort(order, tmp, nc, keys, 3)
+        nu = 0
+        for i in range(nc):
+            c = order[i]
+            if nu == 0 or _cmp(keys, 3, c, ukey[nu - 1]) != 0:
+                ukey[nu] = c
+                owner_a[nu] = -1
+                owner_b[nu] = -1
+                nu += 1
+            if c < fA:
+                owner_a[nu - 1] = c
+            else:
+                owner_b[nu - 1] = c - fA
+        # translated facets: an A facet moved by its one contributing B vertex
+        for k in range(nu):
+            f = owner_a[k]
+            if f >= 0 and owner_b[k] < 0 and cnt_b[f] == 1:
+                for i in range(a_off[f], a_off[f + 1]):
+                    _push(&o.fa, a_idx[i])
+                    _push(&o.fb, b_of[f])
+                _push(&o.size, a_off[f + 1] - a_off[f])
+                _facet(&o, nA[f, 0], nA[f, 1], nA[f, 2], 2, f, 0, b_of[f])
+        # corner facets: a B facet placed at its one contributing A vertex
+        for k in range(nu):
+            f = owner_b[k]
+            if f >= 0 and owner_a[k] < 0 and cnt_a[f] == 1:
+                for i in range(b_off[f], b_off[f + 1]):
+                    _push(&o.fa, a_of[f])
+                    _push(&o.fb, b_idx[i])
+                _push(&o.size, b_off[f + 1] - b_off[f])
+                _facet(&o, nB[f, 0], nB[f, 1], nB[f, 2], 0, a_of[f], 2, f)
+        # planar sums: shared normals, then A's and B's facets with several contributors
+        m = 0
+        for k in range(nu):
+            if owner_a[k] >= 0 and owner_b[k] >= 0:
+                planar[m] = k
+                m += 1
+        for k in range(nu):
+            if owner_a[k] >= 0 and owner_b[k] < 0 and cnt_b[owner_a[k]] != 1:
+                planar[m] = k
+                m += 1
+        for k in range(nu):
+            if owner_b[k] >= 0 and owner_a[k] < 0 and cnt_a[owner_b[k]] != 1:
+                planar[m] = k
+                m += 1
+        # room for the largest planar facet's candidate points (support sizes' product)
+        most = 0
+        for r in range(m):
+            k = planar[r]
+            na = cnt_a[owner_b[k]] if owner_b[k] >= 0 else a_off[owner_a[k] + 1] - a_off[owner_a[k]]
+            nb = cnt_b[owner_a[k]] if owner_a[k] >= 0 else b_off[owner_b[k] + 1] - b_off[owner_b[k]]
+            if na * nb > most:
+                most = na * nb
+        points = np.empty(8 * most + 8, dtype=np.int64)
+        pw = points
+        xy = &pw[0]
+        pa = xy + 2 * most
+        pb = pa + most
+        ring = pb + most
+        hidx = ring + 2 * most
+        htmp = hidx + most
+        for r in range(m):
+            k = planar[r]
+            if owner_b[k] >= 0:
+                supp_a = &SA[owner_b[k] * vA]
+            else:
+                fam[:] = 0
+                f = owner_a[k]
+                for i in range(a_off[f], a_off[f + 1]):
+                    fam[a_idx[i]] = 1
+                supp_a = &fam[0]
+            if owner_a[k] >= 0:
+                supp_b = &SB[owner_a[k] * vB]
+            else:
+                fbm[:] = 0
+                f = owner_b[k]
+                for i in range(b_off[f], b_off[f + 1]):
+                    fbm[b_idx[i]] = 1
+                supp_b = &fbm[0]
+            key = &keys[3 * ukey[k]]
+            axis = 0
+            for c in range(1, 3):
+                if (key[c] if key[c] >= 0 else -key[c]) > (key[axis] if key[axis] >= 0 else -key[axis]):
+                    axis = c
+            p = 0
+            for i in range(vA):
+                if not supp_a[i]:
+                    continue
+                for j in range(vB):
+                    if not supp_b[j]:
+                        continue
+                    pa[p], pb[p] = i, j
+                    xy[2 * p] = A[i, (axis + 1) % 3] + B[j, (axis + 1) % 3]
+                    xy[2 * p + 1] = A[i, (axis + 2) % 3] + B[j, (axis + 2) % 3]
+                    p += 1
+            h = _hull2d(xy, p, ring, hidx, htmp)
+            for i in range(h):
+                q = ring[i] if key[axis] > 0 else ring[h - 1 - i]
+                _push(&o.fa, pa[q])
+                _push(&o.fb, pb[q])
+            _push(&o.size, h)
+            _feature(supp_a, vA, a_edges, a_off, a_idx, &d1, &i1)
+            _feature(supp_b, vB, b_edges, b_off, b_idx, &d2, &i2)
+            _facet(&o, key[0], key[1], key[2], d1, i1, d2, i2)
+        # edge facets: pairs of edges whose Gauss arcs cross inside both
+        la = 0
+        for i in range(eA):
+            if not (cnt_b[a_ef[i, 0]] == 1 and cnt_b[a_ef[i, 1]] == 1
+                    and b_of[a_ef[i, 0]] == b_of[a_ef[i, 1]]):
+                ia[la] = i
+                la += 1
+        lb = 0
+        for j in range(eB):
+            if not (cnt_a[b_ef[j, 0]] == 1 and cnt_a[b_ef[j, 1]] == 1
+                    and a_of[b_ef[j, 0]] == a_of[b_ef[j, 1]]):
+                ib[lb] = j
+                lb += 1
+        T = np.empty((max(la, 1), max(fB, 1)), dtype=np.int8)
+        return _edge_facets(&o, A, B, nA, nB, a_edges, b_edges, a_ef, b_ef, ia, la, ib, lb, T,
+                            np.empty((max(la, 1), 3), dtype=np.int64),
+                            np.empty((max(lb, 1), 3), dtype=np.int64))
+    finally:
+        free(o.fa.data)
+        free(o.fb.data)
+        free(o.size.data)
+        free(o.normal.data)
+        free(o.src_a.data)
+        free(o.src_b.data)
+
+
+cdef object _edge_facets(Out* o, const int64_t[:, ::1] A, const int64_t[:, ::1] B,
+                         const int64_t[:, ::1] nA, const int64_t[:, ::1] nB,
+                         const int64_t[:, ::1] a_edges, const int64_t[:, ::1] b_edges,
+                         const int64_t[:, ::1] a_ef, const int64_t[:, ::1] b_ef,
+                         const int64_t* ia, Py_ssize_t la, const int64_t* ib, Py_ssize_t lb,
+                         signed char[:, ::1] T, int64_t[:, ::1] av, int64_t[:, ::1] bv):
+    cdef Py_ssize_t i, j, c, fB = nB.shape[0], n
+    cdef int64_t s, t1, t2, ua, va, ub, vb, g
+    cdef i128 x0, x1, x2
+    cdef double ma = 0.0, mb = 0.0, z
+    cdef Buf si, sj, ss
+    si = Buf(NULL, 0, 0)
+    sj = Buf(NULL, 0, 0)
+    ss = Buf(NULL, 0, 0)
+    try:
+        for i in range(la):
+            for c in range(3):
+                av[i, c] = A[a_edges[ia[i], 1], c] - A[a_edges[ia[i], 0], c]
+            for j in range(fB):
+                T[i, j] = _sign128(_dot(&av[i, 0], &nB[j, 0]))
+        for j in range(lb):
+            for c in range(3):
+                bv[j, c] = B[b_edges[ib[j], 1], c] - B[b_edges[ib[j], 0], c]
+        for i in range(la):
+            for j in range(lb):
+                t1 = T[i, b_ef[ib[j], 0]]
+                t2 = T[i, b_ef[ib[j], 1]]
+                if t1 == 0 or t1 != -t2:
+                    continue
+                s = t2
+                if _sign128(_dot(&bv[j, 0], &nA[a_ef[ia[i], 0], 0])) != s:
+                    continue
+                if _sign128(_dot(&bv[j, 0], &nA[a_ef[ia[i], 1], 0])) != -s:
+                    continue
+                _push(&si, i)
+                _push(&sj, j)
+                _push(&ss, s)
+        # the reference's range check on the selected edge vectors (exact.cross)
+        for n in range(si.n):
+            for c in range(3):
+                z = <double> (av[si.data[n], c] if av[si.data[n], c] >= 0 else -av[si.data[n], c])
+                if z > ma:
+                    ma = z
+                z = <double> (bv[sj.data[n], c] if bv[sj.data[n], c] >= 0 else -bv[sj.data[n], c])
+                if z > mb:
+                    mb = z
+        if si.n and 2.0 * ma * mb >= 2.0 ** 61:
+            return None
+        for n in range(si.n):
+            i, j, s = si.data[n], sj.data[n], ss.data[n]
+            ua, va = a_edges[ia[i], 0], a_edges[ia[i], 1]
+            ub, vb = b_edges[ib[j], 0], b_edges[ib[j], 1]
+            if s > 0:
+                _push(&o.fa, ua); _push(&o.fa, va); _push(&o.fa, va); _push(&o.fa, ua)
+                _push(&o.fb, ub); _push(&o.fb, ub); _push(&o.fb, vb); _push(&o.fb, vb)
+            else:
+                _push(&o.fa, ua); _push(&o.fa, va); _push(&o.fa, va); _push(&o.fa, ua)
+                _push(&o.fb, vb); _push(&o.fb, vb); _push(&o.fb, ub); _push(&o.fb, ub)
+            _push(&o.size, 4)
+            x0 = (<i128> av[i, 1] * bv[j, 2] - <i128> av[i, 2] * bv[j, 1]) * s
+            x1 = (<i128> av[i, 2] * bv[j, 0] - <i128> av[i, 0] * bv[j, 2]) * s
+            x2 = (<i128> av[i, 0] * bv[j, 1] - <i128> av[i, 1] * bv[j, 0]) * s
+            g = _gcd(_gcd(<int64_t> x0, <int64_t> x1), <int64_t> x2)
+            if g == 0:
+                g = 1
+            _facet(o, <int64_t> x0 // g, <int64_t> x1 // g, <int64_t> x2 // g,
+                   1, ia[i], 1, ib[j])
+        return _labels(o, B.shape[0])
+    finally:
+        free(si.data)
+        free(sj.data)
+        free(ss.data)
+
+
+cdef object _labels(Out* o, Py_ssize_t vB):
+    """One sum vertex per distinct ``(a, b)``, in the order of ``a * vB + b`` (as ``np.unique``)."""
+    cdef Py_ssize_t n = o.fa.n, i, u = 0, lo, hi, mid, f = o.size.n
+    cdef int64_t x
+    codes_arr = np.empty(max(n, 1), dtype=np.int64)
+    cdef int64_t[::1] codes = codes_arr
+    for i in range(n):
+        codes[i] = o.fa.data[i] * vB + o.fb.data[i]
+    qsort(&codes[0], n, sizeof(int64_t), _cmp64)
+    for i in range(n):
+        if u == 0 or codes[i] != codes[u - 1]:
+            codes[u] = codes[i]
+            u += 1
+    labels_arr = np.empty((u, 2), dtype=np.int64)
+    flat_arr = np.empty(n, dtype=np.int64)
+    offsets_arr = np.zeros(f + 1, dtype=np.int64)
+    cdef int64_t[:, ::1] labels = labels_arr
+    cdef int64_t[::1] flat = flat_arr, offsets = offsets_arr
+    for i in range(u):
+        labels[i, 0] = codes[i] // vB
+        labels[i, 1] = codes[i] % vB
+    for i in range(n):
+        x = o.fa.data[i] * vB + o.fb.data[i]
+        lo, hi = 0, u
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if codes[mid] <= x:
+                lo = mid
+            else:
+                hi = mid
+        flat[i] = lo
+    for i in range(f):
+        offsets[i + 1] = offsets[i] + o.size.data[i]
+    normals = _array(&o.normal).reshape(-1, 3)
+    src_a = _array(&o.src_a).reshape(-1, 2)
+    src_b = _array(&o.src_b).reshape(-1, 2)
+    edges = _edges(flat, offsets, u)
+    if edges is None:
+        return None
+    return labels_arr, offsets_arr, flat_arr, normals, src_a, src_b, edges[0], edges[1]
+
+
+def edges_of(const int64_t[::1] flat, const int64_t[::1] offsets, Py_ssize_t nv):
+    """:func:`cspace.mesh.convex._edges_of` of CSR facet polygons, or None where it raises."""
+    return _edges(flat, offsets, nv)
+
+
+cdef object _edges(const int64_t[::1] flat, const int64_t[::1] offsets, Py_ssize_t nv):
+    """Each edge once, ``(u, v)`` with ``u < v`` in the order of ``flat``, and its left and
+    right facets (as ``cspace.mesh.convex._edges_of``); None when the facets do not close up
+    (a half-edge unmatched or repeated: the caller's reference raises the named error)."""
+    cdef Py_ssize_t n = flat.shape[0], f = offsets.shape[0] - 1, i, k, lo, hi, mid, e = 0
+    cdef int64_t u, v, key
+    codes_arr = np.empty((max(n, 1), 3), dtype=np.int64)  # (code, facet, v) per half-edge
+    cdef int64_t[:, ::1] h = codes_arr
+    order_arr = np.empty(max(n, 1), dtype=np.int64)
+    cdef int64_t[::1] order = order_arr
+    for k in range(f):
+        for i in range(offsets[k], offsets[k + 1]):
+            u = flat[i]
+            v = flat[i + 1] if i + 1 < offsets[k + 1] else flat[offsets[k]]
+            h[i, 0] = u * nv + v
+            h[i, 1] = k
+            h[i, 2] = v
+    sorted_codes_arr = np.sort(codes_arr[:n, 0]) if n else np.empty(0, np.int64)
+    sorted_at_arr = np.argsort(codes_arr[:n, 0], kind="stable") if n else np.empty(0, np.int64)
+    cdef int64_t[::1] sc = sorted_codes_arr, at = sorted_at_arr
+    for i in range(1, n):
+        if sc[i] == sc[i - 1]:
+            return None
+    edges_arr = np.empty((n // 2, 2), dtype=np.int64)
+    ef_arr = np.empty((n // 2, 2), dtype=np.int64)
+    cdef int64_t[:, ::1] E = edges_arr, EF = ef_arr
+    for i in range(n):
+        u = h[i, 0] // nv
+        v = h[i, 2]
+        key = v * nv + u
+        lo, hi = 0, n
+        while hi - lo > 1:
+            mid = (lo + hi) // 2
+            if sc[mid] <= key:
+                lo = mid
+            else:
+                hi = mid
+        if sc[lo] != key:
+            return None
+        if u < v:
+            if e == n // 2:
+                return None
+            E[e, 0], E[e, 1] = u, v
+            EF[e, 0], EF[e, 1] = h[i, 1], h[at[lo], 1]
+            e += 1
+    if e != n // 2 or 2 * e != n:
+        return None
+    return edges_arr, ef_arr
