@@ -83,8 +83,11 @@ def synthetic_world(n: int, seed: int = 0):
 
 
 def _cache_size(folder: Path) -> tuple[int, int]:
-    files = [p for p in folder.rglob("*.npz")]
-    return len(files), sum(p.stat().st_size for p in files)
+    """Entries in the cache folder and the bytes of its pack files."""
+    from cspace.scene.cache import COCache
+
+    files = list(folder.rglob("*.cspack")) + list(folder.rglob("*.npz"))
+    return len(COCache(folder).keys()), sum(p.stat().st_size for p in files)
 
 
 def _run(scene, slices, make_executor, label: str, cache: Path) -> dict:

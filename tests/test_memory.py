@@ -105,7 +105,7 @@ def test_over_budget_stops_before_building(tmp_path, offset):
         cspace.model_scene(scene, cache=tmp_path, memory=need - 1)
     assert e.value.needed == need and e.value.budget == need - 1
     assert isinstance(e.value, MemoryError)
-    assert not any(tmp_path.rglob("*.npz"))  # nothing built, nothing cached
+    assert not any(tmp_path.rglob("*.cspack"))  # nothing built, nothing cached
     # at the estimate it builds, through CSpace.from_scene as well
     assert len(cspace.CSpace.from_scene(scene, memory=need)) == 1
 

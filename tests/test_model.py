@@ -244,20 +244,68 @@ def test_cached_solid_c_obstacle_answers_exactly_as_the_fresh_one(tmp_path):
 
 
 def test_corrupt_and_partial_cache_files_are_rebuilt(tmp_path):
+    """A pack cut short is deleted, an entry that fails its digest is dropped: both rebuilt
+    (into a new pack, which then answers); no temporary file is left."""
     scene = make_scene([box_body("box", (1, 0, 0))])
-    _, _, cache = _cached_vs_fresh(scene, tmp_path)
-    (entry,) = list((tmp_path / "cache").rglob("*.npz"))
-    data = entry.read_bytes()
-    entry.write_bytes(data[: len(data) // 2])  # a partial write
+    folder = tmp_path / "cache"
+    _cached_vs_fresh(scene, tmp_path)
+    (pack,) = list(folder.rglob("*.cspack"))
+    data = pack.read_bytes()
+    pack.write_bytes(data[: len(data) // 2])  # a partial write
+    cache = COCache(folder)  # a new process reads what is on disk
+    m = model_scene(scene, cache=cache)
+    assert m.bodies[0].cache == "miss" and cache.rebuilt == 1 and not pack.exists()
+    (pack,) = list(folder.rglob("*.cspack"))
+    flipped = bytearray(pack.read_bytes())
+    flipped[8] ^= 0xFF  # a flipped bit inside the payload
+    pack.write_bytes(bytes(flipped))
+    cache = COCache(folder)
     m = model_scene(scene, cache=cache)
     assert m.bodies[0].cache == "miss" and cache.rebuilt == 1
-    flipped = bytearray(entry.read_bytes())
-    flipped[len(flipped) // 2] ^= 0xFF  # a flipped bit inside the payload
-    entry.write_bytes(bytes(flipped))
-    m = model_scene(scene, cache=cache)
-    assert m.bodies[0].cache == "miss" and cache.rebuilt == 2
-    assert model_scene(scene, cache=cache).bodies[0].cache == "hit"
-    assert not list((tmp_path / "cache").rglob("*.tmp"))
+    assert len(list(folder.rglob("*.cspack"))) == 2  # the corrupt one and the rebuilt one
+    cache = COCache(folder)
+    assert model_scene(scene, cache=cache).bodies[0].cache == "hit"  # the newer pack answers
+    assert cache.rebuilt == 0
+    assert not list(folder.rglob("*.tmp"))
+
+
+def test_cache_packs_are_shared_between_writers_and_old_entries_still_read(tmp_path):
+    """Two caches on one folder (two processes) each write their own pack; a third reads both.
+    An entry of the older layout (one .npz per key) is read as before."""
+    from cspace.scene import cache as cache_module
+
+    folder = tmp_path / "cache"
+    one, two = COCache(folder), COCache(folder)
+    a = {"x": np.arange(5, dtype=np.int64), "y": np.eye(3)}
+    b = {"x": np.arange(3, dtype=np.int32).reshape(1, 3), "s": np.array("text")}
+    one.store("a" * 64, a)
+    two.store("b" * 64, b)
+    assert one.load("a" * 64) is not None and not list(folder.rglob("*.cspack"))  # kept
+    assert one.flush() and two.flush() and one.flush() is None
+    third = COCache(folder)
+    for key, want in (("a" * 64, a), ("b" * 64, b)):
+        got = third.load(key)
+        assert sorted(got) == sorted(want)
+        for name in want:
+            assert got[name].dtype == want[name].dtype and np.array_equal(got[name], want[name])
+    assert third.keys() == {"a" * 64, "b" * 64} and third.load("c" * 64) is None
+    # the older layout
+    key = "c" * 64
+    old = folder / key[:2] / f"{key}.npz"
+    old.parent.mkdir(parents=True)
+    np.savez(old, x=a["x"], _key=np.array(key), _digest=np.array(cache_module._digest({"x": a["x"]})),
+             _format=np.array(str(cache_module.FORMAT)))
+    assert np.array_equal(COCache(folder).load(key)["x"], a["x"])
+
+
+def test_a_cache_writes_what_it_kept_when_it_goes_away(tmp_path):
+    import gc
+
+    cache = COCache(tmp_path)
+    cache.store("d" * 64, {"x": np.ones(4)})
+    del cache
+    gc.collect()
+    assert COCache(tmp_path).load("d" * 64) is not None
 
 
 def test_an_unwritable_cache_warns_and_still_builds(tmp_path):
@@ -277,7 +325,7 @@ def test_cache_key_follows_the_inputs_and_location_follows_the_environment(tmp_p
     assert cache_dir(tmp_path / "x") == tmp_path / "x"
     scene = make_scene([box_body("box", (1, 0, 0))])
     assert model_scene(scene, cache=True).bodies[0].cache == "miss"
-    assert len(list((tmp_path / "env-cache").rglob("*.npz"))) == 1
+    assert len(COCache(tmp_path / "env-cache").keys()) == 1
     assert model_scene(scene, cache=True).bodies[0].cache == "hit"
     # Another robot size: another key.
     other = make_scene([box_body("box", (1, 0, 0))], robot_extent=0.3)

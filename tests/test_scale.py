@@ -19,6 +19,7 @@ import pytest
 import trimesh
 
 from cspace import CSpace, load_scene
+from cspace.scene.cache import COCache
 from cspace.cli import main as cli
 from cspace.errors import BuildError, InvalidArgumentError, MissingDependencyError
 from cspace.scene.model import model_scene
@@ -139,7 +140,7 @@ def test_cache_hits_are_read_here_and_never_submitted(scene, client, tmp_path):
     first = model_scene(scene, cache=tmp_path, executor=ex)
     built = sum(len(b.pairs) for b in first.bodies)
     assert ex.submitted > 0 and all(b.cache == "miss" for b in first.bodies if b.pairs)
-    assert len(list(tmp_path.rglob("*.npz"))) == built  # written here, by the caller
+    assert len(COCache(tmp_path).keys()) == built  # written here, by the caller
     ex.submitted = 0
     second = model_scene(scene, cache=tmp_path, executor=ex)
     assert ex.submitted == 0
@@ -169,12 +170,12 @@ def test_build_slices_builds_what_turning_cspace_builds(scene, client, tmp_path)
     slices = Slices.about(3)
     built = build_slices(scene, slices, client.get_executor(pure=False), cache=tmp_path)
     assert sorted(built) == [0, 1, 2] and all(isinstance(cs, CSpace) for cs in built.values())
-    files = sorted(tmp_path.rglob("*.npz"))
+    files = sorted(tmp_path.rglob("*.cspack"))
     turning = TurningCSpace(scene, slices, cache=tmp_path)
     q = np.random.default_rng(3).uniform(*BOUNDS, (3000, 3))
     for k, cs in built.items():
         assert np.array_equal(cs.contains(q), turning.slice(k).contains(q)), k
-    assert sorted(tmp_path.rglob("*.npz")) == files  # the slices read what was built
+    assert sorted(tmp_path.rglob("*.cspack")) == files  # the slices read what was built
     assert not np.array_equal(built[0].contains(q), built[1].contains(q))  # it turned
     assert build_slices(scene, slices, ks=[1])[1].contains(q).tolist() == \
         built[1].contains(q).tolist()

@@ -139,8 +139,10 @@ def build_slices(scene, slices, executor=None, *, ks=None, cache=None,
     BuildError
         A body failed in a slice; the message names the slice and the body.
     """
+    from ..scene.cache import COCache
     from ..scene.model import model_scene
 
+    cache = COCache.of(cache)  # one cache for all slices: its packs are read once
     n = len(slices)
     ks = list(range(n)) if ks is None else sorted({int(k) % n for k in ks})
     frame, grid = turning_frame(scene)  # one grid, one modelling of the obstacles

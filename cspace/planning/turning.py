@@ -82,7 +82,9 @@ class TurningCSpace:
         self.memory, self._memory_source = budget_and_source(memory)
         self.spilled = 0
         self.slices = slices
-        self.cache = cache
+        from ..scene.cache import COCache
+
+        self.cache = COCache.of(cache)  # one cache for every slice and turn
         self.robot_hull = bool(robot_hull)
         self.bounds = np.asarray(scene.bounds, dtype=np.float64)
         self.built_slices: dict = {}
@@ -131,7 +133,7 @@ class TurningCSpace:
                                   memory=max(1, self.memory - held))
             except MemoryBudgetError as exc:
                 holding = [j for j, cs in self.built_slices.items() if cs.memory]
-                if self.cache not in (None, False) and holding:
+                if self.cache is not None and holding:
                     # Spill the least recently used slice: its C-obstacles are in the disk
                     # cache, so asking for it again reads them back instead of rebuilding.
                     del self.built_slices[holding[0]]

@@ -7,16 +7,29 @@ query engines are built from (polytope CSR arrays in grid integers, or a mesh's 
 vertices and faces), so a loaded C-obstacle answers every query exactly as the fresh one.
 
 Location: the ``directory`` argument, else ``$CSPACE_CACHE``, else ``~/.cache/cspace``.
-Entries are ``<dir>/<key[:2]>/<key>.npz``, written to a temporary file in the same folder
-and renamed (atomic on POSIX), with a digest of the payload; a file that does not load,
-belongs to another key or fails its digest is deleted and reported as a miss (rebuilt).
+
+Layout: append-only **packs**, ``<dir>/packs/<name>.cspack``, one per build (or per
+``PACK_BYTES`` of entries). A build's entries are held in memory (readable at once) and
+written together by :meth:`COCache.flush`: one file, written to a temporary name in the same
+folder, synced once and renamed (atomic on POSIX), so a pack is whole or absent, never half
+written. A pack is its entries' raw array bytes, then an index (JSON: per key its arrays'
+names, dtypes, shapes and offsets, and a SHA-256 digest of the arrays), then the index's
+length and a magic number. Packs are content-addressed by key, written by any number of
+processes side by side (each its own files); where two packs hold a key, the newer one
+answers. An entry that fails its digest is dropped and reported as a miss (rebuilt, into a
+new pack); a pack whose index does not read is deleted. Entries of the older layout, one
+``<dir>/<key[:2]>/<key>.npz`` each, are still read.
 """
 
 from __future__ import annotations
 
 import hashlib
+import json
 import os
+import struct
 import tempfile
+import threading
+import weakref
 import zipfile
 from pathlib import Path
 
@@ -102,6 +115,13 @@ def unpack_polytopes(arrays: dict, prefix: str, grid: Grid) -> list[ConvexPolyto
             for i in range(n)]
 
 
+#: Pending entries beyond this many bytes are written out as a pack before the build ends.
+PACK_BYTES = 64 * 2**20
+
+_MAGIC = b"CSPACK01"
+_TRAILER = struct.Struct("<Q8s")  # the index's length, the magic number
+
+
 class COCache:
     """A folder of cached C-obstacles (see the module docstring).
 
@@ -113,21 +133,120 @@ class COCache:
     Attributes
     ----------
     hits, misses, rebuilt : int
-        Counters (``rebuilt``: corrupt entries found and deleted).
+        Counters (``rebuilt``: corrupt entries found and dropped, and unreadable packs
+        deleted).
+
+    Notes
+    -----
+    :meth:`store` keeps an entry in memory; :meth:`flush` writes what is kept as one pack.
+    ``model_scene`` flushes at the end of each build; what is still kept when the cache is
+    garbage collected or the interpreter exits is flushed then.
     """
 
     def __init__(self, directory=None):
         self.directory = cache_dir(directory)
         self.hits = self.misses = self.rebuilt = 0
+        self._lock = threading.RLock()
+        self._pending: dict = {}            # key -> arrays, not yet written
+        self._pending_bytes = [0]
+        self._index: dict = {}              # key -> (pack path, entry record)
+        self._packs: dict = {}              # pack path -> its mtime when read
+        self._stamp = None                  # the packs folder's mtime when last scanned
+        # what is kept is written when this cache goes away (or at exit)
+        self._finalizer = weakref.finalize(self, _write_at_exit, self._packs_dir(),
+                                           self._pending, self._pending_bytes)
+
+    @classmethod
+    def of(cls, cache) -> "COCache | None":
+        """The cache a ``cache=`` argument names: a COCache as it is; True: the default
+        folder; a path: that folder; None or False: no cache (None). Open one per build and
+        pass it on, so that its packs' indexes are read once."""
+        if isinstance(cache, cls):
+            return cache
+        if cache is None or cache is False:
+            return None
+        return cls(None if cache is True else cache)
+
+    def __repr__(self) -> str:
+        return (f"COCache({str(self.directory)!r}, hits={self.hits}, misses={self.misses}, "
+                f"pending={len(self._pending)})")
+
+    def _packs_dir(self) -> Path:
+        return self.directory / "packs"
 
     def path(self, key: str) -> Path:
-        return self.directory / key[:2] / f"{key}.npz"
+        """Where ``key`` is written: the packs folder (an entry of the older layout:
+        ``<dir>/<key[:2]>/<key>.npz``)."""
+        return self._packs_dir()
+
+    # ---------------------------------------------------------------- reading
 
     def load(self, key: str) -> dict | None:
-        """The stored arrays of ``key``, or None (missing, or corrupt: then deleted)."""
-        p = self.path(key)
+        """The stored arrays of ``key``, or None (missing, or corrupt: then dropped)."""
+        with self._lock:
+            arrays = self._pending.get(key)
+            if arrays is None:
+                arrays = self._from_packs(key)
+            if arrays is None:
+                arrays = self._from_npz(key)
+            if arrays is None:
+                self.misses += 1
+                return None
+            self.hits += 1
+            return arrays
+
+    def keys(self) -> set:
+        """Every key this cache holds: in packs, kept in memory, or in the older layout."""
+        with self._lock:
+            self._scan()
+            old = {p.stem for p in self.directory.glob("??/*.npz")}
+            return set(self._index) | set(self._pending) | old
+
+    def _scan(self) -> None:
+        """Read the index of every pack not read yet (the folder's mtime says when to look)."""
+        folder = self._packs_dir()
+        try:
+            stamp = folder.stat().st_mtime_ns
+        except OSError:
+            return
+        if stamp == self._stamp:
+            return
+        self._stamp = stamp
+        new = []
+        for p in folder.glob("*.cspack"):
+            if p not in self._packs:
+                try:
+                    new.append((p.stat().st_mtime_ns, p.name, p))
+                except OSError:
+                    continue
+        for mtime, _, p in sorted(new):  # the newer pack answers a key both hold
+            index = _read_index(p)
+            if index is None:
+                p.unlink(missing_ok=True)
+                self.rebuilt += 1
+                continue
+            self._packs[p] = mtime
+            for key, record in index.items():
+                self._index[key] = (p, record)
+
+    def _from_packs(self, key: str) -> dict | None:
+        if key not in self._index:
+            self._scan()
+        found = self._index.get(key)
+        if found is None:
+            return None
+        p, record = found
+        arrays = _read_entry(p, record)
+        if arrays is None or _digest(arrays) != record[0]:
+            del self._index[key]
+            self.rebuilt += 1
+            return None
+        return arrays
+
+    def _from_npz(self, key: str) -> dict | None:
+        """An entry of the older layout, one ``.npz`` per key (deleted when corrupt)."""
+        p = self.directory / key[:2] / f"{key}.npz"
         if not p.is_file():
-            self.misses += 1
             return None
         try:
             with np.load(p, allow_pickle=False) as z:
@@ -140,27 +259,146 @@ class COCache:
         if not ok:
             p.unlink(missing_ok=True)
             self.rebuilt += 1
-            self.misses += 1
             return None
-        self.hits += 1
         return arrays
 
-    def store(self, key: str, arrays: dict) -> Path:
-        """Write ``arrays`` under ``key`` atomically (temporary file, then rename)."""
-        p = self.path(key)
-        p.parent.mkdir(parents=True, exist_ok=True)
-        payload = dict(arrays)
-        payload["_key"] = np.array(key)
-        payload["_digest"] = np.array(_digest(arrays))
-        payload["_format"] = np.array(str(FORMAT))
-        fd, tmp = tempfile.mkstemp(dir=p.parent, prefix=f".{key[:8]}-", suffix=".tmp")
-        try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, **payload)
-                f.flush()
-                os.fsync(f.fileno())
-            os.replace(tmp, p)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
-        return p
+    # ---------------------------------------------------------------- writing
+
+    def store(self, key: str, arrays: dict) -> None:
+        """Keep ``arrays`` under ``key`` (readable at once); written by :meth:`flush`, or
+        now when what is kept exceeds ``PACK_BYTES``."""
+        with self._lock:
+            if key in self._pending:
+                return
+            self._pending[key] = dict(arrays)
+            self._pending_bytes[0] += sum(np.asarray(a).nbytes for a in arrays.values())
+            if self._pending_bytes[0] > PACK_BYTES:
+                self.flush()
+
+    def flush(self) -> Path | None:
+        """Write the kept entries as one pack (atomically, synced once); its path, or None
+        when nothing was kept. An unwritable folder raises ``OSError``; the entries are then
+        dropped (a cache that cannot be written is not retried at exit)."""
+        with self._lock:
+            try:
+                p = _write_pack(self._packs_dir(), self._pending, self._pending_bytes)
+            except OSError:
+                self._pending.clear()
+                self._pending_bytes[0] = 0
+                raise
+            if p is not None:
+                self._scan()
+            return p
+
+
+def _write_pack(folder: Path, pending: dict, size: list) -> Path | None:
+    """Write ``pending`` (key -> arrays) as one pack in ``folder`` and empty it."""
+    if not pending:
+        return None
+    folder.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".pack-", suffix=".tmp")
+    try:
+        index, at = {}, 0
+        with os.fdopen(fd, "wb") as f:
+            for key, arrays in pending.items():
+                entry = []
+                for name in sorted(arrays):
+                    a = np.asarray(arrays[name])  # 0-d stays 0-d; tobytes is C order
+                    if a.dtype.hasobject or "\t" in name or "\n" in name:
+                        raise TypeError(f"cache entry {key}: array {name!r} holds objects "
+                                        "or its name a tab or a newline")
+                    data = a.tobytes()
+                    f.write(data)
+                    f.write(b"\0" * (-len(data) % 8))  # 8-byte aligned
+                    shape = ",".join(map(str, a.shape))
+                    entry.append(f"{name}\t{a.dtype.str}\t{shape}\t{at}\t{len(data)}")
+                    at += len(data) + (-len(data) % 8)
+                # one string per entry: the index of a pack of thousands parses in
+                # milliseconds, each entry's spans only when it is read
+                index[key] = [_digest(arrays), "\n".join(entry)]
+            head = json.dumps({"format": FORMAT, "entries": index}).encode()
+            f.write(head)
+            f.write(_TRAILER.pack(len(head), _MAGIC))
+            f.flush()
+            os.fsync(f.fileno())
+        final = folder / f"{Path(tmp).stem.lstrip('.')}.cspack"
+        os.replace(tmp, final)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+    pending.clear()
+    size[0] = 0
+    return final
+
+
+def _write_at_exit(folder: Path, pending: dict, size: list) -> None:
+    """:func:`_write_pack` when the cache goes away: a folder that cannot be written only
+    warns (the entries are lost, never half written)."""
+    try:
+        _write_pack(folder, pending, size)
+    except OSError as exc:
+        import warnings
+
+        warnings.warn(f"C-obstacle cache: cannot write {len(pending)} entries to {folder}: "
+                      f"{exc}", UserWarning, stacklevel=2)
+
+
+def _read_index(p: Path) -> dict | None:
+    """A pack's index (key -> record), or None when the pack does not read as one."""
+    try:
+        with open(p, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            end = f.tell()
+            if end < _TRAILER.size:
+                return None
+            f.seek(end - _TRAILER.size)
+            n, magic = _TRAILER.unpack(f.read(_TRAILER.size))
+            if magic != _MAGIC or n > end - _TRAILER.size:
+                return None
+            f.seek(end - _TRAILER.size - n)
+            head = json.loads(f.read(n))
+        if head.get("format") != FORMAT:
+            return {}  # another layout's pack: nothing of it is ours to read
+        body = end - _TRAILER.size - n
+        entries = head["entries"]
+        for record in entries.values():
+            if not (isinstance(record, list) and len(record) == 2):
+                return None
+        return {key: (digest, spans, body) for key, (digest, spans) in entries.items()}
+    except (OSError, ValueError, KeyError, TypeError, struct.error):
+        return None
+
+
+def _read_entry(p: Path, record: tuple) -> dict | None:
+    """One entry's arrays from its pack (None when the file or the record does not read)."""
+    _, text, body = record
+    try:
+        spans = []
+        for item in text.split("\n") if text else ():
+            name, dtype, shape, at, size = item.split("\t")
+            spans.append((name, np.dtype(dtype), tuple(int(d) for d in shape.split(",") if d),
+                          int(at), int(size)))
+    except (TypeError, ValueError):
+        return None
+    if not spans:
+        return {}
+    lo = min(s[3] for s in spans)
+    hi = max(s[3] + s[4] for s in spans)
+    if lo < 0 or hi > body:
+        return None
+    try:
+        with open(p, "rb") as f:
+            f.seek(lo)
+            buf = bytearray(f.read(hi - lo))
+    except OSError:
+        return None
+    if len(buf) != hi - lo:
+        return None
+    out = {}
+    try:
+        for name, dt, shape, at, size in spans:
+            count = size // dt.itemsize if dt.itemsize else 0
+            out[name] = np.frombuffer(buf, dtype=dt, count=count, offset=at - lo).reshape(shape)
+    except (TypeError, ValueError):
+        return None
+    return out

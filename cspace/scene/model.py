@@ -40,6 +40,7 @@ meets nothing.
 from __future__ import annotations
 
 import time
+import warnings
 from dataclasses import dataclass, field
 from fractions import Fraction
 
@@ -370,7 +371,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                                     f"on the grid (step 2**{grid.exponent})",
                                     np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)))
     t1 = time.perf_counter()
-    store = _store_of(cache)
+    store = COCache.of(cache)
     held = 0
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
@@ -386,6 +387,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                              + (f": {stage}" if stage else ""))
             sub(0.0)
             _build_one(ctx, b, part, parts, sub)
+        _flush(store)
         for b in bodies:  # one convex part: the body's one C-obstacle, as before parts
             if (len(parts) == 1 and b.pairs and b.pairs[0].cos
                     and is_sum(b.pairs[0].construction)):
@@ -407,12 +409,16 @@ def _context(scene, grid: Grid, rgrid: Grid, margin: Margin, store, sums: bool) 
     return _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store, sums)
 
 
-def _store_of(cache):
-    if isinstance(cache, COCache):
-        return cache
-    if cache is None or cache is False:
-        return None
-    return COCache(None if cache is True else cache)
+def _flush(store) -> None:
+    """Write what a build kept in the cache as one pack (an unwritable cache only warns: the
+    build stands, its entries are not kept)."""
+    if store is None:
+        return
+    try:
+        store.flush()
+    except OSError as exc:
+        warnings.warn(f"C-obstacle cache: cannot write {store.path('')}: {exc}", UserWarning,
+                      stacklevel=3)
 
 
 def _build_one(ctx: _Context, b: BodyModel, part: RobotPart, parts: list, sub=None) -> PairModel:
@@ -626,7 +632,7 @@ class LazyCSpace(CSpace):
         scene, parts = model.scene, model.robot_parts
         rgrid = parts[0].grid
         self.model = model
-        self._ctx = _context(scene, model.grid, rgrid, model.margin, _store_of(cache), sums)
+        self._ctx = _context(scene, model.grid, rgrid, model.margin, COCache.of(cache), sums)
         self._todo = [(b, p) for b in model.bodies if b.kind != "dropped" for p in parts]
         held = _memory_check(scene, self._todo, memory, sums)
         super().__init__((), bounds=scene.bounds, name=scene.name, scene=scene,
