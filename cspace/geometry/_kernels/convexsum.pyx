@@ -116,6 +116,18 @@ cdef void _msort(int64_t* idx, int64_t* tmp, Py_ssize_t n, const int64_t* keys,
             idx[i] = src[i]
 
 
+cdef inline Py_ssize_t _last_at_most(const int64_t* a, Py_ssize_t n, int64_t x) noexcept nogil:
+    """In sorted ``a[0:n]`` (n > 0), the last index whose value is at most ``x`` (0 if none)."""
+    cdef Py_ssize_t lo = 0, hi = n, mid
+    while hi - lo > 1:
+        mid = (lo + hi) // 2
+        if a[mid] <= x:
+            lo = mid
+        else:
+            hi = mid
+    return lo
+
+
 cdef int _cmp64(const void* a, const void* b) noexcept nogil:
     cdef int64_t x = (<const int64_t*> a)[0], y = (<const int64_t*> b)[0]
     return (x > y) - (x < y)
@@ -178,14 +190,28 @@ cdef void _support(const int64_t[:, ::1] P, const int64_t[:, ::1] D, uint8_t* ma
                     first[j] = i
 
 
+cdef inline i128 _turn(const int64_t* xy, int64_t o, int64_t a, int64_t b) noexcept nogil:
+    """Twice the signed area of the 2D triangle ``(o, a, b)`` (exact: below ``2**83``)."""
+    return ((<i128> xy[2 * a] - xy[2 * o]) * (<i128> xy[2 * b + 1] - xy[2 * o + 1])
+            - (<i128> xy[2 * a + 1] - xy[2 * o + 1]) * (<i128> xy[2 * b] - xy[2 * o]))
+
+
+cdef inline Py_ssize_t _chain(const int64_t* xy, int64_t* out, Py_ssize_t h, Py_ssize_t base,
+                              int64_t p) noexcept nogil:
+    """Append point ``p`` to the chain ``out[base:h]`` after dropping its last points while
+    they do not turn left (collinear ones too); the chain's new end."""
+    while h - base >= 2 and _turn(xy, out[h - 2], out[h - 1], p) <= 0:
+        h -= 1
+    out[h] = p
+    return h + 1
+
+
 cdef int _hull2d(const int64_t* xy, Py_ssize_t n, int64_t* out, int64_t* idx,
                  int64_t* tmp) noexcept nogil:
     """Strictly convex hull of 2D integer points ``xy`` (interleaved), counter-clockwise, as
     indices: :func:`cspace.mesh.convex._hull2d` (stable sort, first of duplicates, monotone
     chain dropping collinear points). Returns the count; ``out`` holds up to ``2 n``."""
     cdef Py_ssize_t i, m = 0, h, k
-    cdef int64_t o, a, b
-    cdef i128 turn
     for i in range(n):
         idx[i] = i
     _msort(idx, tmp, n, xy, 2)
@@ -198,30 +224,12 @@ cdef int _hull2d(const int64_t* xy, Py_ssize_t n, int64_t* out, int64_t* idx,
         for i in range(m):
             out[i] = tmp[i]
         return <int> m
-    # lower chain
     h = 0
-    for i in range(m):
-        while h >= 2:
-            o, a, b = out[h - 2], out[h - 1], tmp[i]
-            turn = ((<i128> xy[2 * a] - xy[2 * o]) * (<i128> xy[2 * b + 1] - xy[2 * o + 1])
-                    - (<i128> xy[2 * a + 1] - xy[2 * o + 1]) * (<i128> xy[2 * b] - xy[2 * o]))
-            if turn > 0:
-                break
-            h -= 1
-        out[h] = tmp[i]
-        h += 1
-    # upper chain from the lower one's last point (never popped), over the others reversed
-    k = h - 1
+    for i in range(m):  # lower chain
+        h = _chain(xy, out, h, 0, tmp[i])
+    k = h - 1  # upper chain: from the lower one's last point (never popped), the rest reversed
     for i in range(m - 2, -1, -1):
-        while h - k >= 2:
-            o, a, b = out[h - 2], out[h - 1], tmp[i]
-            turn = ((<i128> xy[2 * a] - xy[2 * o]) * (<i128> xy[2 * b + 1] - xy[2 * o + 1])
-                    - (<i128> xy[2 * a + 1] - xy[2 * o + 1]) * (<i128> xy[2 * b] - xy[2 * o]))
-            if turn > 0:
-                break
-            h -= 1
-        out[h] = tmp[i]
-        h += 1
+        h = _chain(xy, out, h, k, tmp[i])
     return <int> (h - 1)
 
 
@@ -261,6 +269,55 @@ cdef void _feature(const uint8_t* supp, Py_ssize_t n, const int64_t[:, ::1] edge
         if ok:
             index[0] = f  # the reference's dict keeps the last facet of a vertex set
     dim[0] = 2
+
+
+cdef uint8_t* _on_facet(int64_t other, uint8_t* S, Py_ssize_t n, int64_t own,
+                        const int64_t[::1] off, const int64_t[::1] idx, uint8_t[::1] mask):
+    """One operand's vertices on a planar-sum facet: its support in the direction of the
+    other operand's facet ``other`` (row ``other`` of ``S``), else the vertices of its own
+    facet ``own`` (marked in ``mask``)."""
+    cdef Py_ssize_t i
+    if other >= 0:
+        return S + other * n
+    mask[:] = 0
+    for i in range(off[own], off[own + 1]):
+        mask[idx[i]] = 1
+    return &mask[0]
+
+
+cdef int _moved_facets(Out* o, Py_ssize_t nu, const int64_t* own, const int64_t* other,
+                       const int64_t* cnt, const int64_t* at, const int64_t[::1] off,
+                       const int64_t[::1] idx, const int64_t[:, ::1] normals, Buf* mine,
+                       Buf* theirs, int corner) except -1:
+    """The facets of one operand (``own`` per distinct normal) that the other meets at one
+    vertex (``cnt == 1``: ``at``), moved there: translated facets (A's) or corner facets
+    (B's, ``corner``), in the normals' order."""
+    cdef Py_ssize_t k, i
+    cdef int64_t f
+    for k in range(nu):
+        f = own[k]
+        if f >= 0 and other[k] < 0 and cnt[f] == 1:
+            for i in range(off[f], off[f + 1]):
+                _push(mine, idx[i])
+                _push(theirs, at[f])
+            _push(&o.size, off[f + 1] - off[f])
+            if corner:
+                _facet(o, normals[f, 0], normals[f, 1], normals[f, 2], 0, at[f], 2, f)
+            else:
+                _facet(o, normals[f, 0], normals[f, 1], normals[f, 2], 2, f, 0, at[f])
+    return 0
+
+
+cdef Py_ssize_t _live(const int64_t[:, ::1] ef, const int64_t* cnt, const int64_t* at,
+                      int64_t* out) noexcept nogil:
+    """The edges whose Gauss arc can cross the other operand's: not both facets met at one
+    and the same vertex of the other. Their indices in ``out``; their count."""
+    cdef Py_ssize_t i, n = 0
+    for i in range(ef.shape[0]):
+        if not (cnt[ef[i, 0]] == 1 and cnt[ef[i, 1]] == 1 and at[ef[i, 0]] == at[ef[i, 1]]):
+            out[n] = i
+            n += 1
+    return n
 
 
 # --------------------------------------------------------------------------------------------
@@ -367,24 +424,10 @@ def facets(const int64_t[:, ::1] A, const int64_t[::1] a_off, const int64_t[::1]
                 owner_a[nu - 1] = c
             else:
                 owner_b[nu - 1] = c - fA
-        # translated facets: an A facet moved by its one contributing B vertex
-        for k in range(nu):
-            f = owner_a[k]
-            if f >= 0 and owner_b[k] < 0 and cnt_b[f] == 1:
-                for i in range(a_off[f], a_off[f + 1]):
-                    _push(&o.fa, a_idx[i])
-                    _push(&o.fb, b_of[f])
-                _push(&o.size, a_off[f + 1] - a_off[f])
-                _facet(&o, nA[f, 0], nA[f, 1], nA[f, 2], 2, f, 0, b_of[f])
-        # corner facets: a B facet placed at its one contributing A vertex
-        for k in range(nu):
-            f = owner_b[k]
-            if f >= 0 and owner_a[k] < 0 and cnt_a[f] == 1:
-                for i in range(b_off[f], b_off[f + 1]):
-                    _push(&o.fa, a_of[f])
-                    _push(&o.fb, b_idx[i])
-                _push(&o.size, b_off[f + 1] - b_off[f])
-                _facet(&o, nB[f, 0], nB[f, 1], nB[f, 2], 0, a_of[f], 2, f)
+        # translated facets: an A facet moved by its one contributing B vertex; then corner
+        # facets: a B facet placed at its one contributing A vertex
+        _moved_facets(&o, nu, owner_a, owner_b, cnt_b, b_of, a_off, a_idx, nA, &o.fa, &o.fb, 0)
+        _moved_facets(&o, nu, owner_b, owner_a, cnt_a, a_of, b_off, b_idx, nB, &o.fb, &o.fa, 1)
         # planar sums: shared normals, then A's and B's facets with several contributors
         m = 0
         for k in range(nu):
@@ -417,22 +460,8 @@ def facets(const int64_t[:, ::1] A, const int64_t[::1] a_off, const int64_t[::1]
         htmp = hidx + most
         for r in range(m):
             k = planar[r]
-            if owner_b[k] >= 0:
-                supp_a = &SA[owner_b[k] * vA]
-            else:
-                fam[:] = 0
-                f = owner_a[k]
-                for i in range(a_off[f], a_off[f + 1]):
-                    fam[a_idx[i]] = 1
-                supp_a = &fam[0]
-            if owner_a[k] >= 0:
-                supp_b = &SB[owner_a[k] * vB]
-            else:
-                fbm[:] = 0
-                f = owner_b[k]
-                for i in range(b_off[f], b_off[f + 1]):
-                    fbm[b_idx[i]] = 1
-                supp_b = &fbm[0]
+            supp_a = _on_facet(owner_b[k], &SA[0], vA, owner_a[k], a_off, a_idx, fam)
+            supp_b = _on_facet(owner_a[k], &SB[0], vB, owner_b[k], b_off, b_idx, fbm)
             key = &keys[3 * ukey[k]]
             axis = 0
             for c in range(1, 3):
@@ -459,18 +488,8 @@ def facets(const int64_t[:, ::1] A, const int64_t[::1] a_off, const int64_t[::1]
             _feature(supp_b, vB, b_edges, b_off, b_idx, &d2, &i2)
             _facet(&o, key[0], key[1], key[2], d1, i1, d2, i2)
         # edge facets: pairs of edges whose Gauss arcs cross inside both
-        la = 0
-        for i in range(eA):
-            if not (cnt_b[a_ef[i, 0]] == 1 and cnt_b[a_ef[i, 1]] == 1
-                    and b_of[a_ef[i, 0]] == b_of[a_ef[i, 1]]):
-                ia[la] = i
-                la += 1
-        lb = 0
-        for j in range(eB):
-            if not (cnt_a[b_ef[j, 0]] == 1 and cnt_a[b_ef[j, 1]] == 1
-                    and a_of[b_ef[j, 0]] == a_of[b_ef[j, 1]]):
-                ib[lb] = j
-                lb += 1
+        la = _live(a_ef, cnt_b, b_of, ia)
+        lb = _live(b_ef, cnt_a, a_of, ib)
         T = np.empty((max(la, 1), max(fB, 1)), dtype=np.int8)
         return _edge_facets(&o, A, B, nA, nB, a_edges, b_edges, a_ef, b_ef, ia, la, ib, lb, T,
                             np.empty((max(la, 1), 3), dtype=np.int64),
@@ -580,15 +599,7 @@ cdef object _labels(Out* o, Py_ssize_t vB):
         labels[i, 0] = codes[i] // vB
         labels[i, 1] = codes[i] % vB
     for i in range(n):
-        x = o.fa.data[i] * vB + o.fb.data[i]
-        lo, hi = 0, u
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if codes[mid] <= x:
-                lo = mid
-            else:
-                hi = mid
-        flat[i] = lo
+        flat[i] = _last_at_most(&codes[0], u, o.fa.data[i] * vB + o.fb.data[i])
     for i in range(f):
         offsets[i + 1] = offsets[i] + o.size.data[i]
     normals = _array(&o.normal).reshape(-1, 3)
@@ -635,13 +646,7 @@ cdef object _edges(const int64_t[::1] flat, const int64_t[::1] offsets, Py_ssize
         u = h[i, 0] // nv
         v = h[i, 2]
         key = v * nv + u
-        lo, hi = 0, n
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if sc[mid] <= key:
-                lo = mid
-            else:
-                hi = mid
+        lo = _last_at_most(&sc[0], n, key)
         if sc[lo] != key:
             return None
         if u < v:
