@@ -459,3 +459,21 @@ def test_convex_sum_kernel_leaves_what_it_cannot_hold_to_the_reference():
         assert convexsum.edges_of(S.facet_indices[:open_[-1]], open_, len(S.ints)) is None
         with pytest.raises(ExactnessError):
             _edges_of(S.facet_indices[:open_[-1]], open_, len(S.ints), "S")
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_component_labels_are_scipys(seed):
+    """Union-find components against scipy's connected_components: the same count and the
+    same labels (numbered by each component's lowest node), with repeated edges, loops,
+    isolated nodes and empty graphs."""
+    from cspace.geometry.graphs import _component_labels_reference, component_labels
+
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        n = int(rng.integers(0, 120))
+        m = int(rng.integers(0, 3 * n + 1)) if n else 0
+        a, b = rng.integers(0, max(n, 1), m), rng.integers(0, max(n, 1), m)
+        a[::5] = b[::5]  # self loops
+        got, want = component_labels(n, a, b), _component_labels_reference(n, a, b)
+        assert got[0] == want[0] and np.array_equal(got[1], want[1])
+        assert got[1].dtype == want[1].dtype

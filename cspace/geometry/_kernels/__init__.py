@@ -7,6 +7,8 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
   ``boxes._tree_reference``; one tree's box queries, the C-space's broad phase);
 - ``convexsum`` — :mod:`cspace.minkowski.cvms` (CVMS in one call; reference
   ``cvms._convex_minkowski_sum_reference``);
+- ``graph`` — :mod:`cspace.geometry.graphs` (connected components by union-find; reference
+  ``graphs._component_labels_reference``, scipy's);
 - ``meshquery`` — :mod:`cspace.mesh.query` (references in :mod:`cspace.mesh.query_reference`);
 - ``pairquery`` — :mod:`cspace.cobstacle.pairs` (triangle pairs found by two box trees; reference
   :mod:`cspace.cobstacle.pairs_reference`, every pair enumerated, tested in

@@ -1,0 +1,53 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
+"""Compiled kernel of :func:`cspace.geometry.graphs.component_labels`: connected components of
+an undirected graph by union-find, labelled as scipy's ``connected_components`` labels them
+(in the order of each component's lowest node), so that the two are identical
+(``tests/test_kernels.py``). Integers only: exact."""
+
+import numpy as np
+
+from libc.stdint cimport int64_t
+
+
+cdef inline int64_t _root(int64_t* parent, int64_t x) noexcept nogil:
+    cdef int64_t r = x, t
+    while parent[r] != r:
+        r = parent[r]
+    while parent[x] != r:  # path compression
+        t = parent[x]
+        parent[x] = r
+        x = t
+    return r
+
+
+def component_labels(Py_ssize_t n, const int64_t[::1] a, const int64_t[::1] b):
+    """``(count, labels)`` of the graph on ``n`` nodes with edges ``a[k] -- b[k]``; None when
+    an edge names a node outside ``[0, n)`` (the caller's reference then raises)."""
+    cdef Py_ssize_t k, i, m = a.shape[0]
+    cdef int64_t ra, rb, count = 0
+    parent_arr = np.arange(n, dtype=np.int64)
+    labels_arr = np.full(n, -1, dtype=np.int32)
+    cdef int64_t[::1] parent = parent_arr
+    cdef int[::1] labels = labels_arr
+    if b.shape[0] != m:
+        return None
+    for k in range(m):
+        if not (0 <= a[k] < n and 0 <= b[k] < n):
+            return None
+    with nogil:
+        for k in range(m):
+            ra = _root(&parent[0], a[k])
+            rb = _root(&parent[0], b[k])
+            if ra != rb:
+                if ra < rb:
+                    parent[rb] = ra
+                else:
+                    parent[ra] = rb
+        # every root is its component's lowest node: number them in node order
+        for i in range(n):
+            ra = _root(&parent[0], i)
+            if labels[ra] < 0:
+                labels[ra] = count
+                count += 1
+            labels[i] = labels[ra]
+    return int(count), labels_arr
