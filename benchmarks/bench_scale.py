@@ -1,4 +1,4 @@
-"""Benchmark: building a synthetic world of many bodies x 36 yaw slices, scaled out (issue #20).
+"""Benchmark: building a synthetic world of many bodies x 36 yaw slices, scaled out (issues #20, #30).
 
 The world: ``N`` obstacle bodies in a cube whose side grows as ``N^(1/3)`` (density fixed):
 random boxes, and every 50th body a small non-convex solid (the L-shape of ``tests/zoo.py``,
@@ -15,8 +15,9 @@ and written once):
 Then a second pass of the 1-process configuration on the full cache (every pair a hit) measures
 what this process does alone per body-slice (modelling, cache reads, making the C-obstacles):
 the serial share that no worker count removes. Results of the three builds are compared on
-random queries (they must agree exactly). The report gives seconds per body-slice, bytes per
-C-obstacle (cache files), the machine's load and versions, and the cost model.
+random queries (they must agree exactly; the answers are kept, the C-spaces dropped). The
+report gives seconds per body-slice, bytes per C-obstacle (cache packs), the machine's load and
+versions, and the cost model.
 
 Usage: ``python benchmarks/bench_scale.py [--quick] [--n 1000 ...] [--slices 36]
 [--out PATH]``; writes ``benchmarks/reports/scale.md``. ``--quick``: N = 50, 4 slices.
@@ -43,15 +44,15 @@ TARGET = 10**6      # body-slices in the cost model
 HOUR = 3600.0       # ... built within this many seconds
 
 CALLER_SHARE = (
-    "Where the caller's share goes: mostly modelling. Each slice's grid is centred on the "
-    "scene with that slice's turned robot, so its origin differs from slice to slice (in this "
-    "world every slice has its own origin, at one step), and steps 1-5 (welding, splitting, "
-    "validating each closed body, its self-intersection check, the convexity test) run again "
-    "per body and slice: `model_scene(memo=...)`, which `build_slices` uses, shares them only "
-    "between slices whose grids coincide. The rest is reading and writing the cache (numpy "
-    ".npz, each written file synced) and making the C-obstacles from the arrays. Moving the "
-    "modelling into the workers, or classifying once on translation-normalised integers, "
-    "would shrink the serial share; neither is done yet."
+    "Where the caller's share goes. The obstacles are modelled once for all slices (one grid "
+    "for every orientation, `planning.orientations.turning_frame`; welding, splitting, "
+    "validation, self-intersection and the convexity test once per body), and per slice only "
+    "the turned robot. What stays in the process that calls `build_slices`: reading the cache "
+    "(one pack index per pack, then each entry's arrays), making the C-obstacles from the "
+    "arrays, and writing each slice's new entries as one pack (one file, synced once). "
+    "Since issue #30 a convex pair's sum is one compiled kernel call "
+    "(`geometry/_kernels/convexsum.pyx`); most of what is left per body-slice is Python "
+    "around it (the C-obstacle object, its margin) and the NCC-CVMS sums of the L-shapes."
 )
 
 
@@ -90,7 +91,15 @@ def _cache_size(folder: Path) -> tuple[int, int]:
     return len(COCache(folder).keys()), sum(p.stat().st_size for p in files)
 
 
+def _queries(scene, n_queries: int = 2000):
+    rng = np.random.default_rng(1)
+    q = rng.uniform(*scene.bounds, (n_queries, 3))
+    return q, q[: n_queries // 2], q[n_queries // 2:]
+
+
 def _run(scene, slices, make_executor, label: str, cache: Path) -> dict:
+    """One configuration's build; its C-spaces' answers to fixed queries are kept (to compare
+    configurations), the C-spaces themselves dropped (10^4 x 36 of them hold gigabytes)."""
     from cspace.planning.scale import build_slices
 
     load0 = os.getloadavg()
@@ -106,27 +115,24 @@ def _run(scene, slices, make_executor, label: str, cache: Path) -> dict:
     t2 = time.perf_counter()
     cpu = time.process_time() - cpu0
     files, size = _cache_size(cache)
+    q, q0, q1 = _queries(scene)
+    answers = {k: (cs.contains(q), cs.segment_free(q0, q1)) for k, cs in built.items()}
     row = {"label": label, "start": t1 - t0, "build": t2 - t1, "cpu": cpu, "files": files,
-           "bytes": size,
-           "load": (load0, os.getloadavg()), "cspaces": built,
+           "bytes": size, "load": (load0, os.getloadavg()), "answers": answers,
            "obstacles": sum(len(cs.obstacles) for cs in built.values())}
-    print(f"  {label}: start {row['start']:.1f} s, build {row['build']:.1f} s, {files} files, "
+    del built
+    print(f"  {label}: start {row['start']:.1f} s, build {row['build']:.1f} s, {files} entries, "
           f"{size / 1e6:.1f} MB, load {load0[0]:.2f} -> {row['load'][1][0]:.2f}", flush=True)
     return row
 
 
-def _agree(rows: list, scene, n_queries: int = 2000) -> bool:
-    """Every configuration's slices answer random queries as the first one's."""
-    rng = np.random.default_rng(1)
-    q = rng.uniform(*scene.bounds, (n_queries, 3))
-    q0, q1 = q[: n_queries // 2], q[n_queries // 2:]
-    ref = rows[0]["cspaces"]
-    for row in rows[1:]:
-        for k, cs in row["cspaces"].items():
-            if not (np.array_equal(cs.contains(q), ref[k].contains(q))
-                    and np.array_equal(cs.segment_free(q0, q1), ref[k].segment_free(q0, q1))):
-                return False
-    return True
+def _agree(rows: list) -> bool:
+    """Every configuration's slices answer the fixed queries as the first one's."""
+    ref = rows[0]["answers"]
+    return all(row["answers"].keys() == ref.keys()
+               and all(np.array_equal(a, b) for k in ref
+                       for a, b in zip(row["answers"][k], ref[k]))
+               for row in rows[1:])
 
 
 def measure(n: int, n_slices: int) -> dict:
@@ -146,10 +152,10 @@ def measure(n: int, n_slices: int) -> dict:
             rows.append(_run(scene, slices, make, label, Path(tmp) / f"cache{i}"))
         hit = _run(scene, slices, lambda: None, "1 process, every pair a cache hit",
                    Path(tmp) / "cache0")
-    agree = _agree(rows + [hit], scene)
+    agree = _agree(rows + [hit])
     pairs = rows[0]["obstacles"]  # one C-obstacle per built (body, slice) pair
     for row in rows + [hit]:
-        row.pop("cspaces")
+        row.pop("answers")
     return {"n": n, "slices": n_slices, "pairs": pairs, "rows": rows, "hit": hit,
             "agree": agree, "kept": rows[0]["obstacles"]}
 
@@ -166,7 +172,7 @@ def _versions() -> str:
 
 
 def report(results: list, quick: bool, note: str) -> str:
-    lines = ["# Scale-out: building many bodies x orientation slices (issue #20)", "",
+    lines = ["# Scale-out: building many bodies x orientation slices (issues #20, #30)", "",
              f"Written by `benchmarks/bench_scale.py{' --quick' if quick else ''}`. "
              + _versions() + ".", ""]
     if note:
@@ -183,7 +189,7 @@ def report(results: list, quick: bool, note: str) -> str:
         lines += [f"## N = {r['n']} bodies x {r['slices']} slices = {r['n'] * r['slices']} "
                   f"body-slices ({P} C-obstacles built)", "",
                   "| configuration | start (s) | build (s) | s per body-slice | speed-up | "
-                  "caller CPU (s) | cache files | MB | bytes per C-obstacle | "
+                  "caller CPU (s) | cache entries | MB | bytes per C-obstacle | "
                   "load before -> after |",
                   "|---|---:|---:|---:|---:|---:|---:|---:|---:|---|"]
         base = r["rows"][0]["build"]
@@ -214,9 +220,10 @@ def report(results: list, quick: bool, note: str) -> str:
         f"making the C-obstacles) takes {hit:.2e} s, so the build a worker takes over is "
         f"**{work:.2e} s per body-slice**. The caller's own share while the cluster builds "
         f"(its CPU time: modelling, submitting, making the C-obstacles from the results, "
-        f"writing them to the cache, each written file synced) is **{caller:.2e} s per "
+        f"writing them to the cache, one pack per slice) is **{caller:.2e} s per "
         f"body-slice**; it stays in the process that calls `build_slices`. A C-obstacle takes "
-        f"**{size:.0f} bytes** on disk (cache file: numpy .npz with its digest).", "",
+        f"**{size:.0f} bytes** on disk (in a pack: its arrays and an index record with "
+        f"its digest).", "",
         f"A world of 10^6 body-slices therefore needs {TARGET * one / HOUR:.1f} CPU-hours, "
         f"{TARGET * size / 1e9:.2f} GB of shared cache, and to finish in one hour: "
         f"**{workers} workers** for the builds, plus the caller's serial share of "
