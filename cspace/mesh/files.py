@@ -124,6 +124,14 @@ def read_mesh_file(path, where: str = "") -> MeshFile:
         centre = None
     if len(faces) == 0 or len(vertices) == 0:
         raise MeshFileError(f"{where}: '{path}' holds no triangles")
+    vertices, faces = np.asarray(vertices), np.asarray(faces)
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise MeshFileError(f"{where}: '{path}': vertices are not 3D points (read as "
+                            f"shape {tuple(vertices.shape)})")
+    if faces.ndim != 2 or faces.shape[1] != 3 or faces.min() < 0 or faces.max() >= len(vertices):
+        raise MeshFileError(f"{where}: '{path}': faces are not triangles of its "
+                            f"{len(vertices)} vertices (indices {int(faces.min())} to "
+                            f"{int(faces.max())}, shape {tuple(faces.shape)})")
     if not np.isfinite(vertices).all():
         row = int(np.argmin(np.isfinite(vertices).all(axis=1)))
         raise MeshFileError(f"{where}: '{path}': vertex {row} is not finite: "
