@@ -545,12 +545,15 @@ class _TreePairsCO:
         """Exactly: the closed segment ``x0 x1`` meets the piece of pair ``(i, j)``."""
         return exact_segment_entry(self._halfspaces(i, j), self.exponent, x0, x1) is not None
 
+    def contains_point(self, x: list) -> bool:
+        """One state (three floats, scene frame): the compiled filter, then the exact piece
+        test on the pairs it leaves."""
+        status, todo = self._set.contains_one(*x, self._scale)
+        return status == 1 or (status == 2 and any(self._in_piece(i, j, x) for i, j in todo))
+
     def contains(self, q: np.ndarray) -> np.ndarray:
         if len(q) == 1:  # one state, as a planner asks: no array round trips
-            x = q[0].tolist()
-            status, todo = self._set.contains_one(*x, self._scale)
-            return np.array([status == 1 or (status == 2 and any(
-                self._in_piece(i, j, x) for i, j in todo))])
+            return np.array([self.contains_point(q[0].tolist())])
         status, todo = self._set.contains(self._grid_units(q))
         out = status == 1
         for r, i, j in todo.tolist():

@@ -85,10 +85,21 @@ class _UnionOf:
     def faces(self) -> np.ndarray:
         return self._join().faces
 
+    def contains_point(self, x: list) -> bool:
+        """One state (three finite floats, scene frame), as a planner asks: no arrays on the
+        way to the engines that answer points (``contains_point``), exact like ``contains``."""
+        if self._index is None:
+            return False
+        for k in self._index.point(*x):
+            e = self._engine(k)
+            point = getattr(e, "contains_point", None)
+            if point(x) if point is not None else e.contains(np.array([x]))[0]:
+                return True
+        return False
+
     def contains(self, q: np.ndarray) -> np.ndarray:
         if len(q) == 1 and self._index is not None:  # one state, as a planner asks
-            ks = self._index.point(*q[0].tolist())
-            return np.array([any(self._engine(k).contains(q)[0] for k in ks)])
+            return np.array([self.contains_point(q[0].tolist())])
         out = np.zeros(len(q), dtype=bool)
         for k, rows in self._near(q, q):
             rest = rows[~out[rows]]

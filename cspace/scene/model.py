@@ -39,6 +39,7 @@ meets nothing.
 
 from __future__ import annotations
 
+import math
 import time
 import warnings
 from dataclasses import dataclass, field
@@ -579,6 +580,9 @@ class CSpace:
 
         See :meth:`CSpaceObstacle.contains`.
         """
+        x = _one_point(q)
+        if x is not None:  # one state, as a planner asks: three floats, no arrays
+            return self._union.contains_point(x)
         q, single = _translations(q)
         out = self._union.contains(q)
         return bool(out[0]) if single else out
@@ -606,6 +610,16 @@ class CSpace:
         a, b, single = CSpaceObstacle._pair(q0, q1)
         t = self._union.segments(a, b, want_t=True)[1]
         return float(t[0]) if single else t
+
+
+def _one_point(q) -> list | None:
+    """``q`` as three finite floats when it is one float64 state ``(3,)`` (a planner's
+    question), else None: the general path then checks and answers it."""
+    if type(q) is np.ndarray and q.shape == (3,) and q.dtype == np.float64:
+        x = q.tolist()
+        if math.isfinite(x[0]) and math.isfinite(x[1]) and math.isfinite(x[2]):
+            return x
+    return None
 
 
 class LazyCSpace(CSpace):
