@@ -275,9 +275,18 @@ def planning(scene) -> list[dict]:
             clipping += bad > 0
         rows.append({"method": method, "solved": solved, "runs": len(SEEDS),
                      "mean_s": float(np.mean(times)) if times else None, "clipping": clipping,
+                     "rss": _peak_rss(),
                      "first": first if method == "ours, 64 orientations" else None})
         print(rows[-1], flush=True)
     return rows
+
+
+def _peak_rss() -> int:
+    """This process's peak resident memory so far (bytes; VmHWM)."""
+    for line in open("/proc/self/status"):
+        if line.startswith("VmHWM:"):
+            return int(line.split()[1]) * 1024
+    return 0
 
 
 def turn_build(scene, slices) -> dict:
@@ -366,7 +375,8 @@ def main():
                   "along the continuous motion, a pose every 10^-4 of the scene's diagonal and "
                   "every 0.1 degree):", "",
                   "| problem | method | solved | mean s | clipping paths | of them translations at "
-                  "the start orientation alone |", "|---|---|---|---|---|---|"]
+                  "the start orientation alone | this process's peak RSS after it |",
+                  "|---|---|---|---|---|---|---|"]
         turns = []
         for name, rows in plans:
             for r in rows:
@@ -378,7 +388,8 @@ def main():
                 mean = f"{r['mean_s']:.2f}" if r["mean_s"] is not None else "–"
                 alone = "" if r.get("first") is None else f"{r['first']}/{r['solved']}"
                 lines.append(f"| {name} | {r['method']} | {r['solved']}/{r['runs']} | {mean} | "
-                             f"{r['clipping']}/{r['solved']} | {alone} |")
+                             f"{r['clipping']}/{r['solved']} | {alone} | "
+                             f"{r['rss'] / 2**20:.0f} MB |")
     if plans:
         lines += ["", "What a turning planner pays the first time it reaches a slice or a turn "
                   "(in this process, no disk cache; the first slice also models the obstacles, "
