@@ -274,7 +274,7 @@ def _store(ctx: _Context, key, pair: PairModel, arrays) -> None:
         try:
             ctx.store.store(key, arrays)
         except OSError as exc:  # an unwritable cache must not fail the build
-            warnings.warn(f"C-obstacle cache: cannot write {ctx.store.path(key)}: {exc}",
+            warnings.warn(f"C-obstacle cache: cannot write {ctx.store.location}: {exc}",
                           UserWarning, stacklevel=3)
 
 

@@ -174,9 +174,10 @@ class COCache:
     def _packs_dir(self) -> Path:
         return self.directory / "packs"
 
-    def path(self, key: str) -> Path:
-        """Where ``key`` is written: the packs folder (an entry of the older layout:
-        ``<dir>/<key[:2]>/<key>.npz``)."""
+    @property
+    def location(self) -> Path:
+        """Where entries are written: the packs folder (entries of the older layout are read
+        from ``<dir>/<key[:2]>/<key>.npz``)."""
         return self._packs_dir()
 
     # ---------------------------------------------------------------- reading

@@ -418,7 +418,7 @@ def _flush(store) -> None:
     try:
         store.flush()
     except OSError as exc:
-        warnings.warn(f"C-obstacle cache: cannot write {store.path('')}: {exc}", UserWarning,
+        warnings.warn(f"C-obstacle cache: cannot write {store.location}: {exc}", UserWarning,
                       stacklevel=3)
 
 

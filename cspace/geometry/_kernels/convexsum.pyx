@@ -359,7 +359,6 @@ def facets(const int64_t[:, ::1] A, const int64_t[::1] a_off, const int64_t[::1]
     cdef Py_ssize_t vA = A.shape[0], vB = B.shape[0], fA = nA.shape[0], fB = nB.shape[0]
     cdef Py_ssize_t eA = a_edges.shape[0], eB = b_edges.shape[0]
     cdef Py_ssize_t nc = fA + fB, i, j, k, c, m, h, r, nu, la, lb, p, q, na, nb, most
-    cdef int64_t f
     cdef int64_t d1, i1, d2, i2
     cdef Out o
     cdef int axis
@@ -579,8 +578,7 @@ cdef object _edge_facets(Out* o, const int64_t[:, ::1] A, const int64_t[:, ::1] 
 
 cdef object _labels(Out* o, Py_ssize_t vB):
     """One sum vertex per distinct ``(a, b)``, in the order of ``a * vB + b`` (as ``np.unique``)."""
-    cdef Py_ssize_t n = o.fa.n, i, u = 0, lo, hi, mid, f = o.size.n
-    cdef int64_t x
+    cdef Py_ssize_t n = o.fa.n, i, u = 0, f = o.size.n
     codes_arr = np.empty(max(n, 1), dtype=np.int64)
     cdef int64_t[::1] codes = codes_arr
     for i in range(n):
@@ -620,12 +618,10 @@ cdef object _edges(const int64_t[::1] flat, const int64_t[::1] offsets, Py_ssize
     """Each edge once, ``(u, v)`` with ``u < v`` in the order of ``flat``, and its left and
     right facets (as ``cspace.mesh.convex._edges_of``); None when the facets do not close up
     (a half-edge unmatched or repeated: the caller's reference raises the named error)."""
-    cdef Py_ssize_t n = flat.shape[0], f = offsets.shape[0] - 1, i, k, lo, hi, mid, e = 0
+    cdef Py_ssize_t n = flat.shape[0], f = offsets.shape[0] - 1, i, k, lo, e = 0
     cdef int64_t u, v, key
     codes_arr = np.empty((max(n, 1), 3), dtype=np.int64)  # (code, facet, v) per half-edge
     cdef int64_t[:, ::1] h = codes_arr
-    order_arr = np.empty(max(n, 1), dtype=np.int64)
-    cdef int64_t[::1] order = order_arr
     for k in range(f):
         for i in range(offsets[k], offsets[k + 1]):
             u = flat[i]
@@ -633,8 +629,8 @@ cdef object _edges(const int64_t[::1] flat, const int64_t[::1] offsets, Py_ssize
             h[i, 0] = u * nv + v
             h[i, 1] = k
             h[i, 2] = v
-    sorted_codes_arr = np.sort(codes_arr[:n, 0]) if n else np.empty(0, np.int64)
-    sorted_at_arr = np.argsort(codes_arr[:n, 0], kind="stable") if n else np.empty(0, np.int64)
+    sorted_at_arr = np.argsort(codes_arr[:n, 0], kind="stable")
+    sorted_codes_arr = np.ascontiguousarray(codes_arr[:n, 0][sorted_at_arr])
     cdef int64_t[::1] sc = sorted_codes_arr, at = sorted_at_arr
     for i in range(1, n):
         if sc[i] == sc[i - 1]:
