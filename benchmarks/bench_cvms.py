@@ -143,7 +143,7 @@ def main() -> None:
         f"({platform.machine()}); best of {args.repeat} runs per method, all in one process.",
         "",
         "- **cvms**: `cspace.convex_minkowski_sum` — exact, polygon facets, provenance; one call of the compiled "
-        "kernel `geometry/_kernels/convexsum.pyx`. **numpy ref**: the same steps in numpy "
+        "kernel `geometry/_kernels/convex.pyx`. **numpy ref**: the same steps in numpy "
         "(`cvms._convex_minkowski_sum_reference`, identical output, checked per row).",
         "- **hull**: exact convex hull of all pairwise vertex sums (Qhull candidate planes, certified with exact "
         "predicates). Same exact output as cvms: every row below was checked to have the same set of facet planes "

@@ -51,7 +51,7 @@ CALLER_SHARE = (
     "(one pack index per pack, then each entry's arrays), making the C-obstacles from the "
     "arrays, and writing each slice's new entries as one pack (one file, synced once). "
     "Since issue #30 a convex pair's sum is one compiled kernel call "
-    "(`geometry/_kernels/convexsum.pyx`); most of what is left per body-slice is Python "
+    "(`geometry/_kernels/convex.pyx`); most of what is left per body-slice is Python "
     "around it (the C-obstacle object, its margin) and the NCC-CVMS sums of the L-shapes."
 )
 

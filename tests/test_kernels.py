@@ -435,16 +435,16 @@ def test_convex_sum_kernel_is_the_reference():
 def test_convex_sum_kernel_leaves_what_it_cannot_hold_to_the_reference():
     """Coordinates beyond 2**40 or normals beyond 2**61: the kernel answers None (its products
     would not fit __int128) and the reference decides."""
-    from cspace.geometry._kernels import convexsum
+    from cspace.geometry._kernels import convex as kernel
     from cspace.minkowski import cvms
 
     A = _polytopes()[0][1]
     args = (A.ints, A.facet_offsets, A.facet_indices, A.normals, A.edges, A.edge_facets)
-    assert convexsum.facets(*args, *args) is not None
+    assert kernel.facets(*args, *args) is not None
     big = (A.ints + 2**40,) + args[1:]
-    assert convexsum.facets(*big, *args) is None
+    assert kernel.facets(*big, *args) is None
     wide = args[:3] + (A.normals * 2**60,) + args[4:]
-    assert convexsum.facets(*args, *wide) is None
+    assert kernel.facets(*args, *wide) is None
     # the sum's edges as convex._edges_of finds them; facets that do not close up: the kernel
     # declines, and the reference names the error
     from cspace.errors import ExactnessError
@@ -452,13 +452,140 @@ def test_convex_sum_kernel_leaves_what_it_cannot_hold_to_the_reference():
 
     for _, P, Q in _polytopes()[::17]:
         S = cvms.convex_minkowski_sum(P, Q).polytope
-        got = convexsum.edges_of(S.facet_indices, S.facet_offsets, len(S.ints))
+        got = kernel.edges_of(S.facet_indices, S.facet_offsets, len(S.ints))
         want = _edges_of(S.facet_indices, S.facet_offsets, len(S.ints), "S")
         assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
         open_ = S.facet_offsets[:-1].copy()  # the last facet dropped: a hole
-        assert convexsum.edges_of(S.facet_indices[:open_[-1]], open_, len(S.ints)) is None
+        assert kernel.edges_of(S.facet_indices[:open_[-1]], open_, len(S.ints)) is None
         with pytest.raises(ExactnessError):
             _edges_of(S.facet_indices[:open_[-1]], open_, len(S.ints), "S")
+
+
+_POLY_FIELDS = ("ints", "facet_offsets", "facet_indices", "normals", "edges", "edge_facets")
+
+
+def _same_polytope(a, b) -> bool:
+    return (all(np.array_equal(getattr(a, f), getattr(b, f)) for f in _POLY_FIELDS)
+            and a.grid == b.grid and a.excess == b.excess)
+
+
+def _closed_meshes():
+    """Closed meshes: convex ones (boxes, icospheres, random hulls, cylinders; small, large
+    and off the origin; rotated so that snapping bends some), and non-convex or not exactly
+    convex ones (torus, L, comb, a dented box, a box wound inwards, a box listed twice)."""
+    import trimesh
+
+    rng = np.random.default_rng(11)
+    out = []
+    for i in range(24):
+        M = trimesh.creation.box(rng.uniform(0.01, 3.0, 3))
+        if i % 3 == 1:
+            M.vertices = random_rotation(M.vertices, seed=i)
+        out.append((f"box {i}", M.vertices + rng.normal(size=3) * (300.0 if i % 2 else 1.0),
+                    M.faces))
+    for k in range(3):
+        M = trimesh.creation.icosphere(k)
+        out.append((f"ico{k}", M.vertices * 0.7 + [250.0, 150.0, -300.0], M.faces))
+    for i in range(16):
+        M = trimesh.convex.convex_hull(rng.normal(size=(int(rng.integers(5, 80)), 3)))
+        out.append((f"hull {i}", M.vertices, M.faces))
+    M = trimesh.creation.cylinder(0.5, 2.0, sections=24)
+    out.append(("cylinder", M.vertices, M.faces))
+    out += [("torus", *torus(sections=12, ring=8)), ("L", *l_shape()), ("comb", *comb(3, 2))]
+    M = trimesh.creation.box((1.0, 1.0, 1.0))
+    dented = M.vertices.copy()
+    out.append(("inwards", dented, M.faces[:, ::-1]))
+    out.append(("twice", np.vstack([dented, dented]), np.vstack([M.faces, M.faces + 8])))
+    sub = M.subdivide()
+    V = sub.vertices.copy()
+    V[np.argmin(np.abs(V - [0.0, 0.0, 0.5]).sum(axis=1))] = [0.0, 0.0, 0.4]  # a dent
+    out.append(("dented", V, sub.faces))
+    return out
+
+
+def test_polytope_of_a_convex_mesh_is_the_reference():
+    """The compiled test of an exactly convex closed mesh against the reference (validation,
+    then ``convex_within_bound``, the one definition of convex): wherever the kernel returns
+    a polytope, the reference accepts the mesh with excess 0 and makes the identical polytope
+    (and so does ``from_ints`` of its vertices); the kernel declines every mesh the reference
+    refuses or bends, and accepts every exactly convex one here."""
+    from cspace.errors import CspaceError
+    from cspace.geometry.exact import Grid
+    from cspace.mesh.closed import ClosedMesh
+    from cspace.mesh.convex import ConvexPolytope, convex_within_bound
+
+    accepted = declined = 0
+    for name, V, F in _closed_meshes():
+        grid = Grid.for_points(np.asarray(V, dtype=np.float64))
+        P, inverse = np.unique(grid.snap(V), axis=0, return_inverse=True)
+        G = inverse.reshape(-1)[np.asarray(F, dtype=np.int64)]
+        got = ConvexPolytope.from_convex_mesh(P, G, grid=grid, name=name)
+        try:
+            mesh = ClosedMesh.from_arrays(grid.to_float(P), G, grid=grid, name=name)
+            want, why = convex_within_bound(mesh)
+        except CspaceError:
+            want = None
+        if got is None:
+            declined += 1
+            exactly = want is not None and not want.excess
+            # the kernel may decline only meshes the reference's validation changes
+            assert not exactly or not np.array_equal(mesh.faces, G), name
+            continue
+        accepted += 1
+        assert want is not None and want.excess == 0, name
+        assert _same_polytope(got, want), name
+        assert _same_polytope(got, ConvexPolytope.from_ints(P, grid=grid, name=name)), name
+    assert accepted >= 40 and declined >= 6, (accepted, declined)
+
+
+def test_polytope_of_mesh_kernel_declines_what_it_cannot_hold():
+    """Coordinates of 2**30 or more, an open mesh, a repeated vertex or an index out of range:
+    None, and the reference decides."""
+    import trimesh
+
+    from cspace.geometry._kernels import convex as kernel
+
+    M = trimesh.creation.box((2.0, 2.0, 2.0))
+    P, F = np.rint(M.vertices).astype(np.int64), np.asarray(M.faces, dtype=np.int64)
+    assert kernel.polytope_of_mesh(P, F) is not None
+    assert kernel.polytope_of_mesh(P + 2**30, F) is None
+    assert kernel.polytope_of_mesh(P, F[1:]) is None
+    assert kernel.polytope_of_mesh(np.vstack([P, P[:1]]), F) is None
+    assert kernel.polytope_of_mesh(P, np.where(F == 7, 8, F)) is None
+
+
+def test_canonical_order_and_grown_polytopes_are_from_ints():
+    """``canonical()`` of a CVMS sum is ``from_ints`` of its vertices, and ``Margin.grow`` (the
+    sum with a box) is the hull of the grown points, identically; Qhull's and the exact wrap's
+    hulls are the same polytope."""
+    from cspace.cobstacle.margin import Margin
+    from cspace.mesh.convex import ConvexPolytope
+    from cspace.minkowski import cvms
+
+    rng = np.random.default_rng(3)
+    for name, A, B in _polytopes()[::5]:
+        A, B = cvms._common_grid(A, B)
+        S = cvms.convex_minkowski_sum(A, B).polytope
+        want = ConvexPolytope.from_ints(S.ints, grid=S.grid, name=S.name)
+        assert _same_polytope(S.canonical(), want), name
+        assert _same_polytope(ConvexPolytope.from_ints(S.ints, grid=S.grid, name=S.name,
+                                                       method="wrap"), want), name
+        steps = tuple(int(x) for x in rng.integers(1, 5000, 3))
+        m = Margin(steps, (0.0, 0.0, 0.0), A.grid, 0.0, True)
+        assert _same_polytope(m.grow(A), ConvexPolytope.from_ints(
+            m.grow_ints(A.ints), grid=A.grid, name=A.name)), name
+
+
+def test_unique_rows_is_numpys():
+    from cspace.mesh.components import unique_rows
+
+    rng = np.random.default_rng(0)
+    for n in (0, 1, 2, 7, 50, 400):
+        a = rng.integers(-3, 3, (n, 3)).astype(np.int64)
+        got = unique_rows(a)
+        want = np.unique(a, axis=0, return_index=True, return_inverse=True)
+        for g, w in zip(got, want):
+            assert np.array_equal(g, np.asarray(w).reshape(g.shape)), n
 
 
 @pytest.mark.parametrize("seed", range(4))

@@ -28,9 +28,12 @@ from ..errors import (
 )
 from ..geometry import exact
 from ..geometry.exact import Grid
+from ..geometry._kernels import load
 from ..geometry.polygon import fan_triangles
 
 __all__ = ["ConvexPolytope"]
+
+_compiled = load("convex")
 
 
 # --------------------------------------------------------------------------------------
@@ -80,6 +83,14 @@ def _facet_polygon(ints: np.ndarray, idx: np.ndarray, normal: np.ndarray) -> np.
     if normal[k] < 0:
         ring = ring[::-1]
     return np.asarray(idx)[ring]
+
+
+# The unit box's corners and outward triangles (trimesh.creation.box's).
+_BOX_CORNERS = np.array([[a, b, c] for a in (-1, 1) for b in (-1, 1) for c in (-1, 1)],
+                        dtype=np.int64)
+_BOX_FACES = np.array([[1, 3, 0], [4, 1, 0], [0, 3, 2], [2, 4, 0], [1, 7, 3], [5, 1, 4],
+                       [5, 7, 1], [3, 7, 2], [6, 4, 2], [2, 7, 6], [6, 5, 4], [7, 5, 6]],
+                      dtype=np.int64)
 
 
 # --------------------------------------------------------------------------------------
@@ -189,9 +200,54 @@ class ConvexPolytope:
         return cls._from_planes(ints, _wrap_planes(ints, tetra), grid=grid, name=name)
 
     @classmethod
+    def from_convex_mesh(cls, ints, faces, *, grid: Grid, name: str = "polytope"
+                         ) -> "ConvexPolytope | None":
+        """The polytope a closed mesh on grid integers bounds when it is exactly convex, in
+        one compiled call; None when the kernel does not decide (then ask
+        :func:`convex_within_bound`, the one definition of "convex", which names the reason).
+
+        ``ints`` (n, 3) int64 grid coordinates (distinct), ``faces`` (m, 3) int64 oriented
+        outwards. A polytope returned is the one :meth:`from_ints` makes of ``ints``, and the
+        one :func:`convex_within_bound` accepts with ``excess`` 0 (the proof is the kernel's:
+        :func:`cspace.geometry._kernels.convex.polytope_of_mesh`; ``tests/test_kernels.py``
+        holds them identical).
+        """
+        got = _compiled.polytope_of_mesh(np.ascontiguousarray(ints, dtype=np.int64),
+                                         np.ascontiguousarray(faces, dtype=np.int64))
+        if got is None:
+            return None
+        P, offsets, flat, normals, edges, edge_facets = got
+        return cls(grid=grid, ints=P, facet_offsets=offsets, facet_indices=flat,
+                   normals=normals, edges=edges, edge_facets=edge_facets, name=name)
+
+    @classmethod
+    def box(cls, half, *, grid: Grid, name: str = "box") -> "ConvexPolytope":
+        """The box ``[-half, half]`` (grid steps per axis, each positive) about the grid's
+        origin, as :meth:`from_ints` makes it of its eight corners (no hull computed)."""
+        h = np.asarray(half, dtype=np.int64).reshape(3)
+        if not (h > 0).all():
+            raise DegenerateError(f"{name}: a box of half-sizes {h.tolist()} has no volume")
+        return cls.from_convex_mesh(_BOX_CORNERS * h, _BOX_FACES, grid=grid, name=name)
+
+    def canonical(self) -> "ConvexPolytope":
+        """The same polytope in :meth:`from_ints`'s order (corners in lexicographic order,
+        facets in lexicographic order of their normals, each ring from its projection's
+        smallest corner): what ``from_ints(self.ints)`` returns, without a hull. For a
+        polytope made another way (a CVMS sum)."""
+        ints = np.unique(self.ints, axis=0)
+        first = self.ints[self.facet_indices[self.facet_offsets[:-1]]]
+        on_plane = exact.plane_side_matrix(ints, first, self.normals) == 0
+        out = self._from_planes(ints, (self.normals, on_plane), grid=self.grid, name=self.name)
+        return replace(out, excess=self.excess, _cache={}) if self.excess else out
+
+    @classmethod
     def _from_planes(cls, ints, planes, *, grid, name) -> "ConvexPolytope":
-        """Polytope from its certified facet planes: each facet is conv(points on its plane)."""
+        """Polytope from its certified facet planes: each facet is conv(points on its plane),
+        the facets in lexicographic order of their normals (so that the polytope does not
+        depend on the order in which Qhull or the wrap found them)."""
         normals, on_plane = planes
+        order = np.lexsort(np.asarray(normals).T[::-1])
+        normals, on_plane = np.asarray(normals)[order], on_plane[:, order]
         polys = [_facet_polygon(ints, np.nonzero(on_plane[:, j])[0], normals[j]) for j in range(len(normals))]
         return cls._from_polygons(ints, polys, normals, grid=grid, name=name)
 
@@ -326,6 +382,12 @@ class ConvexPolytope:
         ``c`` in this frame.
         """
         c = self.grid.offset(reference_point)
+        key = ("reflected", tuple(int(v) for v in c))
+        if key not in self._cache:  # a robot is reflected once, not once per obstacle
+            self._cache[key] = self._reflected(c)
+        return self._cache[key]
+
+    def _reflected(self, c: np.ndarray) -> "ConvexPolytope":
         ints, grid = c[None, :] - self.ints, self.grid.vectors
         if ints.size and np.abs(ints).max() > grid.limit:
             ints, grid = -self.ints, replace(self.grid, origin=tuple(int(v) for v in c))

@@ -32,7 +32,7 @@ FACET_KINDS = ("translated", "corner", "edge")
 
 TRANSLATED, CORNER, EDGE = 0, 1, 2
 
-_compiled = load("convexsum")
+_compiled = load("convex")
 
 
 # --------------------------------------------------------------------------------------
@@ -158,7 +158,7 @@ def convex_minkowski_sum(A, B) -> MinkowskiSum:
     Cost: the support of every facet normal of A among B's vertices and vice versa
     (``O(f_A v_B + f_B v_A)``), and the Gauss-arc crossing test on the pairs of edges whose
     two facets have different contributing vertices. The work is one call of the compiled
-    kernel (:mod:`cspace.geometry._kernels.convexsum`), every decision exact in ``__int128``
+    kernel (:mod:`cspace.geometry._kernels.convex`), every decision exact in ``__int128``
     (no filter needed); :func:`_convex_minkowski_sum_reference` is the same steps in numpy
     (float filters with exact fallbacks, :mod:`cspace.geometry.exact`), identical output
     (``tests/test_kernels.py``), and runs where the kernel's range does not hold.

@@ -10,7 +10,9 @@ surface → surface plus what it encloses (:class:`Enclosing`), open → surface
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
+from fractions import Fraction
 
 import numpy as np
 
@@ -21,7 +23,7 @@ from ..geometry.exact import Grid
 from ..geometry.graphs import component_labels
 from ..mesh.closed import ClosedMesh
 from ..mesh.components import edge_uses
-from ..mesh.convex import convex_within_bound
+from ..mesh.convex import ConvexPolytope, convex_within_bound
 
 __all__ = ["KINDS", "BodyModel", "RobotPart", "PairModel"]
 
@@ -237,6 +239,11 @@ def _closed_kind(name, P, F, grid):
     """
     from ..mesh.query import unbalanced_edge
 
+    # Most bodies of a real scene are exactly convex: one compiled call proves it (what the
+    # steps below would conclude, without their Python and numpy per body).
+    poly = ConvexPolytope.from_convex_mesh(P, F, grid=grid, name=name)
+    if poly is not None:
+        return "convex", f"closed and convex ({poly.n_facets} facets)", poly
     edge, count = edge_uses(F, len(P))
     n_boundary = int((count == 1).sum())
     if n_boundary:
@@ -336,40 +343,57 @@ def _without_far_parts(scene):
     Other unreachable parts are dropped later, on the grid, as usual.
     """
     from dataclasses import replace
-    from fractions import Fraction
 
     from .scene import Body
 
     rel = scene.robot.vertices - scene.reference_point
-    # c - R as a box of exact rationals (the reference point minus the robot's box)
+    # c - R as a box of exact rationals (the reference point minus the robot's box): a part
+    # reaches the bounds when lo + c - r_hi <= b_hi and b_lo <= hi + c - r_lo on every axis,
+    # that is lo <= the largest float not above b_hi - c + r_hi (and hi >= the smallest float
+    # not below b_lo - c + r_lo): exact comparisons of floats.
     c = [Fraction(float(x)) for x in scene.reference_point]
     r_lo = [Fraction(float(x)) for x in scene.robot.vertices.min(axis=0)]
     r_hi = [Fraction(float(x)) for x in scene.robot.vertices.max(axis=0)]
     b_lo = [Fraction(float(x)) for x in scene.bounds[0]]
     b_hi = [Fraction(float(x)) for x in scene.bounds[1]]
-    split = []
-    for body in scene.obstacles:
-        _, inverse = np.unique(body.vertices, axis=0, return_inverse=True)
-        F = inverse.reshape(-1)[body.faces]
-        n = int(F.max()) + 1
-        _, label = component_labels(n, F.reshape(-1), np.repeat(F[:, 0], 3))
-        part = label[F[:, 0]]
-        parts = []
-        for k in np.unique(part):
-            faces = np.nonzero(part == k)[0]
-            V = body.vertices[np.unique(body.faces[faces])]
-            lo, hi = V.min(axis=0), V.max(axis=0)
-            reach = all(Fraction(float(lo[i])) + c[i] - r_hi[i] <= b_hi[i]
-                        and b_lo[i] <= Fraction(float(hi[i])) + c[i] - r_lo[i] for i in range(3))
-            box = np.stack([np.minimum(lo, lo - rel.max(axis=0)),
-                            np.maximum(hi, hi - rel.min(axis=0))])
-            parts.append((faces, reach, box, lo, hi))
-        split.append(parts)
+    lo_max = np.array([_float_at_most(b_hi[i] - c[i] + r_hi[i]) for i in range(3)])
+    hi_min = np.array([_float_at_least(b_lo[i] - c[i] + r_lo[i]) for i in range(3)])
+    # Parts of every body at once: components of triangles sharing a vertex (exact float
+    # positions, per body), their boxes over the vertices their triangles use.
+    sizes = np.array([len(b.vertices) for b in scene.obstacles], dtype=np.int64)
+    n_faces = np.array([len(b.faces) for b in scene.obstacles], dtype=np.int64)
+    if not len(sizes) or not n_faces.sum():
+        return scene, {}
+    base = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    body_of_face = np.repeat(np.arange(len(sizes)), n_faces)
+    V_all = np.concatenate([b.vertices for b in scene.obstacles])
+    F_all = np.concatenate([b.faces for b in scene.obstacles]) + base[body_of_face][:, None]
+    body_of_vertex = np.repeat(np.arange(len(sizes)), sizes)
+    keyed = np.concatenate([body_of_vertex[:, None].astype(np.float64), V_all], axis=1)
+    _, inverse = np.unique(keyed, axis=0, return_inverse=True)
+    F = inverse.reshape(-1)[F_all]
+    _, label = component_labels(int(F.max()) + 1, F.reshape(-1), np.repeat(F[:, 0], 3))
+    _, part = np.unique(label[F[:, 0]], return_inverse=True)  # parts numbered by body, then
+    part = part.reshape(-1)                                     # by lowest welded vertex
+    n_parts = int(part.max()) + 1
+    corners = V_all[F_all]  # (m, 3, 3)
+    p_lo = np.full((n_parts, 3), np.inf)
+    p_hi = np.full((n_parts, 3), -np.inf)
+    np.minimum.at(p_lo, part, corners.min(axis=1))
+    np.maximum.at(p_hi, part, corners.max(axis=1))
+    reach_all = ((p_lo <= lo_max) & (p_hi >= hi_min)).all(axis=1)
+    box_lo = np.minimum(p_lo, p_lo - rel.max(axis=0))
+    box_hi = np.maximum(p_hi, p_hi - rel.min(axis=0))
+    part_body = np.zeros(n_parts, dtype=np.int64)
+    part_body[part] = body_of_face
+    split = [[] for _ in scene.obstacles]
+    for k in range(n_parts):
+        split[part_body[k]].append(k)
     # The box of what is near: the bounds with the robot at their corners, and the parts
     # that can reach them (each with its C-obstacle's box).
-    near = [np.stack([scene.bounds[0] + rel.min(axis=0), scene.bounds[1] + rel.max(axis=0)]),
-            scene.bounds] + [box for parts in split for _, reach, box, _, _ in parts if reach]
-    near = np.concatenate(near)
+    near = np.concatenate([
+        np.stack([scene.bounds[0] + rel.min(axis=0), scene.bounds[1] + rel.max(axis=0)]),
+        scene.bounds, box_lo[reach_all], box_hi[reach_all]])
     n_lo, n_hi = near.min(axis=0), near.max(axis=0)
     r_far = max(float(np.abs(scene.robot.vertices).max()),
                 float(np.abs(scene.reference_point).max()))
@@ -380,6 +404,11 @@ def _without_far_parts(scene):
     def outside(box) -> bool:  # beyond the near box: it would widen the grid
         return bool((box[0] < n_lo).any() or (box[1] > n_hi).any())
 
+    faces_of = np.split(np.argsort(part, kind="stable"), np.cumsum(np.bincount(part))[:-1])
+    first_face = np.concatenate([[0], np.cumsum(n_faces)[:-1]])
+    split = [[(faces_of[k] - first_face[b], bool(reach_all[k]),
+               np.stack([box_lo[k], box_hi[k]]), p_lo[k], p_hi[k]) for k in ks]
+             for b, ks in enumerate(split)]
     far, bodies = {}, []
     for body, parts in zip(scene.obstacles, split):
         gone = [p for p in parts if not p[1] and outside(p[2])]
@@ -398,6 +427,18 @@ def _without_far_parts(scene):
     if not far:
         return scene, far
     return replace(scene, obstacles=tuple(bodies)), far
+
+
+def _float_at_most(t) -> float:
+    """The largest float64 not above the rational ``t``."""
+    f = float(t)
+    return math.nextafter(f, -math.inf) if Fraction(f) > t else f
+
+
+def _float_at_least(t) -> float:
+    """The smallest float64 not below the rational ``t``."""
+    f = float(t)
+    return math.nextafter(f, math.inf) if Fraction(f) < t else f
 
 
 def _far_body(name: str, n_far: int, box) -> BodyModel:

@@ -247,6 +247,18 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
     return out
 
 
+def _robot_polytope(r_ints, rgrid: Grid, name: str, parts) -> ConvexPolytope:
+    """The hull of the robot's snapped vertices: its one part's polytope when that part is
+    exactly convex on the same points (the hull of the same points; no Qhull call), else
+    the exact hull."""
+    if parts is not None and len(parts) == 1 and parts[0].kind == "convex":
+        poly = parts[0].operand
+        if not poly.excess and np.array_equal(np.unique(r_ints, axis=0),
+                                              np.unique(parts[0].ints, axis=0)):
+            return poly
+    return ConvexPolytope.from_ints(r_ints, grid=rgrid, name=name)
+
+
 def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                 grid: Grid | None = None, robot_hull: bool = False,
                 conservative: bool = True, executor=None,
@@ -326,14 +338,16 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     r_ints = rgrid.snap(scene.robot.vertices[np.unique(scene.robot.faces)])
     g = margin.g + 1
     minus_r_box = (c_ints - r_ints.max(axis=0) - g, c_ints - r_ints.min(axis=0) + g)
+    parts = None if robot_hull else _model_robot(scene, rgrid, None, False)
     try:
-        robot = ConvexPolytope.from_ints(r_ints, grid=rgrid, name=scene.robot.name)
+        robot = _robot_polytope(r_ints, rgrid, scene.robot.name, parts)
     except InvalidMeshError as exc:  # a flat robot has no hull polytope
         if robot_hull:
             raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r} has no convex "
                              f"hull to stand in for it ({exc})") from exc
         robot = None
-    parts = _model_robot(scene, rgrid, robot, robot_hull)
+    if robot_hull:
+        parts = _model_robot(scene, rgrid, robot, True)
     bounds_g = grid.inner_box(*np.asarray(scene.bounds, dtype=np.float64))
     bodies, sources = [], {}
     kept = {sb.name: sb for sb in modelled.obstacles}

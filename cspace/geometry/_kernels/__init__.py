@@ -5,8 +5,10 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
   (exact triangle-pair classes), :mod:`cspace.geometry.endpoints` (their endpoints);
 - ``boxtree`` — :class:`cspace.geometry.boxes.BoxTree` (the median-split build, reference
   ``boxes._tree_reference``; one tree's box queries, the C-space's broad phase);
-- ``convexsum`` — :mod:`cspace.minkowski.cvms` (CVMS in one call; reference
-  ``cvms._convex_minkowski_sum_reference``);
+- ``convex`` — :mod:`cspace.minkowski.cvms` (CVMS in one call; reference
+  ``cvms._convex_minkowski_sum_reference``) and :mod:`cspace.mesh.convex` (the polytope of an
+  exactly convex closed mesh, ``ConvexPolytope.from_convex_mesh``; reference ``ClosedMesh``
+  then ``convex_within_bound``);
 - ``graph`` — :mod:`cspace.geometry.graphs` (connected components by union-find; reference
   ``graphs._component_labels_reference``, scipy's);
 - ``meshquery`` — :mod:`cspace.mesh.query` (references in :mod:`cspace.mesh.query_reference`);

@@ -1,5 +1,6 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
-"""Compiled CVMS: the facets of the exact Minkowski sum of two convex polytopes, in one call.
+"""Compiled convex polytopes: the polytope a convex mesh bounds, and CVMS (the facets of the
+exact Minkowski sum of two convex polytopes), each in one call.
 
 :func:`facets` is :func:`cspace.minkowski.cvms._convex_minkowski_sum_reference` step for step
 (the same facets, in the same order, with the same labels and provenance;
@@ -15,6 +16,11 @@ the cross product of two edge vectors (below ``2**82``, in ``__int128``) divided
 components' gcd; the result must fit int64 (the reference's range check: twice the largest
 selected edge coordinates' product below ``2**61``), else :func:`facets` returns None and the
 caller runs the reference, which raises the same named error.
+
+:func:`polytope_of_mesh` proves a closed mesh exactly convex and returns its polytope as
+``ConvexPolytope.from_ints`` makes it (its own range, ``|coordinate| < 2**30``, and its proof
+are in its docstring); the reference is ``cspace.mesh.closed.ClosedMesh`` then
+``cspace.mesh.convex.convex_within_bound``.
 """
 
 import numpy as np
@@ -654,3 +660,197 @@ cdef object _edges(const int64_t[::1] flat, const int64_t[::1] offsets, Py_ssize
     if e != n // 2 or 2 * e != n:
         return None
     return edges_arr, ef_arr
+
+
+# --------------------------------------------------------------------------------------------
+# the polytope a convex mesh bounds
+
+# Mesh coordinates below 2**30: a face normal (a cross product of differences below 2**31)
+# fits int64, a plane test (normal . difference) and a determinant fit __int128.
+cdef int64_t MESH_COORD = 1LL << 30
+# The vertex-against-plane test costs planes x vertices; beyond this the caller's reference
+# (Qhull certified exactly) is the better algorithm.
+cdef int64_t MESH_WORK = 50000000
+
+
+cdef inline i128 _det3(const int64_t* a, const int64_t* b, const int64_t* c) noexcept nogil:
+    """``a . (b x c)``: six times the signed volume of the tetrahedron (0, a, b, c)."""
+    return (a[0] * (<i128> b[1] * c[2] - <i128> b[2] * c[1])
+            - a[1] * (<i128> b[0] * c[2] - <i128> b[2] * c[0])
+            + a[2] * (<i128> b[0] * c[1] - <i128> b[1] * c[0]))
+
+
+def polytope_of_mesh(const int64_t[:, ::1] P, const int64_t[:, ::1] F):
+    """The convex polytope an exactly convex closed mesh bounds, or None.
+
+    ``P`` (n, 3) grid integers, ``F`` (m, 3) triangles into them. The mesh is accepted when
+    its vertices are distinct, every directed edge is used once and its reverse once (closed,
+    consistently oriented), every triangle has an area, every vertex lies on or below every
+    triangle's plane (exact), and the triangles' volume is positive and equals that of the
+    polygons they span. Then the triangles lie on supporting planes of the hull H of ``P``, so
+    as a 2-cycle they are ``k`` times H's boundary with ``k >= 1`` (every one faces out);
+    every facet of H holds some of them, so the polygon spanned per normal is that facet and
+    the polygons' volume is H's; equal volumes mean ``k = 1``.
+
+    Returns ``(ints, offsets, flat, normals, edges, edge_facets)``, what
+    ``cspace.mesh.convex.ConvexPolytope.from_ints(P)`` returns for the same points: the
+    corners in lexicographic order, the facets in lexicographic order of their primitive
+    outward normals, each ring as ``mesh.convex._facet_polygon`` makes it. None (the caller
+    runs its reference, which decides and names the reason) for anything else: coordinates
+    of ``2**30`` or more, a repeated vertex, a face with a repeated index or no area, an
+    open or inconsistently oriented or non-manifold edge, a vertex above a plane (not
+    convex, or bent by snapping), volumes that differ, or more than ``MESH_WORK`` plane
+    tests.
+    """
+    cdef Py_ssize_t n = P.shape[0], m = F.shape[0], i, j, k, a, g, g0, r, h, cnt, total
+    cdef int64_t u, v, key, gg, ax, b1, b2
+    cdef int64_t nrm[3]
+    cdef int64_t d[3]
+    cdef i128 vol_faces = 0, vol_poly = 0
+    if n < 4 or m < 4 or F.shape[1] != 3 or P.shape[1] != 3 or not _within(P, MESH_COORD):
+        return None
+    for i in range(m):
+        for k in range(3):
+            if not 0 <= F[i, k] < n:
+                return None
+        if F[i, 0] == F[i, 1] or F[i, 1] == F[i, 2] or F[i, 0] == F[i, 2]:
+            return None
+    # distinct vertices: the lexicographic order (also the corners' order at the end)
+    vorder_arr = np.empty(n, dtype=np.int64)
+    tmp_arr = np.empty(max(3 * m, 2 * n + 2), dtype=np.int64)
+    cdef int64_t[::1] vorder = vorder_arr, tmp = tmp_arr
+    for i in range(n):
+        vorder[i] = i
+    _msort(&vorder[0], &tmp[0], n, &P[0, 0], 3)
+    for i in range(1, n):
+        if _cmp(&P[0, 0], 3, vorder[i], vorder[i - 1]) == 0:
+            return None
+    # directed edges: each once, each with its reverse
+    keys_arr = np.empty(3 * m, dtype=np.int64)
+    cdef int64_t[::1] keys = keys_arr
+    for i in range(m):
+        for k in range(3):
+            keys[3 * i + k] = F[i, k] * n + F[i, (k + 1) % 3]
+    qsort(&keys[0], 3 * m, sizeof(int64_t), _cmp64)
+    for i in range(1, 3 * m):
+        if keys[i] == keys[i - 1]:
+            return None
+    for i in range(3 * m):
+        u = keys[i] // n
+        v = keys[i] % n
+        key = v * n + u
+        if keys[_last_at_most(&keys[0], 3 * m, key)] != key:
+            return None
+    # primitive face normals (int64: see MESH_COORD), grouped by normal
+    N_arr = np.empty((m, 3), dtype=np.int64)
+    cdef int64_t[:, ::1] N = N_arr
+    for i in range(m):
+        for k in range(3):
+            d[k] = P[F[i, 2], k] - P[F[i, 0], k]
+        for k in range(3):
+            nrm[k] = P[F[i, 1], k] - P[F[i, 0], k]
+        N[i, 0] = nrm[1] * d[2] - nrm[2] * d[1]
+        N[i, 1] = nrm[2] * d[0] - nrm[0] * d[2]
+        N[i, 2] = nrm[0] * d[1] - nrm[1] * d[0]
+        gg = _gcd(_gcd(N[i, 0], N[i, 1]), N[i, 2])
+        if gg == 0:
+            return None
+        for k in range(3):
+            N[i, k] //= gg
+        vol_faces += _det3(&P[F[i, 0], 0], &P[F[i, 1], 0], &P[F[i, 2], 0])
+    if vol_faces <= 0:
+        return None
+    forder_arr = np.empty(m, dtype=np.int64)
+    cdef int64_t[::1] forder = forder_arr
+    for i in range(m):
+        forder[i] = i
+    _msort(&forder[0], &tmp[0], m, &N[0, 0], 3)
+    # group starts (facets) and the plane test: every vertex on or below one face per group,
+    # every face of the group on that face's plane
+    starts_arr = np.empty(m + 1, dtype=np.int64)
+    cdef int64_t[::1] starts = starts_arr
+    g = 0
+    for i in range(m):
+        if i == 0 or _cmp(&N[0, 0], 3, forder[i], forder[i - 1]) != 0:
+            starts[g] = i
+            g += 1
+    starts[g] = m
+    if <int64_t> g * n > MESH_WORK:
+        return None
+    for j in range(g):
+        r = forder[starts[j]]
+        for i in range(starts[j] + 1, starts[j + 1]):
+            for k in range(3):
+                d[k] = P[F[forder[i], 0], k] - P[F[r, 0], k]
+            if _dot(&N[r, 0], d) != 0:
+                return None
+        for a in range(n):
+            for k in range(3):
+                d[k] = P[a, k] - P[F[r, 0], k]
+            if _dot(&N[r, 0], d) > 0:
+                return None
+    # each facet's ring: the 2D hull of its faces' vertices, projected along the normal's
+    # largest component (the first of equals, as numpy's argmax), reversed when it is negative
+    xy_arr = np.empty(2 * 3 * m, dtype=np.int64)
+    ids_arr = np.empty(3 * m, dtype=np.int64)
+    ring_arr = np.empty(2 * 3 * m + 2, dtype=np.int64)
+    idx_arr = np.empty(3 * m, dtype=np.int64)
+    rings_arr = np.empty(3 * m, dtype=np.int64)
+    offsets_arr = np.zeros(g + 1, dtype=np.int64)
+    cdef int64_t[::1] xy = xy_arr, ids = ids_arr, ring = ring_arr, idx = idx_arr
+    cdef int64_t[::1] rings = rings_arr, offsets = offsets_arr
+    total = 0
+    for j in range(g):
+        r = forder[starts[j]]
+        ax = 0
+        for k in range(1, 3):
+            if (N[r, k] if N[r, k] >= 0 else -N[r, k]) > (N[r, ax] if N[r, ax] >= 0 else -N[r, ax]):
+                ax = k
+        b1, b2 = (ax + 1) % 3, (ax + 2) % 3
+        cnt = 0
+        for i in range(starts[j], starts[j + 1]):
+            for k in range(3):
+                a = F[forder[i], k]
+                ids[cnt] = a
+                xy[2 * cnt] = P[a, b1]
+                xy[2 * cnt + 1] = P[a, b2]
+                cnt += 1
+        h = _hull2d(&xy[0], cnt, &ring[0], &idx[0], &tmp[0])
+        if h < 3:
+            return None
+        for i in range(h):
+            rings[total + i] = ids[ring[h - 1 - i] if N[r, ax] < 0 else ring[i]]
+        for i in range(1, h - 1):
+            vol_poly += _det3(&P[rings[total], 0], &P[rings[total + i], 0],
+                              &P[rings[total + i + 1], 0])
+        total += h
+        offsets[j + 1] = total
+    if vol_poly != vol_faces:
+        return None
+    # the corners, renumbered in lexicographic order
+    new_arr = np.full(n, -1, dtype=np.int64)
+    cdef int64_t[::1] new = new_arr
+    for i in range(total):
+        new[rings[i]] = 0
+    cnt = 0
+    for i in range(n):
+        if new[vorder[i]] == 0:
+            new[vorder[i]] = cnt
+            cnt += 1
+    ints_arr = np.empty((cnt, 3), dtype=np.int64)
+    normals_arr = np.empty((g, 3), dtype=np.int64)
+    cdef int64_t[:, ::1] I = ints_arr, NO = normals_arr
+    for i in range(n):
+        if new[i] >= 0:
+            for k in range(3):
+                I[new[i], k] = P[i, k]
+    for i in range(total):
+        rings[i] = new[rings[i]]
+    for j in range(g):
+        for k in range(3):
+            NO[j, k] = N[forder[starts[j]], k]
+    flat_arr = rings_arr[:total].copy()
+    edges = _edges(flat_arr, offsets_arr, cnt)
+    if edges is None:
+        return None
+    return ints_arr, offsets_arr, flat_arr, normals_arr, edges[0], edges[1]
