@@ -149,7 +149,15 @@ class _ConvexCO:
         self.absA = np.abs(self.A)
         self.l1max = float(np.abs(Nf).sum(axis=1).max())
         self.dmax = float(np.abs(df).max())
-        # Float geometry for distances, centred on the polytope (smaller magnitudes).
+        self._float_geometry = False
+
+    def _distance_geometry(self) -> None:
+        """Float geometry for distances, centred on the polytope (smaller magnitudes): made
+        on the first distance asked, since most C-obstacles of a scene are only tested."""
+        if self._float_geometry:
+            return
+        poly, N = self.poly, self.poly.normals.astype(np.int64)
+        Nf = N.astype(np.float64)
         V = poly.vertices
         self.centre = (V.min(axis=0) + V.max(axis=0)) / 2.0
         Vc = V - self.centre
@@ -172,6 +180,7 @@ class _ConvexCO:
         self.ev = Vc[E[:, 1]] - Vc[E[:, 0]]
         self.ell = np.einsum("ij,ij->i", self.ev, self.ev)
         self.radius = float(np.linalg.norm(Vc, axis=1).max())
+        self._float_geometry = True  # last: a half-made geometry is never used
 
     # ---- exact plane signs --------------------------------------------------------------
 
@@ -251,11 +260,13 @@ class _ConvexCO:
 
     def depth(self, q: np.ndarray) -> np.ndarray:
         """``min_j (d_j - n_j . q) / |n_j|`` in float (>= 0 inside)."""
+        self._distance_geometry()
         p = q - self.centre
         return (self.dh[None, :] - p @ self.nh.T).min(axis=1)
 
     def distance_outside(self, q: np.ndarray) -> np.ndarray:
         """Euclidean distance from each (outside) point to the polytope, float."""
+        self._distance_geometry()
         out = np.zeros(len(q))
         f, H, E = len(self.nh), len(self.M), len(self.ea)
         step = max(1, _CHUNK // (f + H + 3 * E))

@@ -30,7 +30,7 @@ zero; their exactly stored C-obstacles (convex, pieces, pairs) get no margin at 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from fractions import Fraction
 
 import numpy as np
@@ -134,11 +134,22 @@ class Margin:
         return grow_points(ints, self.steps)
 
     def grow(self, poly):
-        """A convex polytope grown by the box (exact hull on the grid), or itself."""
+        """A convex polytope grown by the box (exact hull on the grid), or itself.
+
+        The hull of ``grow_ints(poly.ints)`` as :meth:`ConvexPolytope.from_ints` makes it; with
+        every half-size positive it is found as the CVMS sum of the polytope and the box (the
+        sum's facets are the hull's), not by a hull of the grown points."""
         if not self.any:
             return poly
         from ..mesh.convex import ConvexPolytope
 
+        if min(self.steps) > 0:
+            from ..minkowski.cvms import convex_minkowski_sum
+
+            box = ConvexPolytope.box(self.steps, grid=poly.grid.vectors)
+            if box is not None:
+                grown = convex_minkowski_sum(poly, box).polytope.canonical()
+                return replace(grown, name=poly.name, excess=0.0, _cache={})
         return ConvexPolytope.from_ints(self.grow_ints(poly.ints), grid=poly.grid,
                                         name=poly.name)
 

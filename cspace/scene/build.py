@@ -91,7 +91,10 @@ def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None
         co.excess = robot.excess
         return co
     grown = margin.grow(robot) if grown is None else grown
-    co = CSpaceObstacle.build(body._solid, grown, c, grid=grid, conservative=False)
+    # CSpaceObstacle.build(..., conservative=False) without its margin, which is replaced
+    # below: the scene's margin is decided once for every body.
+    co = CSpaceObstacle._grown(body._solid, grown, np.asarray(c, dtype=np.float64).reshape(3),
+                               grid, margin.without_growth())
     co.robot, co.margin = robot, margin
     co.excess = _excess(body) + robot.excess  # the grown robot's hull has lost its excess
     return co
