@@ -23,8 +23,10 @@ new pack); a pack whose index does not read is deleted. Entries of the older lay
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+import mmap
 import os
 import struct
 import tempfile
@@ -104,15 +106,12 @@ def pack_polytopes(polys, prefix: str) -> dict:
 
 
 def unpack_polytopes(arrays: dict, prefix: str, grid: Grid) -> list[ConvexPolytope]:
-    """Inverse of :func:`pack_polytopes`."""
+    """Inverse of :func:`pack_polytopes` (slices of the packed arrays, no copies)."""
     fields = ("ints", "facet_offsets", "facet_indices", "normals", "edges", "edge_facets")
-    split = {}
-    for f in fields:
-        cuts = np.cumsum(arrays[f"{prefix}{f}_n"])[:-1]
-        split[f] = np.split(arrays[f"{prefix}{f}"], cuts)
-    n = len(arrays[f"{prefix}ints_n"])
-    return [ConvexPolytope(grid=grid, **{f: np.ascontiguousarray(split[f][i]) for f in fields})
-            for i in range(n)]
+    ends = {f: np.cumsum(arrays[f"{prefix}{f}_n"]).tolist() for f in fields}
+    n = len(ends["ints"])
+    return [ConvexPolytope(grid=grid, **{f: arrays[f"{prefix}{f}"][
+        (ends[f][i - 1] if i else 0):ends[f][i]] for f in fields}) for i in range(n)]
 
 
 #: Pending entries beyond this many bytes are written out as a pack before the build ends.
@@ -151,6 +150,7 @@ class COCache:
         self._pending_bytes = [0]
         self._index: dict = {}              # key -> (pack path, entry record)
         self._packs: dict = {}              # pack path -> its mtime when read
+        self._maps: dict = {}               # pack path -> its bytes, mapped when first read
         self._stamp = None                  # the packs folder's mtime when last scanned
         # what is kept is written when this cache goes away (or at exit)
         self._finalizer = weakref.finalize(self, _write_at_exit, self._packs_dir(),
@@ -237,7 +237,9 @@ class COCache:
         if found is None:
             return None
         p, record = found
-        arrays = _read_entry(p, record)
+        if p not in self._maps:
+            self._maps[p] = _map(p)
+        arrays = _read_entry(self._maps[p], record)
         if arrays is None or _digest(arrays) != record[0]:
             del self._index[key]
             self.rebuilt += 1
@@ -370,36 +372,37 @@ def _read_index(p: Path) -> dict | None:
         return None
 
 
-def _read_entry(p: Path, record: tuple) -> dict | None:
-    """One entry's arrays from its pack (None when the file or the record does not read)."""
-    _, text, body = record
-    try:
-        spans = []
-        for item in text.split("\n") if text else ():
-            name, dtype, shape, at, size = item.split("\t")
-            spans.append((name, np.dtype(dtype), tuple(int(d) for d in shape.split(",") if d),
-                          int(at), int(size)))
-    except (TypeError, ValueError):
-        return None
-    if not spans:
-        return {}
-    lo = min(s[3] for s in spans)
-    hi = max(s[3] + s[4] for s in spans)
-    if lo < 0 or hi > body:
-        return None
+@functools.lru_cache(maxsize=64)
+def _dtype(text: str) -> np.dtype:
+    return np.dtype(text)
+
+
+def _map(p: Path):
+    """The pack's bytes, mapped copy-on-write (arrays read from it are writable; nothing is
+    written back), or None when it does not open. Packs are never changed once written."""
     try:
         with open(p, "rb") as f:
-            f.seek(lo)
-            buf = bytearray(f.read(hi - lo))
-    except OSError:
+            return mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_COPY)
+    except (OSError, ValueError):
         return None
-    if len(buf) != hi - lo:
+
+
+def _read_entry(buf, record: tuple) -> dict | None:
+    """One entry's arrays from its pack's mapped bytes (None when the record does not
+    read)."""
+    _, text, body = record
+    if buf is None:
         return None
     out = {}
     try:
-        for name, dt, shape, at, size in spans:
+        for item in text.split("\n") if text else ():
+            name, dtype, shape, at, size = item.split("\t")
+            dt, at, size = _dtype(dtype), int(at), int(size)
+            if at < 0 or at + size > body or at + size > len(buf):
+                return None
             count = size // dt.itemsize if dt.itemsize else 0
-            out[name] = np.frombuffer(buf, dtype=dt, count=count, offset=at - lo).reshape(shape)
+            out[name] = np.frombuffer(buf, dtype=dt, count=count, offset=at).reshape(
+                tuple(int(d) for d in shape.split(",") if d))
     except (TypeError, ValueError):
         return None
     return out
