@@ -199,9 +199,16 @@ class Scene:
         r_lo, r_hi = rel.min(axis=0), rel.max(axis=0)
         lo, hi = self.bounds
         boxes = [self.bounds, np.stack([lo + r_lo, hi + r_hi])]
-        for body in self.obstacles:
-            b_lo, b_hi = body.bounds
-            boxes.append(np.stack([b_lo, b_hi, b_lo - r_hi, b_hi - r_lo]))
+        sizes = [len(body.vertices) for body in self.obstacles]
+        if sizes and min(sizes) > 0:  # every body's box at once
+            V = np.concatenate([body.vertices for body in self.obstacles])
+            starts = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+            b_lo, b_hi = np.minimum.reduceat(V, starts), np.maximum.reduceat(V, starts)
+            boxes += [b_lo, b_hi, b_lo - r_hi, b_hi - r_lo]
+        else:
+            for body in self.obstacles:
+                b_lo, b_hi = body.bounds
+                boxes.append(np.stack([b_lo, b_hi, b_lo - r_hi, b_hi - r_lo]))
         allv = np.concatenate(boxes)
         far = max(float(np.abs(self.robot.vertices).max()),
                   float(np.abs(self.reference_point).max()))
