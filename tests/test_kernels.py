@@ -576,6 +576,39 @@ def test_canonical_order_and_grown_polytopes_are_from_ints():
             m.grow_ints(A.ints), grid=A.grid, name=A.name)), name
 
 
+def test_weld_split_shortcut_is_weld_dedupe_then_split_parts(monkeypatch):
+    """The compiled shortcut for exactly convex bodies gives what the two steps give, and
+    every other body (open, non-convex, welded, unused vertices, repeated faces) takes them."""
+    from types import SimpleNamespace
+
+    from cspace.geometry.exact import Grid
+    from cspace.mesh import components
+    from cspace.mesh.components import split_parts, weld_dedupe, weld_split
+
+    slow = []
+    monkeypatch.setattr(components, "weld_dedupe",
+                        lambda *a: slow.append(1) or weld_dedupe(*a))
+
+    cases = list(_closed_meshes())
+    V, F = cases[0][1], cases[0][2]
+    cases += [("open", V, F[1:]), ("unused vertex", np.vstack([V, [[9.0, 9.0, 9.0]]]), F),
+              ("repeated face", V, np.vstack([F, F[:1]])),
+              ("welded", np.vstack([V, V[:1] + 1e-12]), np.vstack([F, [[0, 1, 8]]]))]
+    for name, V, F in cases:
+        body = SimpleNamespace(vertices=np.asarray(V, dtype=np.float64),
+                               faces=np.asarray(F, dtype=np.int64))
+        grid = Grid.for_points(body.vertices)
+        got = weld_split(body, grid)
+        ints, G, counts, two_sided = weld_dedupe(body, grid)
+        want = (ints, G, counts, two_sided, split_parts(ints, G, two_sided))
+        for g, w in zip(got[:2] + got[3:4], want[:2] + want[3:4]):
+            assert np.array_equal(g, w), name
+        assert got[2] == want[2], name
+        assert len(got[4]) == len(want[4]) and all(
+            np.array_equal(a, b) for a, b in zip(got[4], want[4])), name
+    assert 10 <= len(slow) <= len(cases) - 30, len(slow)  # both ways were taken
+
+
 def test_unique_rows_is_numpys():
     from cspace.mesh.components import unique_rows
 

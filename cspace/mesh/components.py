@@ -15,10 +15,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidMeshError
+from ..geometry._kernels import load
 from ..geometry.exact import Grid
 from ..geometry.graphs import component_labels
 
-__all__ = ["unique_rows", "weld_dedupe", "edge_uses", "split_parts", "split_mesh", "nested_pairs"]
+__all__ = ["unique_rows", "weld_dedupe", "weld_split", "edge_uses", "split_parts", "split_mesh", "nested_pairs"]
 
 
 def _parity(F: np.ndarray) -> np.ndarray:
@@ -63,6 +64,26 @@ def weld_dedupe(body, grid: Grid):
     reversed_copy[which[~same]] = True
     order = np.sort(first)
     return ints, F[order], counts, reversed_copy[which[order]]
+
+
+def weld_split(body, grid: Grid):
+    """:func:`weld_dedupe` then :func:`split_parts`: ``(ints, F, counts, two_sided, parts)``.
+
+    A body whose snapped vertices are distinct and all used, and whose triangles one compiled
+    call proves an exactly convex closed mesh (most bodies of a scene: boxes, hulls) is one
+    part with nothing collapsed, repeated or listed twice: what the two steps give it, without
+    their sorting and labelling."""
+    snapped = grid.snap(body.vertices)
+    faces = np.asarray(body.faces, dtype=np.int64)
+    ints, _, inverse = unique_rows(snapped)
+    if len(ints) == len(snapped) and len(faces) and np.bincount(
+            faces.reshape(-1), minlength=len(snapped)).all():
+        F = inverse[faces]
+        if load("convex").polytope_of_mesh(ints, np.ascontiguousarray(F)) is not None:
+            counts = {"triangles": len(faces), "collapsed": 0, "double_sided": 0, "repeated": 0}
+            return ints, F, counts, np.zeros(len(F), dtype=bool), [np.arange(len(F))]
+    ints, F, counts, two_sided = weld_dedupe(body, grid)
+    return ints, F, counts, two_sided, split_parts(ints, F, two_sided) if len(F) else []
 
 
 def edge_uses(F: np.ndarray, n: int):

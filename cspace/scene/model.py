@@ -56,7 +56,7 @@ from ..errors import BuildError, InvalidArgumentError, InvalidMeshError, MemoryB
 from ..geometry.exact import Grid
 from ..geometry.snapping import snap_deviation
 from ..memory import budget_and_source, format_size
-from ..mesh.components import split_parts, weld_dedupe
+from ..mesh.components import weld_split
 from ..mesh.convex import ConvexPolytope
 from .build import (
     _Context,
@@ -228,8 +228,7 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
         return [RobotPart(scene.robot.name, "convex", "the convex hull of its vertices "
                           "(robot_hull: an approximation that can only add collisions)",
                           hull.ints, hull.faces, grid, hull)]
-    ints, F, _, two_sided = weld_dedupe(scene.robot, grid)
-    parts = split_parts(ints, F, two_sided) if len(F) else []
+    ints, F, _, two_sided, parts = weld_split(scene.robot, grid)
     if not parts:
         raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r}: all "
                          f"{len(scene.robot.faces)} triangles collapse when welded on the grid "
@@ -362,8 +361,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         welded = None if memo is None else memo.get(
             ("weld", id(sb), grid.exponent, grid.bits, tuple(int(x) for x in grid.origin)))
         if welded is None:  # steps 1-3 depend only on the body and the grid
-            ints, F, counts, two_sided = weld_dedupe(sb, grid)
-            split = split_parts(ints, F, two_sided) if len(F) else []
+            ints, F, counts, two_sided, split = weld_split(sb, grid)
             if memo is not None:  # the body is kept in the value: its id stays its own
                 memo[("weld", id(sb), grid.exponent, grid.bits,
                       tuple(int(x) for x in grid.origin))] = (sb, ints, F, counts, split,
