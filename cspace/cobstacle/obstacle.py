@@ -212,7 +212,18 @@ class CSpaceObstacle:
         self.grid = polytope.grid
         self.kind = "convex"
         self.sum = None
-        self._impl = _ConvexCO(polytope)
+        self._engine = None  # made on the first query (most of a scene's are never asked)
+
+    @property
+    def _impl(self):
+        """The query engine (a convex C-obstacle's plane tests are made when first asked)."""
+        if self._engine is None:
+            self._engine = _ConvexCO(self.polytope)
+        return self._engine
+
+    @_impl.setter
+    def _impl(self, engine) -> None:
+        self._engine = engine
 
     @classmethod
     def from_mesh(

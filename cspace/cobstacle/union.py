@@ -37,7 +37,8 @@ class _UnionOf:
                 self._index = _boxtree.BoxIndex(BoxTree(lo, hi))
             return
         self.cos = tuple(cos)
-        self.engines = [co._impl for co in self.cos]
+        self.engines = [None] * len(self.cos)  # each made when a query first meets it
+        self._make = self._member
         # Broad phase: each C-obstacle's box, widened by 2**-40 of its coordinates (float
         # vertices of rational points are off by an ulp at most): a query outside a box is
         # outside that C-obstacle. Only prunes; each engine still decides exactly.
@@ -45,6 +46,9 @@ class _UnionOf:
             B = np.array([np.asarray(co.bounds, dtype=np.float64) for co in self.cos])
             pad = np.ldexp(np.abs(B).max(axis=1), -40) + 1e-300
             self._index = _boxtree.BoxIndex(BoxTree(B[:, 0] - pad, B[:, 1] + pad))
+
+    def _member(self, k: int):
+        return self.cos[k]._impl
 
     def _engine(self, k: int):
         """Member ``k``'s engine (a lazy member's: the union of its C-obstacles, made now)."""
