@@ -31,7 +31,7 @@ from ..cobstacle.pairs import (
 )
 from ..cobstacle.surface import SurfaceMesh
 from ..geometry.exact import Grid
-from .cache import COCache, co_key, pack_polytopes, unpack_polytopes
+from .cache import COCache, co_key, pack_polytope, unpack_polytope
 from .classify import BodyModel, PairModel, RobotPart, _excess
 
 __all__ = ["build_pair_batch"]
@@ -42,8 +42,8 @@ __all__ = ["build_pair_batch"]
 
 
 def _to_arrays(co) -> dict:
-    if co.kind == "convex":
-        out = pack_polytopes([co.polytope, co.obstacle], "p_")
+    if co.kind == "convex":  # the obstacle's polytope is the body's: not stored again
+        out = {"polytope": pack_polytope(co.polytope)}
     else:
         out = {"vertices": np.asarray(co.vertices), "faces": np.asarray(co.faces)}
     return out | _margin_arrays(co.margin)
@@ -72,8 +72,8 @@ def _from_arrays(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
 def _from_arrays_of(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
     m = _margin_from(a, margin)
     if body.kind == "convex":
-        co, obs = unpack_polytopes(a, "p_", grid)
-        return CSpaceObstacle(co, obstacle=obs, robot=robot, reference_point=c, margin=m)
+        return CSpaceObstacle(unpack_polytope(a["polytope"], grid), obstacle=body._solid,
+                              robot=robot, reference_point=c, margin=m)
     return CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
                                     robot=robot, reference_point=c, grid=grid, name=body.name,
                                     margin=m)
@@ -101,8 +101,11 @@ def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None
 
 
 def _key(body: BodyModel, robot, c_ints, grid) -> str:
-    """Cache key of a sum (CVMS, NCC-CVMS): a convex or solid body, never a surface."""
-    return co_key(body.kind, grid, body._ints, body.faces, robot.ints, c_ints)
+    """Cache key of a sum (CVMS, NCC-CVMS): a convex or solid body, never a surface. A
+    convex one's entry is one packed polytope (:func:`pack_polytope`; older entries, two
+    polytopes in twelve arrays, are under other keys)."""
+    kind = "convex packed" if body.kind == "convex" else body.kind
+    return co_key(kind, grid, body._ints, body.faces, robot.ints, c_ints)
 
 
 def _pair_key(construction, body: BodyModel, part: RobotPart, c_ints, grid,

@@ -94,24 +94,29 @@ def _digest(arrays: dict) -> str:
     return h.hexdigest()
 
 
-def pack_polytopes(polys, prefix: str) -> dict:
-    """Concatenated CSR arrays of a list of convex polytopes (one grid)."""
-    fields = ("ints", "facet_offsets", "facet_indices", "normals", "edges", "edge_facets")
-    out = {}
-    for f in fields:
-        parts = [getattr(p, f) for p in polys]
-        out[f"{prefix}{f}"] = np.concatenate(parts) if parts else np.zeros((0,), np.int64)
-        out[f"{prefix}{f}_n"] = np.array([len(a) for a in parts], dtype=np.int64)
-    return out
+_POLYTOPE = (("ints", 3), ("facet_offsets", 0), ("facet_indices", 0), ("normals", 3),
+             ("edges", 2), ("edge_facets", 2))  # field, columns (0: a vector)
 
 
-def unpack_polytopes(arrays: dict, prefix: str, grid: Grid) -> list[ConvexPolytope]:
-    """Inverse of :func:`pack_polytopes` (slices of the packed arrays, no copies)."""
-    fields = ("ints", "facet_offsets", "facet_indices", "normals", "edges", "edge_facets")
-    ends = {f: np.cumsum(arrays[f"{prefix}{f}_n"]).tolist() for f in fields}
-    n = len(ends["ints"])
-    return [ConvexPolytope(grid=grid, **{f: arrays[f"{prefix}{f}"][
-        (ends[f][i - 1] if i else 0):ends[f][i]] for f in fields}) for i in range(n)]
+def pack_polytope(poly: ConvexPolytope) -> np.ndarray:
+    """A convex polytope as one int64 array: its six fields' lengths, then each field's
+    values in row-major order (one array to read and digest, not twelve)."""
+    parts = [np.ascontiguousarray(getattr(poly, f), dtype=np.int64) for f, _ in _POLYTOPE]
+    head = np.array([len(a) for a in parts], dtype=np.int64)
+    return np.concatenate([head] + [a.reshape(-1) for a in parts])
+
+
+def unpack_polytope(packed: np.ndarray, grid: Grid) -> ConvexPolytope:
+    """Inverse of :func:`pack_polytope` (views of ``packed``, no copies)."""
+    fields, at = {}, len(_POLYTOPE)
+    for (name, cols), n in zip(_POLYTOPE, packed[:len(_POLYTOPE)].tolist()):
+        size = n * max(cols, 1)
+        values = packed[at:at + size]
+        fields[name] = values.reshape(n, cols) if cols else values
+        at += size
+    if at != len(packed):
+        raise ValueError(f"a packed polytope of {len(packed)} values holds {at}")
+    return ConvexPolytope(grid=grid, **fields)
 
 
 #: Pending entries beyond this many bytes are written out as a pack before the build ends.
