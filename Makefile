@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow bench screenshot clean
+.PHONY: demo test test-slow test-heavy bench screenshot clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -30,7 +30,10 @@ test: $(STAMP)
 	$(PY) -m pytest
 
 test-slow: $(STAMP)
-	$(PY) -m pytest -m slow
+	$(PY) -m pytest -m "slow and not heavy"
+
+test-heavy: $(STAMP)
+	$(PY) -m pytest -m heavy
 
 bench: $(STAMP)
 	$(PY) benchmarks/bench_cvms.py

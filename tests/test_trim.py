@@ -82,7 +82,10 @@ CASES = {
     "star+ico80": (_pair(zoo.star, zoo.icosphere_points(1, radius=0.3)), True, True),
     "genus3+hull20": (_pair(zoo.genus3, zoo.hull20(0, scale=(0.5, 0.35, 0.25))), False, True),
     "star+ico320": (_pair(zoo.star, zoo.icosphere_points(2, radius=0.3)), False, True),
-    "torus+box": (_pair(zoo.torus, zoo.box_points(0.3, 0.25, 0.2)), False, True),
+    # 576 triangles: the exact reference (CGAL unions of the t ⊕ B pieces) takes about 20 s;
+    # at zoo.torus's default 2304 it did not finish in 50 minutes
+    "torus+box": (_pair(lambda: zoo.torus(sections=24, ring=12), zoo.box_points(0.3, 0.25, 0.2)),
+                  False, True),
     "torus+ico320": (_special("torus_icosphere"), False, True),
 }
 for _name in zoo.SPECIAL_CASES:
@@ -198,7 +201,14 @@ def check_output_is_closed_and_oriented(c: Case):
     assert S.error_bound > 0 and S.error_bound < 1e-6 * c.size
 
 
-@pytest.mark.parametrize("name", _params())
+def _volume_params():
+    # torus+ico320's reference unites 2304 hulls of 960 points each with CGAL: over an hour
+    # and 3 GB (stopped after 15 minutes, and 50 before): `make test-heavy` runs it
+    return [pytest.param("torus+ico320", marks=[pytest.mark.slow, pytest.mark.heavy])
+            if getattr(p, "values", (p,))[0] == "torus+ico320" else p for p in _params()]
+
+
+@pytest.mark.parametrize("name", _volume_params())
 def test_volume_matches_the_exact_reference(name):
     check_volume_matches_the_exact_reference(case(name))
 
