@@ -221,9 +221,10 @@ class ConvexPolytope:
                    normals=normals, edges=edges, edge_facets=edge_facets, name=name)
 
     @classmethod
-    def box(cls, half, *, grid: Grid, name: str = "box") -> "ConvexPolytope":
+    def box(cls, half, *, grid: Grid, name: str = "box") -> "ConvexPolytope | None":
         """The box ``[-half, half]`` (grid steps per axis, each positive) about the grid's
-        origin, as :meth:`from_ints` makes it of its eight corners (no hull computed)."""
+        origin, as :meth:`from_ints` makes it of its eight corners (no hull computed); None
+        for half-sizes of ``2**30`` steps or more (beyond the compiled test's range)."""
         h = np.asarray(half, dtype=np.int64).reshape(3)
         if not (h > 0).all():
             raise DegenerateError(f"{name}: a box of half-sizes {h.tolist()} has no volume")
