@@ -196,7 +196,7 @@ def report(results: list, quick: bool, note: str) -> str:
         for row in r["rows"] + [r["hit"]]:
             size = row["bytes"] / max(1, row["files"])
             lines.append(
-                f"| {row['label']} | {row['start']:.1f} | {row['build']:.1f} | "
+                f"| {row['label']} | {row['start']:.1f} | {row['build']:.3f} | "
                 f"{row['build'] / P:.2e} | {base / row['build']:.2f}x | {row['cpu']:.1f} | "
                 f"{row['files']} | "
                 f"{row['bytes'] / 1e6:.1f} | {size:.0f} | "
