@@ -241,6 +241,31 @@ def test_mesh_obstacle_scale_then_rotation_then_position(tmp_path):
     assert body.name == "obstacle-0" and body.source == str((tmp_path / "m/unit.stl").resolve())
 
 
+def test_an_obstacle_orientation_is_not_the_robot_start_orientation(tmp_path):
+    # The scene's start (and, without goal_orientation, goal) rotation is the robot's own,
+    # whatever the obstacles' orientations; the last obstacle's used to leak into both.
+    for robot_turn, want in (("", np.eye(3)), ("orientation = [0, 0, 90]\n",
+                                                 np.array([[0.0, -1, 0], [1, 0, 0], [0, 0, 1]]))):
+        path = write(tmp_path / "s.toml", f"""
+            [robot]
+            box = [0.1, 0.2, 0.3]
+            {robot_turn}
+            [planning]
+            bounds = [[-9, -9, -9], [9, 9, 9]]
+            start = [5, 5, 5]
+            goal = [6, 6, 6]
+            [[obstacles]]
+            box = [1, 2, 3]
+            orientation = [0, 0, 45]
+            position = [1, 0, 0]
+            """)
+        scene = load_quietly(path)
+        np.testing.assert_array_equal(scene.start_rotation, want)
+        np.testing.assert_array_equal(scene.goal_rotation, want)
+        assert corners(scene.obstacles[0]) != set(itertools.product((0.5, 1.5), (-1, 1),
+                                                                     (-1.5, 1.5)))  # turned
+
+
 def test_documented_example_loads(tmp_path):
     doc = scene_module.__doc__
     block = doc.split("A complete example::\n\n", 1)[1]

@@ -200,14 +200,17 @@ def load_scene(path) -> Scene:
 # geometry helpers
 
 
+_SIGNS = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
+# Corner index = 4 * (x > 0) + 2 * (y > 0) + (z > 0); quads counter-clockwise from outside.
+_QUADS = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+_BOX_FACES = np.array([(a, b, c) for a, b, c, d in _QUADS] + [(a, c, d) for a, b, c, d in _QUADS],
+                      dtype=np.int64)
+
+
 def _box(extents) -> tuple[np.ndarray, np.ndarray]:
     """The 8 corners and 12 outward triangles of a box of full ``extents`` centred at 0."""
     h = np.asarray(extents, dtype=np.float64) / 2.0
-    signs = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])
-    # Corner index = 4 * (x > 0) + 2 * (y > 0) + (z > 0); quads counter-clockwise from outside.
-    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
-    faces = [(a, b, c) for a, b, c, d in quads] + [(a, c, d) for a, b, c, d in quads]
-    return signs * h + 0.0, np.array(faces, dtype=np.int64)
+    return _SIGNS * h + 0.0, _BOX_FACES.copy()
 
 
 def _read_mesh(path: Path, where: str) -> tuple[np.ndarray, np.ndarray]:
@@ -374,10 +377,11 @@ def _load_toml(path: Path, notes: list[str]) -> Scene:
         vertices, faces, source = _toml_shape(t, entry, key, base)
         if "mesh" in entry:
             vertices = vertices * _toml_scale(t, entry, key)
-        rotation = _euler_xyz(t.vector(entry["orientation"], f"{key}.orientation")
-                              if "orientation" in entry else (0.0, 0.0, 0.0))
+        # its own name: ``rotation`` is the robot's, the scene's start rotation below
+        turn = (_euler_xyz(t.vector(entry["orientation"], f"{key}.orientation"))
+                if "orientation" in entry else None)
         position = t.vector(entry["position"], f"{key}.position") if "position" in entry else None
-        obstacles.append(Body(obstacle_name, _transform(vertices, rotation, position), faces,
+        obstacles.append(Body(obstacle_name, _transform(vertices, turn, position), faces,
                               source))
 
     goal_rotation = (_euler_xyz(t.vector(plan["goal_orientation"], "planning.goal_orientation"))
