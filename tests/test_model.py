@@ -246,6 +246,8 @@ def test_cached_solid_c_obstacle_answers_exactly_as_the_fresh_one(tmp_path):
 def test_corrupt_and_partial_cache_files_are_rebuilt(tmp_path):
     """A pack cut short is deleted, an entry that fails its digest is dropped: both rebuilt
     (into a new pack, which then answers); no temporary file is left."""
+    from cspace.scene import cache as cache_module
+
     scene = make_scene([box_body("box", (1, 0, 0))])
     folder = tmp_path / "cache"
     _cached_vs_fresh(scene, tmp_path)
@@ -257,11 +259,14 @@ def test_corrupt_and_partial_cache_files_are_rebuilt(tmp_path):
     assert m.bodies[0].cache == "miss" and cache.rebuilt == 1 and not pack.exists()
     (pack,) = list(folder.rglob("*.cspack"))
     flipped = bytearray(pack.read_bytes())
-    flipped[8] ^= 0xFF  # a flipped bit inside the payload
+    index = cache_module._read_index(pack)
+    assert len(index) == 2  # the C-obstacle and the scene's snapshot (cspace.scene.snapshot)
+    for _, spans, _ in index.values():  # a flipped bit inside each entry's payload
+        flipped[int(spans.split("\n")[0].split("\t")[3]) + 8] ^= 0xFF
     pack.write_bytes(bytes(flipped))
     cache = COCache(folder)
     m = model_scene(scene, cache=cache)
-    assert m.bodies[0].cache == "miss" and cache.rebuilt == 1
+    assert m.bodies[0].cache == "miss" and cache.rebuilt == 2
     assert len(list(folder.rglob("*.cspack"))) == 2  # the corrupt one and the rebuilt one
     cache = COCache(folder)
     assert model_scene(scene, cache=cache).bodies[0].cache == "hit"  # the newer pack answers
@@ -325,7 +330,7 @@ def test_cache_key_follows_the_inputs_and_location_follows_the_environment(tmp_p
     assert cache_dir(tmp_path / "x") == tmp_path / "x"
     scene = make_scene([box_body("box", (1, 0, 0))])
     assert model_scene(scene, cache=True).bodies[0].cache == "miss"
-    assert len(COCache(tmp_path / "env-cache").keys()) == 1
+    assert len(COCache(tmp_path / "env-cache").keys()) == 2  # the C-obstacle, the scene's snapshot
     assert model_scene(scene, cache=True).bodies[0].cache == "hit"
     # Another robot size: another key.
     other = make_scene([box_body("box", (1, 0, 0))], robot_extent=0.3)

@@ -268,6 +268,7 @@ class CSpaceObstacle:
         self.kind = "mesh"
         self.sum = sum
         self._impl = impl
+        self.facets = None  # polygon facets when known without the sum (a cached sum's)
         return self
 
     @classmethod
@@ -486,6 +487,8 @@ class CSpaceObstacle:
             return self.polytope.n_facets
         if self.sum is not None and len(self.sum.face_facet):
             return int(self.sum.face_facet.max()) + 1
+        if getattr(self, "facets", None) is not None:
+            return self.facets
         return len(self._impl.faces)
 
     @property
@@ -506,6 +509,9 @@ class CSpaceObstacle:
     @property
     def bounds(self) -> np.ndarray:
         """(2, 3) float64 bounding box of the C-obstacle."""
+        if self.polytope is not None:  # exact: to_float is monotone and exact on grid points
+            k = self.polytope.ints
+            return self.grid.to_float(np.stack([k.min(axis=0), k.max(axis=0)]))
         V = self.vertices
         return np.stack([V.min(axis=0), V.max(axis=0)])
 

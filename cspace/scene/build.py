@@ -31,6 +31,7 @@ from ..cobstacle.pairs import (
 )
 from ..cobstacle.surface import SurfaceMesh
 from ..geometry.exact import Grid
+from ..mesh.convex import ConvexPolytope
 from .cache import COCache, co_key, pack_polytope, unpack_polytope
 from .classify import BodyModel, PairModel, RobotPart, _excess
 
@@ -45,7 +46,8 @@ def _to_arrays(co) -> dict:
     if co.kind == "convex":  # the obstacle's polytope is the body's: not stored again
         out = {"polytope": pack_polytope(co.polytope)}
     else:
-        out = {"vertices": np.asarray(co.vertices), "faces": np.asarray(co.faces)}
+        out = {"vertices": np.asarray(co.vertices), "faces": np.asarray(co.faces),
+               "facets": np.array([co.n_facets], dtype=np.int64)}  # polygons, for reports
     return out | _margin_arrays(co.margin)
 
 
@@ -71,12 +73,18 @@ def _from_arrays(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
 
 def _from_arrays_of(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
     m = _margin_from(a, margin)
-    if body.kind == "convex":
-        return CSpaceObstacle(unpack_polytope(a["polytope"], grid), obstacle=body._solid,
+    if body.kind == "convex":  # packed (a cache entry), or unpacked (a scene's snapshot)
+        poly = a["polytope"]
+        if not isinstance(poly, ConvexPolytope):  # named as CVMS names O + (-R) when built
+            poly = unpack_polytope(poly, grid, name=f"{body._solid.name}+-{robot.name}")
+        return CSpaceObstacle(poly, obstacle=body._solid,
                               robot=robot, reference_point=c, margin=m)
-    return CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
-                                    robot=robot, reference_point=c, grid=grid, name=body.name,
-                                    margin=m)
+    co = CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
+                                  robot=robot, reference_point=c, grid=grid, name=body.name,
+                                  margin=m)
+    if "facets" in a:  # an older entry's report counts triangles
+        co.facets = int(a["facets"][0])
+    return co
 
 
 def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None):

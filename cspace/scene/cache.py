@@ -106,17 +106,46 @@ def pack_polytope(poly: ConvexPolytope) -> np.ndarray:
     return np.concatenate([head] + [a.reshape(-1) for a in parts])
 
 
-def unpack_polytope(packed: np.ndarray, grid: Grid) -> ConvexPolytope:
+def unpack_polytope(packed: np.ndarray, grid: Grid, name: str = "polytope") -> ConvexPolytope:
     """Inverse of :func:`pack_polytope` (views of ``packed``, no copies)."""
-    fields, at = {}, len(_POLYTOPE)
-    for (name, cols), n in zip(_POLYTOPE, packed[:len(_POLYTOPE)].tolist()):
-        size = n * max(cols, 1)
-        values = packed[at:at + size]
-        fields[name] = values.reshape(n, cols) if cols else values
-        at += size
-    if at != len(packed):
-        raise ValueError(f"a packed polytope of {len(packed)} values holds {at}")
-    return ConvexPolytope(grid=grid, **fields)
+    nf = len(_POLYTOPE)
+    head = packed[:nf].tolist()
+    widths = [n * max(c, 1) for n, (_, c) in zip(head, _POLYTOPE)]
+    if nf + sum(widths) != len(packed):
+        raise ValueError(f"a packed polytope of {len(packed)} values holds {nf + sum(widths)}")
+    where = np.cumsum([nf] + widths[:-1]).tolist()
+    return _polytope_at(packed, head, where, grid, name)
+
+
+def unpack_polytopes(packed: np.ndarray, sizes, grid: Grid, names) -> list:
+    """Consecutive packed polytopes of the given lengths (:func:`pack_polytope`, one after
+    the other in ``packed``), unpacked: views of ``packed``, every field's place found for
+    all of them at once."""
+    sizes = np.asarray(sizes, dtype=np.int64)
+    if not len(sizes):
+        return []
+    nf = len(_POLYTOPE)
+    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
+    if (sizes < nf).any() or starts[-1] + sizes[-1] != len(packed):
+        raise ValueError(f"{len(sizes)} packed polytopes do not fill {len(packed)} values")
+    heads = packed[starts[:, None] + np.arange(nf)]
+    widths = heads * np.array([max(c, 1) for _, c in _POLYTOPE], dtype=np.int64)
+    at = starts[:, None] + nf + np.cumsum(widths, axis=1) - widths
+    bad = np.flatnonzero(nf + widths.sum(axis=1) != sizes)
+    if len(bad):
+        raise ValueError(f"a packed polytope of {int(sizes[bad[0]])} values holds "
+                         f"{int(nf + widths[bad[0]].sum())}")
+    return [_polytope_at(packed, head, where, grid, name)
+            for name, head, where in zip(names, heads.tolist(), at.tolist())]
+
+
+def _polytope_at(packed, head: list, where: list, grid: Grid, name: str) -> ConvexPolytope:
+    """The polytope whose fields have lengths ``head`` and start at ``where`` in ``packed``."""
+    fields = {}
+    for (field, cols), n, a in zip(_POLYTOPE, head, where):
+        values = packed[a:a + n * max(cols, 1)]
+        fields[field] = values.reshape(n, cols) if cols else values
+    return ConvexPolytope(grid=grid, name=name, **fields)
 
 
 #: Pending entries beyond this many bytes are written out as a pack before the build ends.
@@ -187,18 +216,20 @@ class COCache:
 
     # ---------------------------------------------------------------- reading
 
-    def load(self, key: str) -> dict | None:
-        """The stored arrays of ``key``, or None (missing, or corrupt: then dropped)."""
+    def load(self, key: str, *, count: bool = True) -> dict | None:
+        """The stored arrays of ``key``, or None (missing, or corrupt: then dropped).
+        ``count=False``: not counted in ``hits`` and ``misses`` (which count C-obstacles)."""
         with self._lock:
             arrays = self._pending.get(key)
             if arrays is None:
                 arrays = self._from_packs(key)
             if arrays is None:
                 arrays = self._from_npz(key)
-            if arrays is None:
-                self.misses += 1
-                return None
-            self.hits += 1
+            if count:
+                if arrays is None:
+                    self.misses += 1
+                else:
+                    self.hits += 1
             return arrays
 
     def keys(self) -> set:

@@ -87,6 +87,7 @@ class BodyModel:
     _solid: object = field(default=None, repr=False)
     _keep: np.ndarray | None = field(default=None, repr=False)
     _encloses: object = field(default=None, repr=False)  # Enclosing of a closed surface
+    _sheet: bool = field(default=False, repr=False)  # every triangle listed with both windings
 
     @property
     def cos(self) -> list:
@@ -283,7 +284,7 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
     V = grid.to_float(P)
     r_lo, r_hi = minus_r_box  # the box of c - R, grid units
     lo, hi = P.min(axis=0) + r_lo, P.max(axis=0) + r_hi
-    body = BodyModel(name, source, "dropped", "", V, F, _ints=P)
+    body = BodyModel(name, source, "dropped", "", V, F, _ints=P, _sheet=bool(sheet))
     if not _meets(lo, hi, *bounds_g):
         body.reason = (f"its C-obstacle's bounding box {grid.to_float(np.stack([lo, hi])).tolist()} "
                        "misses the planning bounds: the robot can never touch it")

@@ -25,7 +25,9 @@ scene grid (``scene.grid()``, centred on the scene):
    triangles whose pieces cannot meet the bounds are left out), or ``dropped``. Each decision carries a
    human-readable reason.
 6. **Build** (``build=True``) each kept body's C-obstacle, through the disk cache
-   (:mod:`cspace.scene.cache`) when one is given.
+   (:mod:`cspace.scene.cache`) when one is given. A build with a cache also leaves the
+   scene's *snapshot* (:mod:`cspace.scene.snapshot`): the next build of the same input
+   restores steps 1-6 from it instead of modelling each body again.
 
 The robot goes through steps 1-3 and 5 too (nothing of it is dropped): its parts
 (:class:`RobotPart`) are ``convex``, ``solid`` or ``surface``, and every (kept body, robot
@@ -73,6 +75,7 @@ from .build import (
     _to_arrays,
 )
 from .cache import COCache
+from .snapshot import Snapshot, snapshot_arrays, snapshot_key
 from .classify import (
     BodyModel,
     KINDS,
@@ -321,9 +324,17 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         :class:`~cspace.errors.BuildError` by :meth:`SceneModel.cspace`.
     """
     t0 = time.perf_counter()
+    store = COCache.of(cache)
+    # A build of the same input before left a snapshot: the model and the convex C-obstacles
+    # are restored from it (cspace.scene.snapshot), not made again per body.
+    skey = (snapshot_key(scene, grid, robot_hull, conservative, sums)
+            if build and store is not None else None)
+    snap = Snapshot.read(store.load(skey, count=False)) if skey is not None else None
     far: dict = {}
     modelled = scene
-    if grid is None:
+    if snap is not None:
+        grid = snap.grid
+    elif grid is None:
         modelled, far = _without_far_parts(scene)
         grid = modelled.grid()
     c = np.asarray(scene.reference_point, dtype=np.float64)
@@ -331,7 +342,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     # grid's origin (Grid.for_robot): c - r are vectors, every C-obstacle is in grid's frame.
     rgrid = grid.for_robot(scene.robot.vertices, c)
     c_ints = rgrid.snap(c)
-    margin = _margin(modelled, grid, conservative)
+    margin = snap.margin if snap is not None else _margin(modelled, grid, conservative)
     # The box of c - R, grown by the widest margin a build may take (one more step for a
     # float64 surface's rounding), decides what is dropped, exactly, whatever the robot's parts.
     r_ints = rgrid.snap(scene.robot.vertices[np.unique(scene.robot.faces)])
@@ -348,9 +359,14 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     if robot_hull:
         parts = _model_robot(scene, rgrid, robot, True)
     bounds_g = grid.inner_box(*np.asarray(scene.bounds, dtype=np.float64))
-    bodies, sources = [], {}
+    convex_robot = sums and len(parts) == 1 and parts[0].kind == "convex"
+    bodies, sources, restored = [], {}, {}
+    if snap is not None:
+        bodies, restored = snap.bodies(minus_r_box, bounds_g, convex_robot,
+                                       parts[0].operand.name if convex_robot else "", memo)
+        sources = snap.sources
     kept = {sb.name: sb for sb in modelled.obstacles}
-    for sb in scene.obstacles:
+    for sb in scene.obstacles if snap is None else ():
         if sb.name not in kept:  # every part of it far away
             n_far, box = far[sb.name]
             sources[sb.name] = {"triangles": len(sb.faces), "collapsed": 0, "double_sided": 0,
@@ -374,8 +390,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         for k, faces in enumerate(split):
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
             bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
-                                    sums and len(parts) == 1 and parts[0].kind == "convex", memo,
-                                    sheet=bool(two_sided[faces].all())))
+                                    convex_robot, memo, sheet=bool(two_sided[faces].all())))
         if sb.name in far:
             bodies.append(_far_body(sb.name, *far[sb.name]))
         if not split and sb.name not in far:
@@ -384,12 +399,16 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                                     f"on the grid (step 2**{grid.exponent})",
                                     np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)))
     t1 = time.perf_counter()
-    store = COCache.of(cache)
     held = 0
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
         held = _memory_check(scene, todo, memory, sums)
         ctx = _context(scene, grid, rgrid, margin, store, sums)
+        if restored:  # their convex C-obstacles, as from their own cache entries
+            for b, part in todo:
+                if id(b) in restored:
+                    _restore_pair(ctx, b, part, restored[id(b)])
+            todo = [(b, p) for b, p in todo if id(b) not in restored]
         if executor is not None:
             _build_with(executor, todo, parts, ctx, progress)
         for i, (b, part) in enumerate(todo if executor is None else ()):
@@ -400,11 +419,15 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                              + (f": {stage}" if stage else ""))
             sub(0.0)
             _build_one(ctx, b, part, parts, sub)
-        _flush(store)
         for b in bodies:  # one convex part: the body's one C-obstacle, as before parts
             if (len(parts) == 1 and b.pairs and b.pairs[0].cos
                     and is_sum(b.pairs[0].construction)):
                 b.co = b.pairs[0].cos[0]
+        if skey is not None and snap is None:
+            kept_arrays = snapshot_arrays(bodies, sources, grid, margin, convex_robot)
+            if kept_arrays is not None:
+                store.store(skey, kept_arrays)
+        _flush(store)
         if progress is not None:
             progress(1.0, f"{len(todo)} C-obstacles" if len(parts) == 1
                      else f"{len(todo)} (body, robot part) pairs")
@@ -459,6 +482,16 @@ def _build_one(ctx: _Context, b: BodyModel, part: RobotPart, parts: list, sub=No
     b.seconds += pair.seconds
     b.cache = pair.cache if not b.cache or b.cache == pair.cache else "mixed"
     return pair
+
+
+def _restore_pair(ctx: _Context, b: BodyModel, part: RobotPart, arrays: dict) -> None:
+    """A restored convex body's C-obstacle from its snapshot's arrays (those of its own
+    cache entry: :func:`cspace.scene.build._assemble` makes it the one way)."""
+    pair = PairModel(part.name, "CVMS", cache="hit")
+    b.pairs.append(pair)
+    _assemble(ctx, "CVMS", b, part, pair, arrays)
+    b.cache = "hit"
+    ctx.store.hits += 1  # a C-obstacle read from the cache, as through its own entry
 
 
 def _memory_check(scene, todo, memory, sums: bool = True) -> int:

@@ -1,0 +1,221 @@
+"""A whole scene's model, and its convex C-obstacles, as one cache entry: a *snapshot*.
+
+Modelling a body (welding, the convexity proof, classification) costs tens of microseconds,
+and making its C-obstacle from its own cache entry (key, read, digest) as much again: a
+cached load of 10^4 bodies took 1.3 s, nearly all of it per body. A snapshot is one entry
+per scene build, under one key over the scene's whole input (:func:`snapshot_key`); a later
+build of the same input restores every body from a few concatenated arrays instead of
+modelling it again.
+
+What a snapshot holds, per modelled body in :func:`cspace.scene.model.model_scene`'s order:
+
+- **restored** (a convex body whose polytope is exactly its snapped mesh's hull, no
+  ``excess``): its welded grid integers, triangles, reason and packed polytope; when the
+  robot is one convex part, its C-obstacle's packed polytope and margin too (the arrays a
+  per-pair cache entry holds, assembled the same way: :func:`cspace.scene.build._assemble`);
+- **classified again** (every other classified body: solid, surface, a convex hull that
+  stands for a bent body, one dropped by the bounds): its welded grid integers, triangles and
+  whether it is a double-sided sheet; :func:`cspace.scene.classify._classify` decides it again
+  on restore and its C-obstacles come through their per-pair entries (such bodies are few,
+  and their builds dear);
+- **dropped before classification** (far parts; every triangle collapsed): name and reason.
+
+Also: the grid, the scene's margin and per scene body what welding dropped. The key covers
+everything these depend on (the bodies' names, float64 vertices and triangles, the robot,
+reference point, bounds, the options and cspace's version), so a restored model is the model
+the same build makes (``tests/test_snapshot.py`` compares them field by field). The per-pair
+entries are still written: slices and other scenes share them.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+
+import numpy as np
+
+from ..cobstacle.margin import Margin
+from ..geometry.exact import Grid
+from .cache import FORMAT, pack_polytope, unpack_polytopes
+from .classify import BodyModel, _classify
+
+__all__ = ["snapshot_key", "snapshot_arrays", "Snapshot"]
+
+# Bump when what a snapshot holds, or how it is read, changes.
+SNAPSHOT = 1
+
+_RESTORED, _CLASSIFY, _DROPPED = 0, 1, 2
+
+
+def snapshot_key(scene, grid: Grid | None, robot_hull: bool, conservative: bool,
+                 sums: bool) -> str:
+    """SHA-256 hex key of everything a scene's model and its C-obstacles depend on.
+
+    The obstacles' and the robot's names, float64 vertices and triangles (bytes: a ``-0.0``
+    where a ``0.0`` was only misses), the reference point, the bounds, the grid when one is
+    imposed, ``robot_hull``, ``conservative`` and ``sums``, the cspace version and the cache
+    format. Not the scene's name, start, goal or file names: they change no C-obstacle.
+    """
+    from .._version import __version__
+
+    bodies = [scene.robot, *scene.obstacles]
+    imposed = None if grid is None else [grid.exponent, grid.bits, list(grid.origin)]
+    h = hashlib.sha256()
+    h.update(json.dumps({"cspace": __version__, "format": FORMAT, "snapshot": SNAPSHOT,
+                         "grid": imposed, "robot_hull": bool(robot_hull),
+                         "conservative": bool(conservative), "sums": bool(sums),
+                         "names": [b.name for b in bodies]}).encode())
+    sizes = np.array([(len(b.vertices), len(b.faces)) for b in bodies], dtype=np.int64)
+    for a in (sizes, np.concatenate([b.vertices for b in bodies]),
+              np.concatenate([b.faces for b in bodies]),
+              np.asarray(scene.reference_point, dtype=np.float64),
+              np.asarray(scene.bounds, dtype=np.float64)):
+        h.update(f"|{a.dtype.str} {a.shape}|".encode())
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def _restorable(b: BodyModel) -> bool:
+    return b.kind == "convex" and not b._solid.excess and not b.changed
+
+
+def _compact(a: np.ndarray) -> np.ndarray:
+    """int32 when every value fits (grid integers of a 26-bit grid do), else int64."""
+    small = not len(a) or (int(a.min()) >= -2**31 and int(a.max()) < 2**31)
+    return a.astype(np.int32 if small else np.int64)
+
+
+def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
+                    one_convex_part: bool) -> dict | None:
+    """The snapshot of a finished build (``model_scene``'s bodies, in order), as the arrays
+    a cache entry holds; None when there is nothing to keep (a failed build is not kept: its
+    bodies are built again)."""
+    if any(b.error for b in bodies):
+        return None
+    codes = np.array([_RESTORED if _restorable(b) else _CLASSIFY if len(b.faces) else _DROPPED
+                      for b in bodies], dtype=np.int8)
+    restored = [b for b, c in zip(bodies, codes) if c == _RESTORED]
+    # the convex C-obstacles, when every restored body has its one (one convex robot part),
+    # grown by the scene's margin (as a convex body's always is: it is not stored)
+    with_cos = one_convex_part and all(b.co is not None and b.co.kind == "convex"
+                                       and b.co.margin == margin for b in restored)
+    shaped = [b for b, c in zip(bodies, codes) if c != _DROPPED]
+    reasons: dict = {}
+    meta = {
+        "grid": [grid.exponent, grid.bits, list(grid.origin)],
+        "margin": [list(margin.steps), [float(d) for d in margin.deviation],
+                   float(margin.rounding), bool(margin.conservative)],
+        "sources": sources,
+        "bodies": [[b.name, b.source, reasons.setdefault(b.reason, len(reasons))]
+                   for b in bodies],
+        "reasons": list(reasons),
+    }
+    out = {
+        "meta": np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8),
+        "codes": codes,
+        "sheet": np.array([bool(b._sheet) for b in shaped], dtype=bool),
+        "ints": _compact(np.concatenate([b._ints for b in shaped]) if shaped
+                         else np.zeros((0, 3), np.int64)),
+        "faces": _compact(np.concatenate([b.faces for b in shaped]) if shaped
+                          else np.zeros((0, 3), np.int64)),
+        "sizes": np.array([(len(b._ints), len(b.faces)) for b in shaped],
+                          dtype=np.int64).reshape(-1, 2),
+    }
+    out |= _packed("poly", [b._solid for b in restored])
+    if with_cos:
+        out |= _packed("co", [b.co.polytope for b in restored])
+    return out
+
+
+def _packed(name: str, polytopes: list) -> dict:
+    packs = [pack_polytope(p) for p in polytopes]
+    return {name: np.concatenate(packs) if packs else np.zeros(0, np.int64),
+            f"{name}_sizes": np.array([len(p) for p in packs], dtype=np.int64)}
+
+
+def _slices(sizes: np.ndarray) -> list:
+    """Start offsets of consecutive runs of the given lengths (and the total last)."""
+    return np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64).tolist()
+
+
+class Snapshot:
+    """A snapshot read back (:func:`Snapshot.read`): the grid and margin at once, the bodies
+    by :meth:`bodies`."""
+
+    def __init__(self, arrays: dict, meta: dict):
+        self.arrays = arrays
+        self.meta = meta
+        e, bits, origin = meta["grid"]
+        self.grid = Grid(int(e), int(bits), tuple(int(x) for x in origin))
+        steps, deviation, rounding, conservative = meta["margin"]
+        self.margin = Margin(tuple(int(s) for s in steps), tuple(float(d) for d in deviation),
+                             self.grid, float(rounding), bool(conservative))
+        self.sources = meta["sources"]
+
+    @classmethod
+    def read(cls, arrays: dict | None) -> "Snapshot | None":
+        """The snapshot in a cache entry's arrays (None: no entry, or not one of ours)."""
+        if arrays is None or "meta" not in arrays:
+            return None
+        try:
+            snap = cls(arrays, json.loads(arrays["meta"].tobytes()))
+        except (ValueError, KeyError, TypeError):
+            return None
+        return snap if snap._whole() else None
+
+    def _whole(self) -> bool:
+        """Every array there, of lengths that agree (a digest guards the bytes and the key
+        the layout; this guards against a snapshot written by other code)."""
+        a, bodies = self.arrays, self.meta.get("bodies")
+        need = ("codes", "sheet", "ints", "faces", "sizes", "poly", "poly_sizes")
+        if not isinstance(bodies, list) or any(k not in a for k in need):
+            return False
+        codes = a["codes"]
+        shaped, restored = int((codes != _DROPPED).sum()), int((codes == _RESTORED).sum())
+        sizes = a["sizes"]
+        return (len(codes) == len(bodies) and sizes.shape == (shaped, 2)
+                and len(a["sheet"]) == shaped and len(a["poly_sizes"]) == restored
+                and int(sizes[:, 0].sum()) == len(a["ints"])
+                and int(sizes[:, 1].sum()) == len(a["faces"])
+                and ("co" not in a or len(a.get("co_sizes", ())) == restored))
+
+    def bodies(self, minus_r_box, bounds_g, convex_robot: bool, robot_name: str = "",
+               memo=None) -> tuple[list, dict]:
+        """The modelled bodies, in order, and per restored body (by id) the arrays of its
+        convex C-obstacle as a per-pair cache entry holds them, unpacked (empty without
+        them); ``robot_name``: the convex robot part's, which names them."""
+        a, grid = self.arrays, self.grid
+        ints = a["ints"].astype(np.int64)
+        faces = a["faces"].astype(np.int64)
+        vertices = grid.to_float(ints) if len(ints) else np.zeros((0, 3))
+        sizes = a["sizes"]
+        v_at, f_at = _slices(sizes[:, 0]), _slices(sizes[:, 1])
+        names = [b[0] for b, c in zip(self.meta["bodies"], a["codes"].tolist())
+                 if c == _RESTORED]
+        polys = unpack_polytopes(a["poly"], a["poly_sizes"], grid, names)
+        cos = (None if "co" not in a else  # unpacked: _from_arrays takes them as they are
+               [{"polytope": p} for p in unpack_polytopes(
+                   a["co"], a["co_sizes"], grid, [f"{n}+-{robot_name}" for n in names])])
+        sheet = a["sheet"].tolist()
+        reasons = self.meta["reasons"]
+        out, co_arrays = [], {}
+        k = r = 0  # shaped body, restored body
+        for code, (name, source, why) in zip(a["codes"].tolist(), self.meta["bodies"]):
+            if code == _DROPPED:
+                out.append(BodyModel(name, source, "dropped", reasons[why], np.zeros((0, 3)),
+                                     np.zeros((0, 3), dtype=np.int64)))
+                continue
+            P, F = ints[v_at[k]:v_at[k + 1]], faces[f_at[k]:f_at[k + 1]]
+            if code == _CLASSIFY:
+                out.append(_classify(name, source, P, F, minus_r_box, bounds_g, grid,
+                                     convex_robot, memo, sheet=sheet[k]))
+            else:
+                body = BodyModel(name, source, "convex", reasons[why],
+                                 vertices[v_at[k]:v_at[k + 1]], F, _ints=P, _solid=polys[r],
+                                 _sheet=sheet[k])
+                out.append(body)
+                if cos is not None:
+                    co_arrays[id(body)] = cos[r]
+                r += 1
+            k += 1
+        return out, co_arrays
