@@ -101,9 +101,22 @@ _POLYTOPE = (("ints", 3), ("facet_offsets", 0), ("facet_indices", 0), ("normals"
 def pack_polytope(poly: ConvexPolytope) -> np.ndarray:
     """A convex polytope as one int64 array: its six fields' lengths, then each field's
     values in row-major order (one array to read and digest, not twelve)."""
-    parts = [np.ascontiguousarray(getattr(poly, f), dtype=np.int64) for f, _ in _POLYTOPE]
-    head = np.array([len(a) for a in parts], dtype=np.int64)
-    return np.concatenate([head] + [a.reshape(-1) for a in parts])
+    return pack_polytopes([poly])[0]
+
+
+def pack_polytopes(polys: list) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`pack_polytope` of each, one after the other in one array (one concatenation
+    for all of them), and each one's length."""
+    pieces, sizes = [], []
+    for poly in polys:
+        parts = [getattr(poly, f).reshape(-1) for f, _ in _POLYTOPE]
+        head = [len(getattr(poly, f)) for f, _ in _POLYTOPE]
+        pieces.append(np.array(head, dtype=np.int64))
+        pieces += parts
+        sizes.append(sum(len(a) for a in parts) + len(parts))
+    packed = (np.concatenate(pieces).astype(np.int64, copy=False) if pieces
+              else np.zeros(0, np.int64))
+    return packed, np.array(sizes, dtype=np.int64)
 
 
 def unpack_polytope(packed: np.ndarray, grid: Grid, name: str = "polytope") -> ConvexPolytope:

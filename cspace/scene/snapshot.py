@@ -36,7 +36,7 @@ import numpy as np
 
 from ..cobstacle.margin import Margin
 from ..geometry.exact import Grid
-from .cache import FORMAT, pack_polytope, unpack_polytopes
+from .cache import FORMAT, pack_polytopes, unpack_polytopes
 from .classify import BodyModel, _classify
 
 __all__ = ["snapshot_key", "snapshot_arrays", "Snapshot"]
@@ -128,9 +128,8 @@ def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
 
 
 def _packed(name: str, polytopes: list) -> dict:
-    packs = [pack_polytope(p) for p in polytopes]
-    return {name: np.concatenate(packs) if packs else np.zeros(0, np.int64),
-            f"{name}_sizes": np.array([len(p) for p in packs], dtype=np.int64)}
+    packed, sizes = pack_polytopes(polytopes)
+    return {name: packed, f"{name}_sizes": sizes}
 
 
 def _slices(sizes: np.ndarray) -> list:
