@@ -101,63 +101,21 @@ _POLYTOPE = (("ints", 3), ("facet_offsets", 0), ("facet_indices", 0), ("normals"
 def pack_polytope(poly: ConvexPolytope) -> np.ndarray:
     """A convex polytope as one int64 array: its six fields' lengths, then each field's
     values in row-major order (one array to read and digest, not twelve)."""
-    return pack_polytopes([poly])[0]
-
-
-def pack_polytopes(polys: list) -> tuple[np.ndarray, np.ndarray]:
-    """:func:`pack_polytope` of each, one after the other in one array (one concatenation
-    for all of them), and each one's length."""
-    pieces, sizes = [], []
-    for poly in polys:
-        parts = [getattr(poly, f).reshape(-1) for f, _ in _POLYTOPE]
-        head = [len(getattr(poly, f)) for f, _ in _POLYTOPE]
-        pieces.append(np.array(head, dtype=np.int64))
-        pieces += parts
-        sizes.append(sum(len(a) for a in parts) + len(parts))
-    packed = (np.concatenate(pieces).astype(np.int64, copy=False) if pieces
-              else np.zeros(0, np.int64))
-    return packed, np.array(sizes, dtype=np.int64)
+    parts = [np.ascontiguousarray(getattr(poly, f), dtype=np.int64) for f, _ in _POLYTOPE]
+    head = np.array([len(a) for a in parts], dtype=np.int64)
+    return np.concatenate([head] + [a.reshape(-1) for a in parts])
 
 
 def unpack_polytope(packed: np.ndarray, grid: Grid, name: str = "polytope") -> ConvexPolytope:
     """Inverse of :func:`pack_polytope` (views of ``packed``, no copies)."""
-    nf = len(_POLYTOPE)
-    head = packed[:nf].tolist()
-    widths = [n * max(c, 1) for n, (_, c) in zip(head, _POLYTOPE)]
-    if nf + sum(widths) != len(packed):
-        raise ValueError(f"a packed polytope of {len(packed)} values holds {nf + sum(widths)}")
-    where = np.cumsum([nf] + widths[:-1]).tolist()
-    return _polytope_at(packed, head, where, grid, name)
-
-
-def unpack_polytopes(packed: np.ndarray, sizes, grid: Grid, names) -> list:
-    """Consecutive packed polytopes of the given lengths (:func:`pack_polytope`, one after
-    the other in ``packed``), unpacked: views of ``packed``, every field's place found for
-    all of them at once."""
-    sizes = np.asarray(sizes, dtype=np.int64)
-    if not len(sizes):
-        return []
-    nf = len(_POLYTOPE)
-    starts = np.concatenate([[0], np.cumsum(sizes)[:-1]]).astype(np.int64)
-    if (sizes < nf).any() or starts[-1] + sizes[-1] != len(packed):
-        raise ValueError(f"{len(sizes)} packed polytopes do not fill {len(packed)} values")
-    heads = packed[starts[:, None] + np.arange(nf)]
-    widths = heads * np.array([max(c, 1) for _, c in _POLYTOPE], dtype=np.int64)
-    at = starts[:, None] + nf + np.cumsum(widths, axis=1) - widths
-    bad = np.flatnonzero(nf + widths.sum(axis=1) != sizes)
-    if len(bad):
-        raise ValueError(f"a packed polytope of {int(sizes[bad[0]])} values holds "
-                         f"{int(nf + widths[bad[0]].sum())}")
-    return [_polytope_at(packed, head, where, grid, name)
-            for name, head, where in zip(names, heads.tolist(), at.tolist())]
-
-
-def _polytope_at(packed, head: list, where: list, grid: Grid, name: str) -> ConvexPolytope:
-    """The polytope whose fields have lengths ``head`` and start at ``where`` in ``packed``."""
-    fields = {}
-    for (field, cols), n, a in zip(_POLYTOPE, head, where):
-        values = packed[a:a + n * max(cols, 1)]
+    fields, at = {}, len(_POLYTOPE)
+    for (field, cols), n in zip(_POLYTOPE, packed[:len(_POLYTOPE)].tolist()):
+        size = n * max(cols, 1)
+        values = packed[at:at + size]
         fields[field] = values.reshape(n, cols) if cols else values
+        at += size
+    if at != len(packed):
+        raise ValueError(f"a packed polytope of {len(packed)} values holds {at}")
     return ConvexPolytope(grid=grid, name=name, **fields)
 
 

@@ -10,8 +10,8 @@ modelling it again.
 What a snapshot holds, per modelled body in :func:`cspace.scene.model.model_scene`'s order:
 
 - **restored** (a convex body whose polytope is exactly its snapped mesh's hull, no
-  ``excess``): its welded grid integers, triangles, reason and packed polytope; when the
-  robot is one convex part, its C-obstacle's packed polytope and margin too (the arrays a
+  ``excess``): its welded grid integers, triangles, reason and polytope; when the
+  robot is one convex part, its C-obstacle's polytope too (what a
   per-pair cache entry holds, assembled the same way: :func:`cspace.scene.build._assemble`);
 - **classified again** (every other classified body: solid, surface, a convex hull that
   stands for a bent body, one dropped by the bounds): its welded grid integers, triangles and
@@ -36,7 +36,8 @@ import numpy as np
 
 from ..cobstacle.margin import Margin
 from ..geometry.exact import Grid
-from .cache import FORMAT, pack_polytopes, unpack_polytopes
+from ..mesh.convex import ConvexPolytope
+from .cache import _POLYTOPE, FORMAT
 from .classify import BodyModel, _classify
 
 __all__ = ["snapshot_key", "snapshot_arrays", "Snapshot"]
@@ -128,8 +129,28 @@ def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
 
 
 def _packed(name: str, polytopes: list) -> dict:
-    packed, sizes = pack_polytopes(polytopes)
-    return {name: packed, f"{name}_sizes": sizes}
+    """Polytopes as one array per field (each field's rows of all of them, in order) and a
+    table of each one's row counts: restoring one is then six slices, no reshaping."""
+    out = {f"{name}_rows": np.array([[len(getattr(p, f)) for f, _ in _POLYTOPE]
+                                     for p in polytopes], dtype=np.int64).reshape(-1, 6)}
+    for f, cols in _POLYTOPE:
+        parts = [getattr(p, f) for p in polytopes]
+        empty = np.zeros((0, cols) if cols else 0, dtype=np.int64)
+        out[f"{name}_{f}"] = _compact(np.concatenate(parts) if parts else empty)
+    return out
+
+
+def _polytopes(a: dict, name: str, grid: Grid, names: list) -> list:
+    """The polytopes :func:`_packed` stored, as views of its arrays."""
+    P, FO, FI, N, E, EF = (a[f"{name}_{f}"].astype(np.int64) for f, _ in _POLYTOPE)
+    ends = np.cumsum(a[f"{name}_rows"], axis=0)
+    starts = (ends - a[f"{name}_rows"]).tolist()
+    # one polytope: six slices, written out (this loop runs once per body of a scene)
+    return [ConvexPolytope(grid=grid, ints=P[p0:p1], facet_offsets=FO[o0:o1],
+                           facet_indices=FI[i0:i1], normals=N[n0:n1], edges=E[e0:e1],
+                           edge_facets=EF[f0:f1], name=label)
+            for label, (p0, o0, i0, n0, e0, f0), (p1, o1, i1, n1, e1, f1)
+            in zip(names, starts, ends.tolist())]
 
 
 def _slices(sizes: np.ndarray) -> list:
@@ -166,17 +187,29 @@ class Snapshot:
         """Every array there, of lengths that agree (a digest guards the bytes and the key
         the layout; this guards against a snapshot written by other code)."""
         a, bodies = self.arrays, self.meta.get("bodies")
-        need = ("codes", "sheet", "ints", "faces", "sizes", "poly", "poly_sizes")
+        need = ("codes", "sheet", "ints", "faces", "sizes", "poly_rows",
+                *(f"poly_{f}" for f, _ in _POLYTOPE))
         if not isinstance(bodies, list) or any(k not in a for k in need):
             return False
         codes = a["codes"]
         shaped, restored = int((codes != _DROPPED).sum()), int((codes == _RESTORED).sum())
         sizes = a["sizes"]
         return (len(codes) == len(bodies) and sizes.shape == (shaped, 2)
-                and len(a["sheet"]) == shaped and len(a["poly_sizes"]) == restored
+                and len(a["sheet"]) == shaped
                 and int(sizes[:, 0].sum()) == len(a["ints"])
                 and int(sizes[:, 1].sum()) == len(a["faces"])
-                and ("co" not in a or len(a.get("co_sizes", ())) == restored))
+                and all(self._table(p, restored) for p in ("poly", "co")
+                        if p == "poly" or "co_rows" in a))
+
+    def _table(self, name: str, n: int) -> bool:
+        """``n`` polytopes stored by :func:`_packed` under ``name``, every field whole."""
+        a = self.arrays
+        rows = a[f"{name}_rows"]
+        if rows.shape != (n, 6):
+            return False
+        sums = rows.sum(axis=0).tolist()
+        return all(f"{name}_{f}" in a and len(a[f"{name}_{f}"]) == k
+                   for (f, _), k in zip(_POLYTOPE, sums))
 
     def bodies(self, minus_r_box, bounds_g, convex_robot: bool, robot_name: str = "",
                memo=None) -> tuple[list, dict]:
@@ -191,10 +224,10 @@ class Snapshot:
         v_at, f_at = _slices(sizes[:, 0]), _slices(sizes[:, 1])
         names = [b[0] for b, c in zip(self.meta["bodies"], a["codes"].tolist())
                  if c == _RESTORED]
-        polys = unpack_polytopes(a["poly"], a["poly_sizes"], grid, names)
-        cos = (None if "co" not in a else  # unpacked: _from_arrays takes them as they are
-               [{"polytope": p} for p in unpack_polytopes(
-                   a["co"], a["co_sizes"], grid, [f"{n}+-{robot_name}" for n in names])])
+        polys = _polytopes(a, "poly", grid, names)
+        cos = (None if "co_rows" not in a else  # unpacked: _from_arrays takes them as they are
+               [{"polytope": p} for p in _polytopes(a, "co", grid,
+                                                    [f"{n}+-{robot_name}" for n in names])])
         sheet = a["sheet"].tolist()
         reasons = self.meta["reasons"]
         out, co_arrays = [], {}
