@@ -21,7 +21,9 @@
   one axis) or ``--orientations N`` (free flying) let the robot turn, every translation and
   turn in place certified (:func:`cspace.planning.plan.plan_turning`); a scene whose goal
   orientation differs from the start's is planned that way by default (36 slices;
-  ``--no-turns`` keeps the start's). ``--workers`` / ``--scheduler`` build through an
+  ``--no-turns`` keeps the start's). Without ``--planner``, ``auto``: RRTConnect, then PRM
+  with the narrow-passage sampler, then turns over 8 slices, within ``--time``
+  (``plan(..., planner='auto')``). ``--workers`` / ``--scheduler`` build through an
   executor, as for ``build``.
 - ``cspace view SCENE`` — :func:`cspace.viz.scene_view.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``.
@@ -297,7 +299,7 @@ def _build(args: argparse.Namespace) -> int:
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .planning.plan import plan
+    from .planning.plan import AUTO, AUTO_SLICES, default_slices, plan
 
     path_out = _out(args.output, ("txt", "csv", "npy", "path"), "-o")
     result_out = _out(args.result, ("json",), "--result")
@@ -321,10 +323,25 @@ def _plan(args: argparse.Namespace) -> int:
             print(line)
     scene = m.scene
     cs = m.cspace()
+    auto = args.planner == AUTO
+    if auto and args.sampler != "uniform":
+        args.planner = "PRM"  # a sampler asked for: the planner that uses it, as before
+        auto = False
     r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner=args.planner,
-             time=args.time, seed=args.seed, sampler=args.sampler)
+             time=args.time, seed=args.seed, sampler=args.sampler,
+             cache=None if args.no_cache else (args.cache_dir or True),
+             robot_hull=args.robot_hull, memory=args.memory, turns=not args.no_turns)
+    for t in r.tried or ():
+        how = (f"{t['planner']} with {t['slices']} orientation slices (turns in place)"
+               if t["slices"] else f"{t['planner']} ({t['sampler']} sampler)")
+        print(f"  auto: {how}: {'solved' if t['solved'] else 'no path'} in {t['seconds']:.2f} s "
+              f"of {t['time']:.2f} s")
+    if r.slices is not None:  # auto turned the robot
+        return _report_turning(args, scene, default_slices(scene, AUTO_SLICES), r, path_out,
+                               result_out, html_out)
     status = "solved" if r.solved else f"NOT solved ({r.status})"
-    print(f"{scene.name}: {args.planner} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
+    name = f"auto ({r.planner})" if auto else args.planner
+    print(f"{scene.name}: {name} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
           f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
     fcl = None
     if args.fcl_check and r.solved:
@@ -342,7 +359,7 @@ def _plan(args: argparse.Namespace) -> int:
         print(f"wrote {path_out}")
     elif path_out:
         print(f"no path written to {path_out}: the problem was not solved", file=sys.stderr)
-    if not r.solved and (args.planner, args.sampler) != ("PRM", "narrow"):
+    if not r.solved and not auto and (args.planner, args.sampler) != ("PRM", "narrow"):
         print("hint: for narrow passages try --planner PRM --sampler narrow (samples in the gaps "
               "between C-obstacles), or a longer --time", file=sys.stderr)
     result = None
@@ -367,7 +384,7 @@ def _result_head(args: argparse.Namespace, scene, r) -> dict:
     return {"scene": scene.name, "scene_file": str(args.scene), "planner": args.planner,
             "seed": args.seed, "time_budget": args.time, "solved": r.solved, "exact": r.exact,
             "valid_exact_recheck": r.valid, "status": r.status, "seconds": r.time,
-            "length": r.length}
+            "length": r.length, "tried": r.tried}
 
 
 def _finish(result, result_out, html_out, scene, path) -> int:
@@ -437,6 +454,8 @@ def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_ou
         rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
         slices = Orientations.uniform(args.orientations, goal_rotation=rel)
     executor = _executor(args)
+    if args.planner == "auto":  # turns asked for (or needed): the turning planner's default
+        args.planner = "RRTConnect"
     try:
         r = plan_turning(scene, slices, planner=args.planner, time=args.time, seed=args.seed,
                          cache=cache, robot_hull=args.robot_hull, executor=executor,
@@ -444,6 +463,16 @@ def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_ou
     finally:
         if executor is not None:
             executor.shutdown(wait=False, cancel_futures=True)
+    return _report_turning(args, scene, slices, r, path_out, result_out, html_out)
+
+
+def _report_turning(args: argparse.Namespace, scene, slices, r, path_out, result_out,
+                    html_out) -> int:
+    """Print, check, write and summarise a path with turns (``plan_turning``'s result)."""
+    import numpy as np
+
+    if r.tried:
+        args.planner = f"auto ({r.planner})"
     status = "solved" if r.solved else f"NOT solved ({r.status})"
     turns = int((np.diff(r.slices) != 0).sum()) if len(r.slices) else 0
     print(f"{scene.name}: {args.planner} with {len(slices)} orientations {status} in "
@@ -673,7 +702,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     _model_options(p)
-    p.add_argument("--planner", default="RRTConnect", help="any bound OMPL geometric planner")
+    p.add_argument("--planner", default="auto",
+                   help="any bound OMPL geometric planner, or 'auto' (default): RRTConnect, "
+                        "then PRM with the narrow-passage sampler, then turns over "
+                        "orientation slices (not with --no-turns), within --time")
     p.add_argument("--time", type=_positive, default=5.0,
                    help="planning time budget in seconds")
     p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (none: a new one each run)")
@@ -690,7 +722,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                         "linked to its nearest, every motion certified (0: the 24 alone)")
     p.add_argument("--no-turns", action="store_true",
                    help="keep the start's orientation even when the goal's differs (by "
-                        f"default such a scene is planned with {DEFAULT_SLICES} slices)")
+                        f"default such a scene is planned with {DEFAULT_SLICES} slices), "
+                        "and do not let --planner auto turn the robot")
     _executor_options(p)
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
     p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),

@@ -165,7 +165,7 @@ def test_plan_explain_reports_the_model_then_plans(capsys):
     assert "front-spine: dropped" in text and "back-tooth-1: convex" in text
     # the stated bound, one-sided (the comb's coordinates are not all on the grid: it grows)
     assert "error bound " in text and "never a false free" in text
-    assert text.index("modelled") < text.index("RRTConnect solved")
+    assert text.index("modelled") < text.index("auto (RRTConnect) solved")
 
 
 def test_build_of_a_solid_body_builds_or_names_it(tmp_path, capsys):

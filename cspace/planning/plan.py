@@ -9,7 +9,7 @@ the timings. The OMPL glue (spaces, checkers, samplers) is :mod:`cspace.planning
 from __future__ import annotations
 
 import time as _time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -99,6 +99,10 @@ class PlanResult:
         C-spaces built (lazily, only those the planner entered) out of those there are;
         with ``'start_orientation_only'`` when the start and goal share an orientation (True:
         the path is translations at it alone, found before any turn was tried).
+    tried : list of dict or None
+        With ``planner='auto'``: each attempt in order, ``{'planner', 'sampler', 'slices',
+        'time', 'seconds', 'solved'}`` (``slices`` None: translations at the start's
+        orientation); this result is the last attempt's.
     """
 
     path: np.ndarray
@@ -117,6 +121,7 @@ class PlanResult:
     slices: np.ndarray | None = None
     orientations: np.ndarray | None = None
     built: dict | None = None
+    tried: list | None = None
 
     @property
     def length(self) -> float:
@@ -215,7 +220,7 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
          planner_range: float | None = None, cache=None,
          sampler: str = "uniform", robot_hull: bool = False, slices=None,
-         memory=None) -> PlanResult:
+         memory=None, turns: bool = True) -> PlanResult:
     """Plan a collision-free translation with OMPL, checked exactly; with ``slices``, a
     path that also turns the robot, every motion certified.
 
@@ -227,7 +232,11 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
     start, goal : (3,) float64, optional
         Reference-point translations; required for a CSpace.
     planner : str, default 'RRTConnect'
-        A geometric planner bound in ``ompl.geometric`` (:func:`planner_names`).
+        A geometric planner bound in ``ompl.geometric`` (:func:`planner_names`), or
+        ``'auto'`` (what ``cspace plan`` does unless told otherwise): RRTConnect, then PRM
+        with the narrow-passage sampler, then (a scene, ``turns``) turns over
+        ``AUTO_SLICES`` orientation slices, each within its share of ``time``
+        (:data:`AUTO_SHARES`), until one solves; ``PlanResult.tried`` lists the attempts.
     time : float, default 1.0
         Seconds for ``solve()`` (simplification gets ``min(1, time / 2)`` more).
     seed : int, optional
@@ -269,6 +278,9 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         ``$CSPACE_MEMORY``, else half of what is available: :mod:`cspace.memory`). Over it,
         :class:`~cspace.errors.MemoryBudgetError` before anything is built; with turns, one
         budget for all the slices built.
+    turns : bool, default True
+        With ``planner='auto'`` on a scene: whether it may turn the robot when translations
+        at the start's orientation find no path (False: the start's orientation only).
 
     Returns
     -------
@@ -285,6 +297,14 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
     """
     ob, og, ou = _ompl()
     names = planner_names()
+    if planner == AUTO:
+        if sampler != "uniform" or slices is not None or motion != "exact" or optimize:
+            raise InvalidArgumentError("planner='auto' chooses the sampler and the slices "
+                                       "itself; give a planner to choose them")
+        return _plan_auto(scene_or_cspace, start, goal, time=time, seed=seed,
+                          simplify=simplify, bounds=bounds, cache=cache,
+                          robot_hull=robot_hull, memory=memory, turns=turns,
+                          planner_range=planner_range)
     if planner not in names:
         raise InvalidArgumentError(f"{planner!r} is not a valid planner, must be one of {', '.join(names)}")
     if sampler not in SAMPLERS:
@@ -366,6 +386,56 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         motion_checks=int(mv.calls) if mv is not None else 0,
         simplified=simplified,
     )
+
+
+# --------------------------------------------------------------------------------------
+# planner='auto': a schedule of attempts within one budget
+
+AUTO = "auto"
+#: ``planner='auto'``: the orientation slices of its last attempt (turns in place).
+AUTO_SLICES = 8
+#: ``planner='auto'``: each translation attempt's share of the budget, and its cap in seconds
+#: (the turning attempt gets what is left).
+AUTO_SHARES = (("RRTConnect", "uniform", 0.1, 1.0), ("PRM", "narrow", 0.3, 3.0))
+
+
+def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: bool, bounds,
+               cache, robot_hull: bool, memory, turns: bool, planner_range) -> PlanResult:
+    """``plan(..., planner='auto')``: RRTConnect (most problems: milliseconds), then PRM with
+    the narrow-passage sampler (gaps a uniform sampler rarely hits), then, on a scene whose
+    robot may turn, the turning planner over :data:`AUTO_SLICES` slices (a passage the robot
+    fits through only turned) with the rest of the budget. Stops at the first solution; every
+    answer is certified as :func:`plan`'s."""
+    if not (time > 0):
+        raise InvalidArgumentError(f"time must be positive, got {time}")
+    t0 = _time.perf_counter()
+    cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull, memory)
+    scene = scene if scene is not None else cs.scene
+    if scene is not None:  # what plan() takes from a scene, for the translation attempts
+        start = scene.start if start is None else start
+        goal = scene.goal if goal is None else goal
+        bounds = scene.bounds if bounds is None else bounds
+    tried: list = []
+    r = None
+    for planner, sampler, share, cap in AUTO_SHARES:
+        budget = min(cap, share * time, time - (_time.perf_counter() - t0))
+        if budget <= 0:
+            break
+        r = plan(cs, start, goal, planner=planner, sampler=sampler, time=budget, seed=seed,
+                 simplify=simplify, bounds=bounds, planner_range=planner_range)
+        tried.append({"planner": planner, "sampler": sampler, "slices": None, "time": budget,
+                      "seconds": r.time, "solved": r.solved})
+        if r.solved:
+            break
+    left = time - (_time.perf_counter() - t0)
+    if not (r is not None and r.solved) and turns and scene is not None and left > 0:
+        r = plan_turning(scene, default_slices(scene, AUTO_SLICES), start, goal,
+                         planner="RRTConnect", time=left, seed=seed, simplify=simplify,
+                         bounds=bounds, planner_range=planner_range, cache=cache,
+                         robot_hull=robot_hull or cs.robot_hull, memory=memory)
+        tried.append({"planner": "RRTConnect", "sampler": "uniform", "slices": AUTO_SLICES,
+                      "time": left, "seconds": r.time, "solved": r.solved})
+    return replace(r, tried=tried, time=_time.perf_counter() - t0)
 
 
 # --------------------------------------------------------------------------------------
