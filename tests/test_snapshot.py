@@ -19,6 +19,7 @@ from cspace.scene import model as model_module
 from cspace.scene.cache import COCache
 from cspace.scene.model import model_scene
 from cspace.scene.scene import Body, Scene
+from cspace.scene import snapshot
 from cspace.scene.snapshot import snapshot_key
 
 from zoo import l_shape, random_rotation
@@ -153,7 +154,7 @@ def test_a_snapshot_restores_convex_bodies_without_modelling_them(tmp_path, monk
     _same_model(model_scene(scene), restored)
 
 
-def test_the_snapshot_key_follows_every_input():
+def test_the_snapshot_key_follows_every_input(monkeypatch):
     scene = _scene(_robot("box"))
     key = snapshot_key(scene, None, False, True, True)
     assert key == snapshot_key(_scene(_robot("box")), None, False, True, True)
@@ -173,6 +174,9 @@ def test_the_snapshot_key_follows_every_input():
     wider = Scene("snap", None, scene.obstacles, scene.robot, AT,
                   (AT - 3.0, AT + 3.5), scene.start, scene.goal)
     others.append(snapshot_key(wider, None, False, True, True))
+    # other code (the same version number): a snapshot holds the outcome of its rules
+    monkeypatch.setattr(snapshot, "_code", lambda: "0.1.0 another source")
+    others.append(snapshot_key(scene, None, False, True, True))
     assert len(set(others) | {key}) == len(others) + 1
 
 

@@ -22,15 +22,17 @@ What a snapshot holds, per modelled body in :func:`cspace.scene.model.model_scen
 
 Also: the grid, the scene's margin and per scene body what welding dropped. The key covers
 everything these depend on (the bodies' names, float64 vertices and triangles, the robot,
-reference point, bounds, the options and cspace's version), so a restored model is the model
-the same build makes (``tests/test_snapshot.py`` compares them field by field). The per-pair
-entries are still written: slices and other scenes share them.
+reference point, bounds, the options, cspace's version and a digest of its source), so a
+restored model is the model the same build makes (``tests/test_snapshot.py`` compares them
+field by field). The per-pair entries are still written: slices and other scenes share them.
 """
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import json
+from pathlib import Path
 
 import numpy as np
 
@@ -54,15 +56,13 @@ def snapshot_key(scene, grid: Grid | None, robot_hull: bool, conservative: bool,
 
     The obstacles' and the robot's names, float64 vertices and triangles (bytes: a ``-0.0``
     where a ``0.0`` was only misses), the reference point, the bounds, the grid when one is
-    imposed, ``robot_hull``, ``conservative`` and ``sums``, the cspace version and the cache
-    format. Not the scene's name, start, goal or file names: they change no C-obstacle.
+    imposed, ``robot_hull``, ``conservative`` and ``sums``, the cspace version, a digest of
+    its source (:func:`_code`) and the cache format. Not the scene's name, start, goal or file names: they change no C-obstacle.
     """
-    from .._version import __version__
-
     bodies = [scene.robot, *scene.obstacles]
     imposed = None if grid is None else [grid.exponent, grid.bits, list(grid.origin)]
     h = hashlib.sha256()
-    h.update(json.dumps({"cspace": __version__, "format": FORMAT, "snapshot": SNAPSHOT,
+    h.update(json.dumps({"cspace": _code(), "format": FORMAT, "snapshot": SNAPSHOT,
                          "grid": imposed, "robot_hull": bool(robot_hull),
                          "conservative": bool(conservative), "sums": bool(sums),
                          "names": [b.name for b in bodies]}).encode())
@@ -74,6 +74,22 @@ def snapshot_key(scene, grid: Grid | None, robot_hull: bool, conservative: bool,
         h.update(f"|{a.dtype.str} {a.shape}|".encode())
         h.update(np.ascontiguousarray(a).tobytes())
     return h.hexdigest()
+
+
+@functools.lru_cache(maxsize=1)
+def _code() -> str:
+    """The version and a digest of the package's source (``.py`` and ``.pyx``, once per
+    process, a few milliseconds): a snapshot holds the outcome of all modelling and building
+    rules, so any change of the code that made it, not only of the version, makes it miss."""
+    from .._version import __version__
+
+    root = Path(__file__).resolve().parents[1]
+    h = hashlib.sha256()
+    for p in sorted(root.rglob("*.py*")):
+        if p.suffix in (".py", ".pyx") and "__pycache__" not in p.parts:
+            h.update(f"{p.relative_to(root).as_posix()}\0".encode())
+            h.update(p.read_bytes())
+    return f"{__version__} {h.hexdigest()}"
 
 
 def _restorable(b: BodyModel) -> bool:
