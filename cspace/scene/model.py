@@ -304,7 +304,8 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     memo : dict, optional
         Shared by calls on scenes with the same obstacle bodies (orientation slices,
         :func:`cspace.planning.scale.build_slices`): steps 1-3 of a body and step 5's classification
-        depend only on the body and the grid, and are made once per grid.
+        depend only on the body and the grid, and are made once per grid. Such builds leave
+        no snapshot (each would repeat the shared model) and read none.
     memory : int or str, optional
         The memory budget of the build (bytes or a size such as ``"6G"``; default
         ``$CSPACE_MEMORY``, else half of the memory available: :mod:`cspace.memory`). The
@@ -326,9 +327,11 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     t0 = time.perf_counter()
     store = COCache.of(cache)
     # A build of the same input before left a snapshot: the model and the convex C-obstacles
-    # are restored from it (cspace.scene.snapshot), not made again per body.
+    # are restored from it (cspace.scene.snapshot), not made again per body. Not for scenes
+    # sharing their obstacles (memo: orientation slices), whose obstacles are modelled once
+    # for all of them already: a snapshot per slice would hold the same model once per slice.
     skey = (snapshot_key(scene, grid, robot_hull, conservative, sums)
-            if build and store is not None else None)
+            if build and store is not None and memo is None else None)
     snap = Snapshot.read(store.load(skey, count=False)) if skey is not None else None
     far: dict = {}
     modelled = scene

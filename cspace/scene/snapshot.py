@@ -25,6 +25,10 @@ everything these depend on (the bodies' names, float64 vertices and triangles, t
 reference point, bounds, the options, cspace's version and a digest of its source), so a
 restored model is the model the same build makes (``tests/test_snapshot.py`` compares them
 field by field). The per-pair entries are still written: slices and other scenes share them.
+Builds of orientation slices (``model_scene(memo=...)``) neither write nor read snapshots:
+their obstacles are modelled once for all slices already, and a snapshot per slice would
+store that model once per slice (at 10^4 bodies x 36 slices it took the cache from 0.78 to
+1.44 GB, and the one-process build from 178 s to 238 s in a run on a busier machine).
 """
 
 from __future__ import annotations
