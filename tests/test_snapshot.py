@@ -199,3 +199,15 @@ def test_a_snapshot_that_does_not_read_is_not_used(tmp_path):
         p.write_bytes(bytes(data))
     again = model_scene(scene, cache=COCache(tmp_path))
     _same_model(first, again)
+
+
+def test_builds_sharing_their_obstacles_leave_no_snapshot(tmp_path):
+    # Orientation slices (memo): the obstacles are modelled once for all slices; a snapshot
+    # per slice would store that model once per slice.
+    scene = _scene(_robot("box"))
+    cache = COCache(tmp_path)
+    m = model_scene(scene, cache=cache, memo={})
+    assert snapshot_key(scene, None, False, True, True) not in cache.keys()
+    assert len(cache.keys()) == sum(len(b.pairs) for b in m.bodies)  # the C-obstacles' own
+    again = model_scene(scene, cache=COCache(tmp_path), memo={})
+    _same_model(model_scene(scene), again)
