@@ -260,6 +260,33 @@ def test_plan_on_a_scene_builds_through_the_cache(tmp_path):
     assert r1.solved and r2.solved
 
 
+def test_narrow_passage_samples_of_triangle_pairs_build_no_hull_of_every_pair():
+    # A non-convex robot: its C-obstacles are triangle pairs, with no boundary mesh; the
+    # samples come from the hulls of a few random pieces (every hull would cost 0.6 ms a
+    # pair), and stay exactly free.
+    import trimesh
+
+    from cspace.planning.ompl_plugin import narrow_passage_samples
+    from cspace.scene.scene import Body, Scene
+    from zoo import l_shape
+
+    V, F = l_shape()
+    robot = Body("L", np.asarray(V, float) * 0.1, F, "test")
+    boxes = []
+    for i, x in enumerate((-0.66, 0.66)):  # a gap 0.02 wider than the robot
+        m = trimesh.creation.box(extents=(1.0, 2.0, 2.0))
+        boxes.append(Body(f"wall{i}", m.vertices + [x, 0, 0], m.faces, "box"))
+    lo, hi = np.array([-1.5, -1.5, -1.5]), np.array([1.5, 1.5, 1.5])
+    scene = Scene("gap", None, tuple(boxes), robot, (0.0, 0.0, 0.0), (lo, hi), lo + 0.01,
+                  hi - 0.01)
+    cs = cspace.CSpace.from_scene(scene)
+    pairs = [o for o in cs.obstacles if o.kind == "pairs"]
+    assert pairs and all(o.n_pairs > 256 for o in pairs)
+    P = narrow_passage_samples(cs, scene.bounds, seed=0)
+    assert all(o._mesh is None for o in pairs)  # no hull of every pair was made
+    assert len(P) and not cs.contains(P).any()
+
+
 def test_narrow_passage_samples_are_free_and_in_a_gap(scenes):
     from cspace.planning.ompl_plugin import narrow_passage_samples
 
