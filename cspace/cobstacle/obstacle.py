@@ -268,7 +268,7 @@ class CSpaceObstacle:
         self.kind = "mesh"
         self.sum = sum
         self._impl = impl
-        self.facets = None  # polygon facets when known without the sum (a cached sum's)
+        self._facets = None  # polygon facets when known without the sum (a cached sum's)
         return self
 
     @classmethod
@@ -487,8 +487,8 @@ class CSpaceObstacle:
             return self.polytope.n_facets
         if self.sum is not None and len(self.sum.face_facet):
             return int(self.sum.face_facet.max()) + 1
-        if getattr(self, "facets", None) is not None:
-            return self.facets
+        if getattr(self, "_facets", None) is not None:
+            return self._facets
         return len(self._impl.faces)
 
     @property

@@ -82,8 +82,8 @@ def _from_arrays_of(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
     co = CSpaceObstacle.from_mesh(a["vertices"], a["faces"], obstacle=body._solid,
                                   robot=robot, reference_point=c, grid=grid, name=body.name,
                                   margin=m)
-    if "facets" in a:  # an older entry's report counts triangles
-        co.facets = int(a["facets"][0])
+    if "facets" in a:  # (an older entry has none: its report counts triangles)
+        co._facets = int(a["facets"][0])
     return co
 
 
