@@ -102,7 +102,9 @@ class PlanResult:
     tried : list of dict or None
         With ``planner='auto'``: each attempt in order, ``{'planner', 'sampler', 'slices',
         'time', 'seconds', 'solved'}`` (``slices`` None: translations at the start's
-        orientation); this result is the last attempt's.
+        orientation); this result is the last attempt's, its ``time`` all of theirs (the
+        narrow sampler's pool and the turning attempt's builds included, the start's
+        C-space not).
     """
 
     path: np.ndarray
@@ -408,8 +410,8 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     answer is certified as :func:`plan`'s."""
     if not (time > 0):
         raise InvalidArgumentError(f"time must be positive, got {time}")
-    t0 = _time.perf_counter()
     cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull, memory)
+    t0 = _time.perf_counter()  # the budget is for planning, as plan()'s: the build is not in it
     scene = scene if scene is not None else cs.scene
     if scene is not None:  # what plan() takes from a scene, for the translation attempts
         start = scene.start if start is None else start
