@@ -48,6 +48,14 @@ def test_auto_turns_the_robot_when_translations_find_no_path():
     assert [t["slices"] for t in kept.tried] == [None, None]
 
 
+def test_auto_answers_within_a_tiny_budget():
+    scene = cspace.load_scene(SCENES / "window.toml")
+    r = plan(scene, planner="auto", time=1e-6, seed=1)
+    assert len(r.tried) >= 1 and r.tried[0]["planner"] == "RRTConnect"
+    assert not r.solved or verify_path(cspace.CSpace.from_scene(scene), r.path,
+                                       scene.bounds)["valid"]
+
+
 def test_auto_chooses_what_it_chooses():
     scene = cspace.load_scene(SCENES / "comb.toml")
     with pytest.raises(InvalidArgumentError, match="chooses the sampler and the slices"):

@@ -420,7 +420,9 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     tried: list = []
     r = None
     for planner, sampler, share, cap in AUTO_SHARES:
-        budget = min(cap, share * time, time - (_time.perf_counter() - t0))
+        budget = min(cap, share * time)
+        if tried:  # the first attempt always runs: there is always an answer
+            budget = min(budget, time - (_time.perf_counter() - t0))
         if budget <= 0:
             break
         r = plan(cs, start, goal, planner=planner, sampler=sampler, time=budget, seed=seed,
