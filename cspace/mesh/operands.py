@@ -168,7 +168,9 @@ def _flat_hull(P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     corners = P[hull] if len(hull) >= 2 else P[:1]
     if len(corners) == 2:  # a segment: one degenerate triangle for FCL and drawing
         corners = np.vstack([corners, corners[1:]])
-    faces = np.array([[0, k, k + 1] for k in range(1, len(corners) - 1)], dtype=np.int64)
+    # (0, 3) for a point: joined with other operands' faces, the shape must still stack
+    faces = np.array([[0, k, k + 1] for k in range(1, len(corners) - 1)],
+                     dtype=np.int64).reshape(-1, 3)
     return corners, faces
 
 
