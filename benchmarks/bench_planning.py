@@ -252,7 +252,7 @@ def turning_section() -> list[str]:
     from scipy.spatial.transform import Rotation
 
     from cspace.check.cross_check import pose_path_collisions
-    from cspace.planning.plan import plan_sampled
+    from cspace.planning.sampled import plan_sampled
 
     load0 = os.getloadavg()
     lines = [f"## Planning with turns ({len(TURN_SEEDS)} seeds, RRTConnect)", "",

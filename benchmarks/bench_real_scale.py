@@ -242,7 +242,8 @@ def planning(scene) -> list[dict]:
 
     from cspace.check.cross_check import pose_path_collisions
     from cspace.planning.orientations import Orientations
-    from cspace.planning.plan import plan, plan_sampled
+    from cspace.planning.plan import plan
+    from cspace.planning.sampled import plan_sampled
 
     rel = np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T
     slices = Orientations.uniform(64, goal_rotation=rel)

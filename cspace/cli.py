@@ -333,9 +333,20 @@ def _plan(args: argparse.Namespace) -> int:
              robot_hull=args.robot_hull, memory=args.memory, turns=not args.no_turns)
     for t in r.tried or ():
         how = (f"{t['planner']} with {t['slices']} orientation slices (turns in place)"
-               if t["slices"] else f"{t['planner']} ({t['sampler']} sampler)")
-        print(f"  auto: {how}: {'solved' if t['solved'] else 'no path'} in {t['seconds']:.2f} s "
-              f"of {t['time']:.2f} s")
+               if t["slices"] else "decision by certified cells" if t["planner"] == "decide"
+               else f"{t['planner']} ({t['sampler']} sampler)")
+        said = t.get("answer") or ("solved" if t["solved"] else "no path")
+        print(f"  auto: {how}: {said} in {t['seconds']:.2f} s of {t['time']:.2f} s")
+    d = r.decision
+    if d is not None and d.answer == "no path":
+        print(f"  no path at the start's orientation, proved: {d.reason} (a wall of "
+              f"{int(d.wall.sum())} cells inside the C-obstacles; for clearances above "
+              f"{d.clearance:.3g})")
+    if d is not None and d.answer == "no path" and not r.solved and r.slices is None:
+        if result_out:
+            _finish({**_result_head(args, scene, r), "path": None}, result_out, None, scene,
+                    None)
+        return EXIT_NO_PATH
     if r.slices is not None:  # auto turned the robot
         return _report_turning(args, scene, default_slices(scene, AUTO_SLICES), r, path_out,
                                result_out, html_out)
@@ -384,7 +395,13 @@ def _result_head(args: argparse.Namespace, scene, r) -> dict:
     return {"scene": scene.name, "scene_file": str(args.scene), "planner": args.planner,
             "seed": args.seed, "time_budget": args.time, "solved": r.solved, "exact": r.exact,
             "valid_exact_recheck": r.valid, "status": r.status, "seconds": r.time,
-            "length": r.length, "tried": r.tried}
+            "length": r.length, "tried": r.tried, "decision": _decision(r.decision)}
+
+
+def _decision(d) -> dict | None:
+    """A decision's fields for ``plan --result``."""
+    return None if d is None else {"answer": d.answer, "reason": d.reason, "depth": d.depth,
+                                   "clearance": d.clearance, "seconds": d.time}
 
 
 def _finish(result, result_out, html_out, scene, path) -> int:
@@ -637,6 +654,7 @@ def _size(text: str) -> int:
 
 # Exit status of a build that would not fit in its memory budget (2 is bad input).
 EXIT_MEMORY = 4
+EXIT_NO_PATH = 3  # plan: proved that no path exists (at the orientations allowed)
 
 
 class _Formatter(argparse.RawDescriptionHelpFormatter):
@@ -699,13 +717,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     _executor_options(p)
     p.set_defaults(func=_build)
     p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles", **_help(
-        "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html"))
+        "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html\n"
+        "exit status: 0 a proved path; 1 none found in the time given; 2 bad input; "
+        f"{EXIT_NO_PATH} proved that none exists (--planner auto, at the start's orientation: "
+        f"with --no-turns, or when the robot cannot turn); {EXIT_MEMORY} over the memory "
+        "budget"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     _model_options(p)
     p.add_argument("--planner", default="auto",
-                   help="any bound OMPL geometric planner, or 'auto' (default): RRTConnect, "
-                        "then PRM with the narrow-passage sampler, then turns over "
-                        "orientation slices (not with --no-turns), within --time")
+                   help="any bound OMPL geometric planner, or 'auto' (default): a decision "
+                        "by certified cells (a path through free cells, or a proof that none "
+                        "exists), then RRTConnect, then PRM with the narrow-passage sampler, "
+                        "then turns over orientation slices (not with --no-turns), within --time")
     p.add_argument("--time", type=_positive, default=5.0,
                    help="planning time budget in seconds")
     p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (none: a new one each run)")

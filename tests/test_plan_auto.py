@@ -41,11 +41,14 @@ def test_auto_turns_the_robot_when_translations_find_no_path():
     scene = cspace.load_scene(SCENES / "piano.toml")
     r = plan(scene, planner="auto", time=8.0, seed=1)
     assert r.solved and r.slices is not None, r.tried
+    assert [t["planner"] for t in r.tried] == ["RRTConnect", "decide", "RRTConnect"]
     assert [t["slices"] for t in r.tried] == [None, None, AUTO_SLICES]
+    assert r.decision.answer == "no path"  # at the start's orientation: so it turned at once
     assert (np.diff(r.slices) != 0).any()  # it did turn
     kept = plan(scene, planner="auto", time=2.0, seed=1, turns=False)
-    assert not kept.solved and kept.slices is None
-    assert [t["slices"] for t in kept.tried] == [None, None]
+    assert not kept.solved and kept.slices is None and len(kept.path) == 0
+    assert [t["planner"] for t in kept.tried] == ["RRTConnect", "decide"]
+    assert kept.decision.answer == "no path" and kept.status == "No path (proved)"
 
 
 def test_auto_answers_within_a_tiny_budget():
@@ -83,7 +86,15 @@ def test_cspace_plan_without_flags_solves_every_shipped_scene(tmp_path):
         assert "auto:" in p.stdout
 
 
-def test_cspace_plan_no_turns_keeps_auto_at_the_start_orientation():
-    p = _cli(SCENES / "piano.toml", "--time", 2, "--seed", 1, "--no-cache", "--no-turns")
-    assert p.returncode == 1, p.stdout
-    assert "orientation slices" not in p.stdout and "auto: PRM" in p.stdout
+def test_cspace_plan_no_turns_keeps_auto_at_the_start_orientation(tmp_path):
+    """The piano has no translation path at its start orientation: with --no-turns that is
+    proved (exit 3), and no sampler is run after the proof."""
+    out = tmp_path / "r.json"
+    p = _cli(SCENES / "piano.toml", "--time", 2, "--seed", 1, "--no-cache", "--no-turns",
+             "--result", out)
+    assert p.returncode == 3, p.stdout
+    assert "orientation slices" not in p.stdout and "auto: PRM" not in p.stdout
+    assert "no path at the start's orientation, proved" in p.stdout
+    summary = json.loads(out.read_text())
+    assert summary["decision"]["answer"] == "no path" and summary["path"] is None
+    assert not summary["solved"]

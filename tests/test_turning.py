@@ -21,7 +21,8 @@ from scipy.spatial.transform import Rotation
 
 from cspace import InvalidArgumentError, load_scene
 from cspace.check.cross_check import pose_path_collisions
-from cspace.planning.plan import default_slices, plan, plan_sampled
+from cspace.planning.plan import default_slices, plan
+from cspace.planning.sampled import plan_sampled
 from cspace.scene.scene import Body
 from cspace.geometry.transform import axis_angle
 from cspace.planning.orientations import Slices, swept_points

@@ -1,14 +1,20 @@
 """Planning on the exact C-space: OMPL, a robot that turns, scale-out executors.
 
 - :mod:`.ompl_plugin` — OMPL state-validity checker, motion validator, spaces and samplers;
-- :mod:`.plan` — :func:`~cspace.planning.plan.plan`, :func:`~cspace.planning.plan.plan_turning`,
-  :func:`~cspace.planning.plan.plan_sampled` → :class:`~cspace.planning.plan.PlanResult`;
+- :mod:`.decide` — :func:`~cspace.planning.decide.decide`: a path through certified free cells,
+  or a proof that none exists (cells inside the C-obstacles separate start and goal);
+- :mod:`.plan` — :func:`~cspace.planning.plan.plan`, :func:`~cspace.planning.plan.plan_turning`
+  → :class:`~cspace.planning.plan.PlanResult`; :mod:`.sampled` —
+  :func:`~cspace.planning.sampled.plan_sampled` (OMPL.app's way, for comparison);
 - :mod:`.orientations` — orientation slices and sets; :mod:`.turning` — certified turns and
   :class:`~cspace.planning.turning.TurningCSpace`;
 - :mod:`.scale` — executors (process pool, Dask) and building many slices at once.
 """
 
-from .plan import PlanResult, plan, plan_sampled, plan_turning
+from .decide import Decision, decide
+from .plan import PlanResult, plan, plan_turning
+from .sampled import plan_sampled
 from .turning import TurningCSpace
 
-__all__ = ["PlanResult", "plan", "plan_turning", "plan_sampled", "TurningCSpace"]
+__all__ = ["Decision", "decide", "PlanResult", "plan", "plan_turning", "plan_sampled",
+           "TurningCSpace"]

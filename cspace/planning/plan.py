@@ -1,9 +1,9 @@
 """Planning: OMPL planners over the exact C-space, with and without turns.
 
-:func:`plan` (a fixed orientation), :func:`plan_turning` (orientation slices joined by
-certified turns, :mod:`cspace.planning.turning`) and :func:`plan_sampled` (SE(2)/SE(3) sampled,
-checked by FCL) return a :class:`PlanResult`: the path, whether it was solved, certified, and
-the timings. The OMPL glue (spaces, checkers, samplers) is :mod:`cspace.planning.ompl_plugin`.
+:func:`plan` (a fixed orientation) and :func:`plan_turning` (orientation slices joined by
+certified turns, :mod:`cspace.planning.turning`) return a :class:`PlanResult`: the path, whether
+it was solved, certified, and the timings (as does :func:`cspace.planning.sampled.plan_sampled`,
+OMPL.app's way, for comparison). The OMPL glue (spaces, checkers, samplers) is :mod:`cspace.planning.ompl_plugin`.
 """
 
 from __future__ import annotations
@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import ArgumentTypeError, InvalidArgumentError
 from ..scene.model import CSpace
+from .decide import decide
 from .ompl_plugin import (
     _bounds,
     _box_bounds,
@@ -33,8 +34,6 @@ __all__ = [
     "MOTIONS",
     "plan_turning",
     "default_slices",
-    "plan_sampled",
-    "SAMPLED_SPACES",
     "PlanResult",
     "plan",
     "SAMPLERS",
@@ -102,9 +101,14 @@ class PlanResult:
     tried : list of dict or None
         With ``planner='auto'``: each attempt in order, ``{'planner', 'sampler', 'slices',
         'time', 'seconds', 'solved'}`` (``slices`` None: translations at the start's
-        orientation); this result is the last attempt's, its ``time`` all of theirs (the
+        orientation; planner ``'decide'``: :func:`cspace.planning.decide.decide`, with its
+        ``answer``); this result is the last attempt's, its ``time`` all of theirs (the
         narrow sampler's pool and the turning attempt's builds included, the start's
         C-space not).
+    decision : Decision or None
+        With ``planner='auto'``: the decision at the start's orientation. ``'no path'`` and
+        not solved: no translation path exists there (with a clearance above
+        ``decision.clearance``); without turns that is the answer (``cspace plan`` exit 3).
     """
 
     path: np.ndarray
@@ -124,6 +128,7 @@ class PlanResult:
     orientations: np.ndarray | None = None
     built: dict | None = None
     tried: list | None = None
+    decision: object = None
 
     @property
     def length(self) -> float:
@@ -396,18 +401,22 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
 AUTO = "auto"
 #: ``planner='auto'``: the orientation slices of its last attempt (turns in place).
 AUTO_SLICES = 8
-#: ``planner='auto'``: each translation attempt's share of the budget, and its cap in seconds
-#: (the turning attempt gets what is left).
-AUTO_SHARES = (("RRTConnect", "uniform", 0.1, 1.0), ("PRM", "narrow", 0.3, 3.0))
+#: ``planner='auto'``: each attempt at the start's orientation, its share of the budget and
+#: its cap in seconds (turns get what is left). ``'decide'``: :func:`cspace.planning.decide.decide` (a path
+#: through free cells, a proof that none exists, or unknown: then the planners go on).
+AUTO_SHARES = (("RRTConnect", "uniform", 0.05, 0.5), ("decide", None, 0.2, 2.0),
+               ("PRM", "narrow", 0.3, 3.0))
 
 
 def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: bool, bounds,
                cache, robot_hull: bool, memory, turns: bool, planner_range) -> PlanResult:
-    """``plan(..., planner='auto')``: RRTConnect (most problems: milliseconds), then PRM with
-    the narrow-passage sampler (gaps a uniform sampler rarely hits), then, on a scene whose
-    robot may turn, the turning planner over :data:`AUTO_SLICES` slices (a passage the robot
-    fits through only turned) with the rest of the budget. Stops at the first solution; every
-    answer is certified as :func:`plan`'s."""
+    """``plan(..., planner='auto')``: RRTConnect (most problems: milliseconds), then the
+    decision by certified cells (a path through free cells; or a proof that there is none at
+    this orientation, which skips the samplers), then PRM with the narrow-passage sampler
+    (gaps a uniform sampler rarely hits), then, on a scene whose robot may turn, the turning
+    planner over :data:`AUTO_SLICES` slices (a passage the robot fits through only turned)
+    with the rest of the budget. Stops at the first solution; every answer is certified as
+    :func:`plan`'s."""
     if not (time > 0):
         raise InvalidArgumentError(f"time must be positive, got {time}")
     cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull, memory)
@@ -419,12 +428,24 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         bounds = scene.bounds if bounds is None else bounds
     tried: list = []
     r = None
-    for planner, sampler, share, cap in AUTO_SHARES:
+    q0, q1 = (_endpoint(cs, q, _bounds(bounds if bounds is not None else cs.bounds), w)
+              for q, w in ((start, "start"), (goal, "goal")))
+    d = None
+    for n, (planner, sampler, share, cap) in enumerate(AUTO_SHARES):
         budget = min(cap, share * time)
-        if tried:  # the first attempt always runs: there is always an answer
+        if n:  # the first planner always runs: there is always a path or a status
             budget = min(budget, time - (_time.perf_counter() - t0))
         if budget <= 0:
             break
+        if planner == "decide":
+            d = decide(cs, q0, q1, bounds=bounds, time=budget)
+            tried.append({"planner": "decide", "sampler": None, "slices": None, "time": budget,
+                          "answer": d.answer, "seconds": d.time, "solved": d.answer == "path"})
+            if d.answer == "path":
+                r = _decided(cs, d, bounds)
+            if d.answer != "unknown":
+                break
+            continue
         r = plan(cs, start, goal, planner=planner, sampler=sampler, time=budget, seed=seed,
                  simplify=simplify, bounds=bounds, planner_range=planner_range)
         tried.append({"planner": planner, "sampler": sampler, "slices": None, "time": budget,
@@ -439,7 +460,21 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
                          robot_hull=robot_hull or cs.robot_hull, memory=memory)
         tried.append({"planner": "RRTConnect", "sampler": "uniform", "slices": AUTO_SLICES,
                       "time": left, "seconds": r.time, "solved": r.solved})
-    return replace(r, tried=tried, time=_time.perf_counter() - t0)
+    if d is not None and d.answer == "no path" and not (r is not None and r.solved):
+        r = r if r is not None and r.slices is not None else _decided(cs, d, bounds)
+    return replace(r, tried=tried, time=_time.perf_counter() - t0, decision=d)
+
+
+def _decided(cs, d, bounds) -> PlanResult:
+    """A :class:`PlanResult` of a decision alone (its path, re-proved, or none)."""
+    P = d.path if d.path is not None else np.zeros((0, 3))
+    b = _bounds(bounds if bounds is not None else cs.bounds)
+    valid = bool(len(P)) and verify_path(cs, P, b)["valid"]
+    status = {"path": "Exact solution", "no path": "No path (proved)"}.get(d.answer, "Unknown")
+    return PlanResult(path=P, solved=valid, exact=d.answer == "path", valid=valid,
+                      planner="decide", motion="exact", time=d.time, solve_time=d.time,
+                      n_states=len(P), status=status, state_checks=0, motion_checks=0,
+                      simplified=True)
 
 
 # --------------------------------------------------------------------------------------
@@ -692,109 +727,3 @@ def _turning_classes() -> dict[str, type]:
     _TURNING["checker"] = TurningValidityChecker
     _TURNING["motion"] = TurningMotionValidator
     return _TURNING
-
-
-# --------------------------------------------------------------------------------------
-# OMPL.app's way, for comparison: sampled poses, discrete motion checks
-
-SAMPLED_SPACES = ("SE2", "SE3")
-
-
-def plan_sampled(scene, *, space: str = "SE3", planner: str = "RRTConnect", time: float = 1.0,
-                 seed: int | None = None, resolution: float = 0.01,
-                 simplify: bool = True) -> PlanResult:
-    """Plan as OMPL.app does, for comparison: poses checked by FCL, motions by sampling.
-
-    The state is the robot's pose: ``'SE3'`` (position and a rotation relative to the start
-    orientation) or ``'SE2'`` (x, y and a turn about z; z stays the start's). A state is
-    valid when FCL finds the robot mesh at that pose free of every obstacle body (solid
-    semantics, :class:`cspace.check.cross_check.PoseCollider`); a motion is valid when OMPL's
-    default discrete validator finds the states every ``resolution`` times the space's
-    maximum extent valid. Nothing is proved between those states: a returned path can clip
-    a thin obstacle or a corner (:func:`cspace.check.cross_check.pose_path_collisions` finds out).
-
-    Returns a :class:`PlanResult` whose ``valid`` is only OMPL's discrete verdict, with
-    ``orientations`` (world frame quaternions ``(x, y, z, w)``).
-    """
-    from scipy.spatial.transform import Rotation
-
-    from ..check.cross_check import PoseCollider
-
-    ob, og, ou = _ompl()
-    if space not in SAMPLED_SPACES:
-        raise InvalidArgumentError(f"{space!r} is not a valid space, must be one of {', '.join(SAMPLED_SPACES)}")
-    if planner not in planner_names():
-        raise InvalidArgumentError(f"{planner!r} is not a valid planner")
-    b = _bounds(scene.bounds)
-    start_rot = np.asarray(scene.start_rotation, dtype=np.float64)
-    rel_goal = Rotation.from_matrix(np.asarray(scene.goal_rotation) @ start_rot.T)
-    collider = PoseCollider(scene)
-    z0 = float(scene.start[2])
-    if space == "SE3":
-        sp = ob.SE3StateSpace()
-        rb = _box_bounds(ob, b[0], b[1])
-    else:
-        if scene.start[2] != scene.goal[2]:
-            raise InvalidArgumentError("SE2 keeps z: the start and goal must share it")
-        rv = rel_goal.as_rotvec()
-        if abs(rv[0]) > 1e-12 or abs(rv[1]) > 1e-12:
-            raise InvalidArgumentError("SE2 turns about z: the goal rotation is not a turn about z")
-        sp = ob.SE2StateSpace()
-        rb = _box_bounds(ob, b[0, :2], b[1, :2])
-    sp.setBounds(rb)
-
-    def pose(state) -> tuple[np.ndarray, np.ndarray]:
-        if space == "SE3":
-            r = state.rotation()
-            R = Rotation.from_quat([r.x, r.y, r.z, r.w]).as_matrix()
-            return np.array([state.getX(), state.getY(), state.getZ()]), R
-        R = Rotation.from_euler("z", state.getYaw()).as_matrix()
-        return np.array([state.getX(), state.getY(), z0]), R
-
-    lo, hi = b[0], b[1]
-
-    def valid(state) -> bool:
-        q, R = pose(state)
-        if not ((lo <= q) & (q <= hi)).all():
-            return False
-        return not bool(collider.collides(R[None], q[None])[0])
-
-    def setter(q, rot):
-        def fill(state):
-            if space == "SE3":
-                state.setXYZ(*map(float, q))
-                angle = rot.magnitude()
-                if angle > 0:
-                    state.rotation().setAxisAngle(*map(float, rot.as_rotvec() / angle), float(angle))
-                else:
-                    state.rotation().setIdentity()
-            else:
-                state.setXY(float(q[0]), float(q[1]))
-                state.setYaw(float(rot.as_rotvec()[2]))
-        return fill
-
-    def read(state) -> np.ndarray:
-        q, R = pose(state)
-        return np.concatenate([q, R.ravel()])
-
-    _seed(ou, seed)
-    si = ob.SpaceInformation(sp)
-    si.setStateValidityChecker(valid)
-    si.setStateValidityCheckingResolution(float(resolution))
-    si.setup()
-    t0 = _time.perf_counter()
-    status, exact, raw, simp, solve_time = _solve(
-        si, setter(scene.start, Rotation.identity()), setter(scene.goal, rel_goal),
-        planner=planner, time=time, optimize=False, planner_range=None, simplify=simplify,
-        read=read, dim=12)
-    rows = (simp if simp is not None else raw) if exact else np.zeros((0, 12))
-    simplified = simp is not None and exact
-    poses = [(row[:3], row[3:].reshape(3, 3)) for row in rows]
-    P = np.array([q for q, _ in poses], dtype=np.float64).reshape(-1, 3)
-    R = np.array([r @ start_rot for _, r in poses]).reshape(-1, 3, 3)
-    return PlanResult(
-        path=P, solved=bool(exact), exact=bool(exact), valid=bool(exact), planner=planner,
-        motion=f"discrete {space}", time=_time.perf_counter() - t0, solve_time=solve_time,
-        n_states=len(P), status=status.asString(), state_checks=0, motion_checks=0,
-        simplified=simplified,
-        orientations=Rotation.from_matrix(R).as_quat() if len(R) else np.zeros((0, 4)))

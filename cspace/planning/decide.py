@@ -1,0 +1,479 @@
+"""Deciding a translation problem before sampling it: certified cells of the free space.
+
+At one orientation the robot goes from start to goal exactly when both lie in one connected
+component of ``F = bounds - U CO``. :func:`decide` labels the cells of an octree over the
+planning bounds:
+
+``blocked``
+    The closed cell lies inside one convex piece of one C-obstacle: its eight corners are in
+    that piece, by the piece's exact point test (a convex piece holds the hull of its
+    points). Exact; a cell inside the union of several pieces but no single one is not
+    blocked (it stays passable: never a false proof).
+``free``
+    Every C-obstacle whose box meets the cell is kept off it: a convex piece by one of its
+    facet planes (the cell's support value beyond the plane by more than ``2**-30`` of the
+    magnitudes), any other kind by a clearance of the cell's centre above its half-diagonal
+    plus ``2**-20`` of the scene's size (:meth:`CSpaceObstacle.signed_distance`, accurate to
+    a few ulps). Float, with those margins: this label only stops refinement and routes the
+    path below; it never enters a proof, and every segment of a path through free cells is
+    re-proved with :meth:`CSpace.segment_free`.
+``mixed``
+    Neither: split in eight, down to ``depth`` (the finest cells are ``2**-depth`` of the
+    bounds per axis); a mixed cell at that depth stays passable.
+
+**"no path"**: the union ``P`` of the closed cells not blocked holds every free translation in
+the bounds, so a path would lie in one connected component of ``P``. Closed cells touching at a
+face, an edge or a corner are connected (26-connectivity on the finest grid; cell corners are
+float64 functions of integer indices, the same for neighbours, strictly increasing, so touching
+is decided on the integers). Start and goal in different components of ``P``: no path. The
+C-obstacles are grown outward within their ``error_bound`` (principle 2), so the statement is
+"no path with a clearance above ``error_bound``"; it is never made where such a path exists.
+
+**"path"**: start and goal joined through free cells (a polyline through the cells' centres and
+the middles of their contacts, shortcut), every segment proved by ``segment_free``.
+
+**"unknown"**: neither within the depth and the time given (walls whose C-obstacles only
+touch, or thinner than a finest cell; a gap narrower than a finest cell). The planners then
+run as without the decision. C-obstacles of kind ``'mesh'`` (non-convex sums) block no cell
+yet: their free space is over-approximated, which can only turn a proof into "unknown".
+
+This is a certified cell decomposition (as in Zhang, Kim and Manocha, "Path non-existence
+computation using C-obstacle query", 2008), with the cells' labels decided exactly; the
+exact union of the C-obstacles (issue #31) would remove the depth limit.
+"""
+
+from __future__ import annotations
+
+import time as _time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import InvalidArgumentError
+
+#: Cell labels.
+BLOCKED, MIXED, FREE = 0, 1, 2
+#: Answers of :func:`decide`.
+ANSWERS = ("no path", "path", "unknown")
+#: The first level cut into cells (8 per axis), and the default finest level.
+FIRST_LEVEL, DEPTH = 3, 7
+# The free label's margin, relative to the bounds' size (signed_distance's float error is a
+# few ulps of the coordinates; 2**-20 is far above it and far below any cell).
+_FREE_MARGIN = 2.0 ** -20
+_CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.int64)
+_NEIGHBOURS = [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
+               if (i, j, k) > (0, 0, 0)]
+
+
+class _OutOfTime(Exception):
+    pass
+
+
+@dataclass(repr=False)
+class Decision:
+    """What :func:`decide` found for one start and goal at one orientation.
+
+    Attributes
+    ----------
+    answer : {'no path', 'path', 'unknown'}
+    path : (n, 3) float64 or None
+        With ``'path'``: start to goal, every segment proved free (``segment_free``).
+    clearance : float
+        With ``'no path'``: the statement holds for paths whose clearance exceeds this
+        (the largest ``error_bound`` of the C-obstacles), scene units.
+    depth : int
+        The finest level reached (cells ``2**-depth`` of the bounds per axis).
+    bounds : (2, 3) float64
+    cells_lo, cells_hi : (k, 3) float64
+        The leaf cells (closed boxes, scene frame), and ``labels`` (k,) int8 of theirs.
+    start_component : (k,) bool
+        The passable leaves connected to the start (with ``'no path'``: the region the
+        robot cannot leave).
+    wall : (k,) bool
+        The blocked leaves touching the start's component: with ``'no path'``, the wall
+        that proves it (each inside one convex piece of a C-obstacle).
+    time : float
+        Wall seconds.
+    reason : str
+        Why the answer is what it is, one line.
+    """
+
+    answer: str
+    path: np.ndarray | None
+    clearance: float
+    depth: int
+    bounds: np.ndarray
+    cells_lo: np.ndarray
+    cells_hi: np.ndarray
+    labels: np.ndarray
+    start_component: np.ndarray
+    wall: np.ndarray
+    time: float
+    reason: str
+    counts: dict = field(default_factory=dict)
+
+    def __repr__(self) -> str:
+        n = {k: int(np.count_nonzero(self.labels == v))
+             for k, v in (("blocked", BLOCKED), ("mixed", MIXED), ("free", FREE))}
+        return (f"Decision(answer={self.answer!r}, depth={self.depth}, cells={n}, "
+                f"time={self.time:.3f})")
+
+    def to_trimesh(self, which: str = "start"):
+        """The cells as one mesh of boxes: ``'start'`` the start's component (with
+        ``'no path'``: where the robot is confined), ``'blocked'`` the blocked cells around
+        it (the wall that proves it)."""
+        import trimesh
+
+        if which == "start":
+            keep = self.start_component
+        elif which == "blocked":
+            keep = self.wall
+        else:
+            raise InvalidArgumentError(f"which must be 'start' or 'blocked', got {which!r}")
+        boxes = []
+        for lo, hi in zip(self.cells_lo[keep], self.cells_hi[keep]):
+            b = trimesh.creation.box(np.maximum(hi - lo, 0.0))
+            b.apply_translation((lo + hi) / 2)
+            boxes.append(b)
+        return trimesh.util.concatenate(boxes) if boxes else trimesh.Trimesh()
+
+
+# --------------------------------------------------------------------------------------------
+# the blocked label: inside one convex piece of one C-obstacle
+
+
+def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(m,) bool: the closed box ``[lo[r], hi[r]]`` lies in one convex piece of ``co``
+    (all eight corners in it, exactly). Kinds without convex pieces (``'mesh'``) answer
+    False, which is always safe."""
+    m = len(lo)
+    C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])  # (m, 8, 3)
+    kind = co.kind
+    if kind == "convex":
+        return co.contains(C.reshape(-1, 3)).reshape(m, 8).all(axis=1)
+    if kind == "union":
+        out = np.zeros(m, dtype=bool)
+        for part in co.parts:
+            rows = np.nonzero(~out)[0]
+            if len(rows):
+                out[rows] = _inside_one_piece(part, lo[rows], hi[rows])
+        return out
+    if kind == "surface":
+        impl, out = co._impl, np.zeros(m, dtype=bool)
+        for j, piece in enumerate(impl.impl):
+            rows = np.nonzero(~out & (impl.lo[j] <= lo).all(axis=1)
+                              & (hi <= impl.hi[j]).all(axis=1))[0]
+            if len(rows):
+                out[rows] = piece.contains(C[rows].reshape(-1, 3)).reshape(-1, 8).all(axis=1)
+        return out
+    if kind == "pairs":
+        impl, out = co._impl, np.zeros(m, dtype=bool)
+        cand = impl._set.candidates(impl._grid_units(lo), impl._grid_units(hi))
+        for r, i, j in cand.tolist():
+            if not out[r] and all(impl._in_piece(i, j, x) for x in C[r].tolist()):
+                out[r] = True
+        return out
+    return np.zeros(m, dtype=bool)
+
+
+def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
+    """(m,) bool: ``co`` certainly misses the closed box (see the ``free`` label)."""
+    kind = co.kind
+    if kind == "convex":
+        e = co._impl.exponent
+        A = co._impl.A
+        c, h = np.ldexp((lo + hi) / 2, -e), np.ldexp((hi - lo) / 2, -e)
+        val = c @ A[:3] + A[3] - h @ np.abs(A[:3])
+        tol = 2.0 ** -30 * ((np.abs(c) + h) @ np.abs(A[:3]) + np.abs(A[3]))
+        return (val > tol).any(axis=1)
+    if kind in ("union", "surface"):
+        parts = co.parts if kind == "union" else [None] * len(co._impl.impl)
+        out = np.ones(len(lo), dtype=bool)
+        for j, part in enumerate(parts):
+            if part is not None:
+                B = np.asarray(part.bounds, dtype=np.float64)
+            else:
+                B = np.stack([co._impl.lo[j], co._impl.hi[j]])
+            rows = np.nonzero(out & (lo <= B[1]).all(axis=1) & (B[0] <= hi).all(axis=1))[0]
+            if not len(rows):
+                continue
+            if part is not None:
+                out[rows] = _kept_off(part, lo[rows], hi[rows], margin)
+            else:  # a surface's convex piece: its planes as a convex C-obstacle's
+                out[rows] = _kept_off(_Piece(co._impl.impl[j]), lo[rows], hi[rows], margin)
+        return out
+    half = np.linalg.norm(hi - lo, axis=1) / 2
+    return co.signed_distance((lo + hi) / 2) > half + margin
+
+
+class _Piece:
+    """A convex engine seen as a convex C-obstacle by :func:`_kept_off`."""
+
+    kind = "convex"
+
+    def __init__(self, impl):
+        self._impl = impl
+
+
+def _labels(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
+            deadline: float) -> np.ndarray:
+    """The label of each closed cell ``[lo[r], hi[r]]``."""
+    free = np.ones(len(lo), dtype=bool)
+    for k, co in enumerate(obstacles):
+        if _time.perf_counter() > deadline:
+            raise _OutOfTime
+        B = boxes[k]
+        rows = np.nonzero(free & (lo <= B[1]).all(axis=1) & (B[0] <= hi).all(axis=1))[0]
+        if len(rows):
+            free[rows] = _kept_off(co, lo[rows], hi[rows], margin)
+    label = np.where(free, FREE, MIXED).astype(np.int8)
+    rest = np.nonzero(~free)[0]
+    label[rest[_blocked(obstacles, boxes, lo[rest], hi[rest], deadline)]] = BLOCKED
+    return label
+
+
+def _blocked(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+             deadline: float) -> np.ndarray:
+    out = np.zeros(len(lo), dtype=bool)
+    for k, co in enumerate(obstacles):
+        if _time.perf_counter() > deadline:
+            raise _OutOfTime
+        B = boxes[k]
+        rows = np.nonzero(~out & (B[0] <= lo).all(axis=1) & (hi <= B[1]).all(axis=1))[0]
+        if len(rows):
+            out[rows] = _inside_one_piece(co, lo[rows], hi[rows])
+    return out
+
+
+# --------------------------------------------------------------------------------------------
+# the octree
+
+
+class _Grid:
+    """The finest grid over the bounds: ``N[a]`` cells on axis ``a`` (1 on a flat axis), cell
+    corner ``i`` at ``x[a][i]`` (float64, strictly increasing, the bounds' ends exact)."""
+
+    def __init__(self, b: np.ndarray, depth: int):
+        self.b = b
+        self.split = b[1] > b[0]
+        self.N = np.where(self.split, 1 << depth, 1).astype(np.int64)
+        self.x = []
+        for a in range(3):
+            i = np.arange(self.N[a] + 1, dtype=np.float64)
+            x = b[0, a] + (b[1, a] - b[0, a]) * (i / self.N[a])
+            x[0], x[-1] = b[0, a], b[1, a]
+            x = np.clip(x, b[0, a], b[1, a])
+            if self.split[a] and not (np.diff(x) > 0).all():
+                raise InvalidArgumentError("the bounds are too small for the decision's cells")
+            self.x.append(x)
+
+    def floats(self, I: np.ndarray) -> np.ndarray:
+        """Float coordinates of integer corner indices ``I (k, 3)``."""
+        return np.stack([self.x[a][I[:, a]] for a in range(3)], axis=1)
+
+    def cells_at(self, q: np.ndarray, step: np.ndarray) -> np.ndarray:
+        """Indices (in units of ``step``) of every cell of that size whose closed box holds
+        ``q``: one or two per axis (``q`` on a corner plane belongs to both sides)."""
+        per_axis = []
+        for a in range(3):
+            xs = self.x[a][:: int(step[a])]
+            lo = max(int(np.searchsorted(xs, q[a], side="left")) - 1, 0)
+            hi = min(int(np.searchsorted(xs, q[a], side="right")) - 1, len(xs) - 2)
+            per_axis.append(range(lo, max(hi, lo) + 1))
+        return np.array([(i, j, k) for i in per_axis[0] for j in per_axis[1]
+                         for k in per_axis[2]], dtype=np.int64)
+
+
+def _components(mask: np.ndarray) -> np.ndarray:
+    from scipy import ndimage
+
+    labels, _ = ndimage.label(mask, structure=np.ones((3, 3, 3), dtype=bool))
+    return labels
+
+
+def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float = 2.0,
+           progress=None) -> Decision:
+    """Decide whether the robot can translate from ``start`` to ``goal``, by certified cells.
+
+    Parameters
+    ----------
+    cspace : CSpace
+        The C-obstacles at one orientation (``model_scene(scene).cspace()``).
+    start, goal : (3,) float64
+        Free translations inside ``bounds`` (scene units, scene frame).
+    bounds : (2, 3) float64, optional
+        Where the robot may go; default ``cspace.bounds``.
+    depth : int, default 7
+        The finest cells are ``2**-depth`` of the bounds per axis.
+    time : float, default 2.0
+        Wall-second budget; past it the answer is ``'unknown'`` (the levels done still say
+        "no path" if they proved it).
+    progress : callable, optional
+        ``progress(fraction, message)`` after each level.
+
+    Returns
+    -------
+    Decision
+        ``'no path'`` (proved, for clearances above ``Decision.clearance``), ``'path'`` (a
+        proved polyline) or ``'unknown'``. See the module docstring for what each means.
+    """
+    t0 = _time.perf_counter()
+    deadline = t0 + float(time)
+    if not (1 <= int(depth) <= 10):
+        raise InvalidArgumentError(f"depth must be in 1..10, got {depth}")
+    depth = int(depth)
+    b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
+    q0 = np.asarray(start, dtype=np.float64).reshape(3)
+    q1 = np.asarray(goal, dtype=np.float64).reshape(3)
+    for name, q in (("start", q0), ("goal", q1)):
+        if not ((b[0] <= q) & (q <= b[1])).all():
+            raise InvalidArgumentError(f"{name} {q.tolist()} is outside the bounds {b.tolist()}")
+        if cspace.contains(q):
+            raise InvalidArgumentError(f"{name} {q.tolist()} is in collision")
+    g = _Grid(b, depth)
+    obstacles = list(cspace.obstacles)
+    boxes = np.array([np.asarray(co.bounds, dtype=np.float64) for co in obstacles]).reshape(-1, 2, 3)
+    clearance = max((float(co.error_bound) for co in obstacles), default=0.0)
+    margin = _FREE_MARGIN * float(np.abs(b).max() + (b[1] - b[0]).max())
+
+    first = min(FIRST_LEVEL, depth)
+    S = np.where(g.split, 1 << (depth - first), 1)
+    n0 = g.N // S
+    todo = np.stack(np.meshgrid(*[np.arange(n) for n in n0], indexing="ij"), -1).reshape(-1, 3) * S
+    size = S.copy()
+    leaves_lo, leaves_size, leaves_label = [], [], []
+    answer, reason, reached, path = "unknown", "", first - 1, None
+    comp_start = wall = None
+    try:
+        for level in range(first, depth + 1):
+            lo_i, hi_i = todo, todo + size
+            lo, hi = g.floats(lo_i), g.floats(hi_i)
+            label = _labels(obstacles, boxes, lo, hi, margin, deadline)
+            split = (label == MIXED) & (level < depth)
+            keep = ~split
+            leaves_lo.append(lo_i[keep])
+            leaves_size.append(np.broadcast_to(size, (int(keep.sum()), 3)))
+            leaves_label.append(label[keep])
+            reached = level
+            # the decision at this level: split cells still passable
+            L_lo = np.concatenate(leaves_lo + [lo_i[split]])
+            L_sz = np.concatenate(leaves_size + [np.broadcast_to(size, (int(split.sum()), 3))])
+            L_lab = np.concatenate(leaves_label + [label[split]])
+            answer, reason, path, comp_start, wall = _decide_level(cspace, g, q0, q1, L_lo, L_sz, L_lab,
+                                                             size, level, depth, b)
+            if progress is not None:
+                progress((level - first + 1) / (depth - first + 1), f"level {level}: {answer}")
+            if answer != "unknown" or not split.any():
+                leaves_lo.append(lo_i[split])  # cells left to split stay mixed leaves
+                leaves_size.append(np.broadcast_to(size, (int(split.sum()), 3)))
+                leaves_label.append(label[split])
+                break
+            # children of the split cells
+            half_size = np.where(g.split, size // 2, 1)
+            offs = np.unique(_CORNERS * g.split, axis=0) * half_size  # flat axes: not cut
+            todo = (lo_i[split][:, None, :] + offs[None]).reshape(-1, 3)
+            size = half_size
+    except _OutOfTime:
+        reason = f"out of time at level {reached + 1}"
+    if answer == "unknown" and not reason:
+        reason = f"no wall found and no free route at depth {reached}"
+    L_lo = np.concatenate(leaves_lo) if leaves_lo else np.zeros((0, 3), np.int64)
+    L_sz = np.concatenate(leaves_size) if leaves_size else np.zeros((0, 3), np.int64)
+    L_lab = np.concatenate(leaves_label) if leaves_label else np.zeros(0, np.int8)
+    lo_f, hi_f = g.floats(L_lo), g.floats(L_lo + L_sz)
+    if comp_start is None or len(comp_start) != len(L_lo):  # out of time: none
+        comp_start = wall = np.zeros(len(L_lo), dtype=bool)
+    return Decision(answer=answer, path=path, clearance=clearance, depth=reached, bounds=b,
+                    cells_lo=lo_f, cells_hi=hi_f, labels=L_lab, start_component=comp_start, wall=wall,
+                    time=_time.perf_counter() - t0, reason=reason)
+
+
+def _decide_level(cspace, g: _Grid, q0, q1, L_lo, L_sz, L_lab, size, level, depth, b):
+    """Components of the passable and of the free leaves on this level's grid (leaves of
+    earlier levels cover blocks of it): ``(answer, reason, path, start component mask)``."""
+    n = g.N // size
+    ids = np.full(tuple(n.tolist()), -1, dtype=np.int64)
+    I, W = L_lo // size, L_sz // size
+    for w in np.unique(W, axis=0):  # leaves of one size at once: their blocks of voxels
+        k = np.nonzero((W == w).all(axis=1))[0]
+        off = np.stack(np.meshgrid(*[np.arange(x) for x in w], indexing="ij"), -1).reshape(-1, 3)
+        V = (I[k][:, None, :] + off[None]).reshape(-1, 3)
+        ids[V[:, 0], V[:, 1], V[:, 2]] = np.repeat(k, len(off))
+    lab = np.where(ids >= 0, L_lab[np.maximum(ids, 0)], BLOCKED)
+    comp = _components(lab != BLOCKED)
+    at0, at1 = g.cells_at(q0, size), g.cells_at(q1, size)
+    c0 = {int(comp[tuple(i)]) for i in at0} - {0}
+    c1 = {int(comp[tuple(i)]) for i in at1} - {0}
+    start_mask, wall = np.zeros(len(L_lo), dtype=bool), np.zeros(len(L_lo), dtype=bool)
+    if c0:
+        from scipy import ndimage
+
+        cells = np.isin(comp, list(c0))
+        start_mask[np.unique(ids[cells])] = True
+        around = ndimage.binary_dilation(cells, structure=np.ones((3, 3, 3), dtype=bool))
+        wall[np.unique(ids[around & (lab == BLOCKED)])] = True
+    if c0 and c1 and not (c0 & c1):
+        return ("no path", f"start and goal in different components at level {level}", None,
+                start_mask, wall)
+    path = _free_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, at0, at1)
+    if path is not None:
+        return "path", f"a route through free cells at level {level}", path, start_mask, wall
+    return "unknown", "", None, start_mask, wall
+
+
+def _free_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, at0, at1):
+    """A polyline through free leaves from ``q0`` to ``q1`` (both in free cells), every segment
+    proved, or None."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import breadth_first_order
+
+    free = lab == FREE
+    s0 = [int(ids[tuple(i)]) for i in at0 if free[tuple(i)]]
+    s1 = [int(ids[tuple(i)]) for i in at1 if free[tuple(i)]]
+    if not s0 or not s1:
+        return None
+    # leaf adjacency through touching free voxels (26 neighbours)
+    a_all, b_all = [], []
+    shape = ids.shape
+    for d in _NEIGHBOURS:
+        src = tuple(slice(max(0, -x), shape[a] - max(0, x)) for a, x in enumerate(d))
+        dst = tuple(slice(max(0, x), shape[a] - max(0, -x)) for a, x in enumerate(d))
+        both = free[src] & free[dst]
+        a, c = ids[src][both], ids[dst][both]
+        keep = a != c
+        a_all.append(a[keep])
+        b_all.append(c[keep])
+    A, B = np.concatenate(a_all), np.concatenate(b_all)
+    n = len(L_lo)
+    G = coo_matrix((np.ones(len(A)), (A, B)), shape=(n, n)).tocsr()
+    G = G + G.T
+    order, pred = breadth_first_order(G, s0[0], directed=False, return_predecessors=True)
+    target = next((t for t in s1 if t == s0[0] or pred[t] >= 0), None)
+    if target is None:
+        return None
+    chain = [target]
+    while chain[-1] != s0[0]:
+        chain.append(int(pred[chain[-1]]))
+    chain.reverse()
+    lo = g.floats(L_lo)
+    hi = g.floats(L_lo + L_sz)
+    pts = [q0, (lo[chain[0]] + hi[chain[0]]) / 2]
+    for u, v in zip(chain, chain[1:]):
+        pts.append((np.maximum(lo[u], lo[v]) + np.minimum(hi[u], hi[v])) / 2)  # their contact
+        pts.append((lo[v] + hi[v]) / 2)
+    pts.append(q1)
+    P = _shortcut(cspace, np.array(pts))
+    ok = cspace.segment_free(P[:-1], P[1:])
+    return P if bool(np.all(ok)) else None
+
+
+def _shortcut(cspace, P: np.ndarray) -> np.ndarray:
+    """Greedy: from each kept waypoint, the farthest later one in straight sight (exact)."""
+    out, i = [P[0]], 0
+    while i < len(P) - 1:
+        later = np.arange(len(P) - 1, i, -1)
+        ok = cspace.segment_free(np.broadcast_to(P[i], (len(later), 3)), P[later])
+        j = int(later[np.argmax(ok)]) if ok.any() else i + 1
+        out.append(P[j])
+        i = j
+    return np.array(out)

@@ -1,0 +1,198 @@
+"""The decision by certified cells (:mod:`cspace.planning.decide`): "no path" only where none
+exists, on scenes moved far from the origin, scaled and permuted; every wall cell checked
+by FCL on the raw meshes (it shares nothing with the cells); every "path" re-proved exactly
+and by FCL; and the answer through ``plan`` and ``cspace plan`` (exit 3)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+import cspace
+from cspace.check.cross_check import path_collisions
+from cspace.check.oracle import SceneOracle
+from cspace.errors import InvalidArgumentError
+from cspace.planning.decide import BLOCKED, decide
+from cspace.planning.plan import plan, verify_path
+
+ROBOT = 0.4  # the cube robot's side
+
+
+def cage_toml(slot: float, *, offset=(0.0, 0.0, 0.0), scale: float = 1.0, axes=(0, 1, 2),
+              order=None, surfaces: bool = False, tmp=None) -> str:
+    """A closed cage of six walls around the origin (inner half-width 1), the +x wall in two
+    halves with a slot ``slot`` wide (along y) between them; start inside, goal outside.
+    Moved by ``offset``, scaled by ``scale``, its axes permuted by ``axes``, its bodies in
+    ``order``; ``surfaces``: each wall an open one-sided square (an OBJ in ``tmp``)."""
+    walls = [((-1.05, 0, 0), (0.1, 2.2, 2.2)),
+             ((1.05, -(0.55 + slot / 4), 0), (0.1, 1.1 - slot / 2, 2.2)),
+             ((1.05, 0.55 + slot / 4, 0), (0.1, 1.1 - slot / 2, 2.2)),
+             ((0, -1.05, 0), (2.2, 0.1, 2.2)), ((0, 1.05, 0), (2.2, 0.1, 2.2)),
+             ((0, 0, -1.05), (2.2, 2.2, 0.1)), ((0, 0, 1.05), (2.2, 2.2, 0.1))]
+    order = range(len(walls)) if order is None else order
+
+    def place(p):
+        p = np.asarray(p, dtype=np.float64)[list(axes)] * scale + np.asarray(offset)
+        return "[" + ", ".join(repr(float(x)) for x in p) + "]"
+
+    def size(s):
+        return "[" + ", ".join(repr(float(x) * scale) for x in np.asarray(s)[list(axes)]) + "]"
+
+    b = 2.0
+    lines = ['name = "cage"', "[robot]", f"box = [{ROBOT * scale}, {ROBOT * scale}, {ROBOT * scale}]",
+             "[planning]", f"bounds = [{place((-b, -b, -b))}, {place((b, b, b))}]",
+             f"start = {place((0, 0, 0))}", f"goal = {place((1.6, 1.6, 1.6))}"]
+    for k in order:
+        c, s = walls[k]
+        lines.append("[[obstacles]]")
+        lines.append(f'name = "wall{k}"')
+        if surfaces:  # the wall's mid-plane as an open square (2 triangles, one-sided)
+            c, s = np.asarray(c, float), np.asarray(s, float)
+            thin = int(np.argmin(s))
+            u, v = [a for a in range(3) if a != thin]
+            corners = []
+            for du, dv in ((-1, -1), (1, -1), (1, 1), (-1, 1)):
+                p = c.copy()
+                p[u] += du * s[u] / 2
+                p[v] += dv * s[v] / 2
+                corners.append(np.asarray(place(p)[1:-1].split(", "), dtype=float))
+            path = tmp / f"wall{k}.obj"
+            path.write_text("".join(f"v {float(x)!r} {float(y)!r} {float(z)!r}\n" for x, y, z in corners)
+                            + "f 1 2 3\nf 1 3 4\n")
+            lines.append(f'mesh = "{path}"')
+        else:
+            lines += [f"box = {size(s)}", f"position = {place(c)}"]
+    return "\n".join(lines) + "\n"
+
+
+def _cage(tmp_path, name="cage.toml", **kw):
+    path = tmp_path / name
+    path.write_text(cage_toml(tmp=tmp_path, **kw))
+    scene = cspace.load_scene(path)
+    return scene, cspace.model_scene(scene).cspace()
+
+
+def _check_wall_with_fcl(scene, d, n_cells=60, seed=0):
+    """Every sampled wall cell's corners, centre and random points collide by FCL on the raw
+    meshes (or lie within the stated clearance of a body: the C-obstacles are grown)."""
+    oracle = SceneOracle(scene)
+    rng = np.random.default_rng(seed)
+    cells = np.nonzero(d.wall)[0]
+    assert len(cells) and (d.labels[cells] == BLOCKED).all()
+    for c in rng.choice(cells, size=min(n_cells, len(cells)), replace=False):
+        lo, hi = d.cells_lo[c], d.cells_hi[c]
+        corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                            for z in (lo[2], hi[2])])
+        pts = np.vstack([corners, (lo + hi) / 2, lo + rng.random((8, 3)) * (hi - lo)])
+        hit = oracle.collides(pts)
+        if not hit.all():
+            assert (oracle.distance(pts[~hit]) <= d.clearance + 1e-9).all(), (lo, hi)
+
+
+def test_a_cage_whose_slot_is_narrower_than_the_robot_has_no_path(tmp_path):
+    scene, cs = _cage(tmp_path, slot=0.2)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "no path", d.reason
+    assert 0 < d.clearance < 1e-6 and d.path is None
+    assert d.start_component.any() and not (d.labels[d.start_component] == BLOCKED).any()
+    _check_wall_with_fcl(scene, d)
+    assert len(d.to_trimesh("blocked").faces) == 12 * int(d.wall.sum())
+    assert "no path" in repr(d)
+
+
+@pytest.mark.parametrize("move", [
+    dict(offset=(250.0, 150.0, -300.0)),
+    dict(offset=(250.0, 150.0, -300.0), scale=3.0),
+    dict(scale=0.01),
+    dict(axes=(2, 0, 1), order=[6, 5, 4, 3, 2, 1, 0]),
+    dict(offset=(-1e4, 3e3, 7.5), scale=7.0, axes=(1, 2, 0)),
+])
+def test_no_path_is_the_same_answer_wherever_the_cage_is(tmp_path, move):
+    scene, cs = _cage(tmp_path, slot=0.2, **move)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "no path", (move, d.reason)
+    _check_wall_with_fcl(scene, d, n_cells=20)
+
+
+@pytest.mark.parametrize("move", [dict(), dict(offset=(250.0, 150.0, -300.0), scale=3.0),
+                                  dict(axes=(1, 2, 0))])
+def test_a_slot_wider_than_the_robot_is_never_called_closed(tmp_path, move):
+    """Slot 0.6 for a robot of 0.4 (C-space gap 0.2, ~6 finest cells): a path through free
+    cells, proved exactly and by FCL."""
+    scene, cs = _cage(tmp_path, slot=0.6, **move)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=20)
+    assert d.answer == "path", d.reason
+    assert verify_path(cs, d.path, scene.bounds)["valid"]
+    np.testing.assert_array_equal(d.path[0], scene.start)
+    np.testing.assert_array_equal(d.path[-1], scene.goal)
+    bad, n = path_collisions(cs, d.path, scene=scene)
+    assert len(bad) == 0 and n > 0
+
+
+@pytest.mark.parametrize("slot", [ROBOT, ROBOT + 1e-3, ROBOT + 2.0 ** -20])
+def test_a_slot_the_robot_barely_fits_is_never_called_closed_wrongly(tmp_path, slot):
+    """At exactly the robot's width the C-obstacles touch (touching is a collision: no path);
+    a hair wider, a path exists but is far thinner than a cell: 'unknown' is right, and
+    'no path' is allowed only for the gap below the stated clearance."""
+    scene, cs = _cage(tmp_path, slot=slot)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer != "path" or verify_path(cs, d.path, scene.bounds)["valid"]
+    if d.answer == "no path":
+        assert slot - ROBOT <= d.clearance, (slot, d.clearance)
+
+
+def test_open_walls_block_cells_too(tmp_path):
+    """Walls as open one-sided squares (surface C-obstacles: a convex piece per triangle)."""
+    scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, offset=(250.0, 150.0, -300.0))
+    assert {co.kind for co in cs.obstacles} - {"convex"}, [co.kind for co in cs.obstacles]
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=20)
+    assert d.answer == "no path", d.reason
+    _check_wall_with_fcl(scene, d, n_cells=20)
+
+
+def test_shipped_scenes_are_never_called_closed_where_a_path_exists():
+    """Every shipped scene but the piano has a translation path (the planners find it):
+    the decision must not say otherwise; the piano's start orientation has none."""
+    from pathlib import Path
+
+    scenes = Path(__file__).resolve().parents[1] / "scenes"
+    for name in ("window", "cavity", "comb", "maze", "piano"):
+        scene = cspace.load_scene(scenes / f"{name}.toml")
+        cs = cspace.model_scene(scene).cspace()
+        d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=20)
+        if name == "piano":
+            assert d.answer == "no path", d.reason
+        else:
+            assert d.answer in ("path", "unknown"), (name, d.reason)
+        if d.answer == "path":
+            assert verify_path(cs, d.path, scene.bounds)["valid"]
+
+
+def test_bad_questions_get_named_errors(tmp_path):
+    scene, cs = _cage(tmp_path, slot=0.2)
+    with pytest.raises(InvalidArgumentError, match="start .* is in collision"):
+        decide(cs, [-1.05, 0, 0], scene.goal, bounds=scene.bounds)
+    with pytest.raises(InvalidArgumentError, match="goal .* outside the bounds"):
+        decide(cs, scene.start, [9, 9, 9], bounds=scene.bounds)
+    with pytest.raises(InvalidArgumentError, match="depth"):
+        decide(cs, scene.start, scene.goal, depth=0)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=0.0)
+    assert d.answer == "unknown" and "out of time" in d.reason
+
+
+def test_plan_and_the_cli_answer_no_path(tmp_path):
+    path = tmp_path / "cage.toml"
+    path.write_text(cage_toml(slot=0.2))
+    r = plan(cspace.load_scene(path), planner="auto", time=3.0, seed=1, turns=False)
+    assert not r.solved and r.decision.answer == "no path" and len(r.path) == 0
+    out = tmp_path / "r.json"
+    p = subprocess.run([sys.executable, "-m", "cspace", "plan", str(path), "--time", "3",
+                        "--no-turns", "--no-cache", "--result", str(out)],
+                       capture_output=True, text=True, timeout=300)
+    assert p.returncode == 3, (p.stdout, p.stderr)
+    assert "no path at the start's orientation, proved" in p.stdout
+    assert json.loads(out.read_text())["decision"]["answer"] == "no path"
