@@ -25,7 +25,7 @@
   with the narrow-passage sampler, then turns over 8 slices, within ``--time``
   (``plan(..., planner='auto')``). ``--workers`` / ``--scheduler`` build through an
   executor, as for ``build``.
-- ``cspace view SCENE`` — :func:`cspace.viz.scene_view.draw_scene`: an offline HTML page of a scene
+- ``cspace view SCENE`` — :func:`cspace.viz.draw.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``.
 """
 
@@ -332,9 +332,11 @@ def _plan(args: argparse.Namespace) -> int:
              cache=None if args.no_cache else (args.cache_dir or True),
              robot_hull=args.robot_hull, memory=args.memory, turns=not args.no_turns)
     for t in r.tried or ():
-        how = (f"{t['planner']} with {t['slices']} orientation slices (turns in place)"
-               if t["slices"] else "decision by certified cells" if t["planner"] == "decide"
-               else f"{t['planner']} ({t['sampler']} sampler)")
+        cells = "decision by certified cells" + (f" over {t['slices']} orientation slices and "
+                                                 "the turns between them" if t["slices"] else "")
+        how = (cells if t["planner"] == "decide" else
+               f"{t['planner']} with {t['slices']} orientation slices (turns in place)"
+               if t["slices"] else f"{t['planner']} ({t['sampler']} sampler)")
         said = t.get("answer") or ("solved" if t["solved"] else "no path")
         print(f"  auto: {how}: {said} in {t['seconds']:.2f} s of {t['time']:.2f} s")
     d = r.decision
@@ -343,9 +345,13 @@ def _plan(args: argparse.Namespace) -> int:
               f"{int(d.wall.sum())} cells inside the C-obstacles; for clearances above "
               f"{d.clearance:.3g})")
     if d is not None and d.answer == "no path" and not r.solved and r.slices is None:
-        if result_out:
-            _finish({**_result_head(args, scene, r), "path": None}, result_out, None, scene,
-                    None)
+        turned = [t for t in r.tried if t["planner"] == "decide" and t["slices"]]
+        print(f"{scene.name}: no path, proved: "
+              + (f"none over {turned[0]['slices']} orientation slices (turns about one "
+                 "axis), translating at each and turning in place between neighbours (not a "
+                 "proof over all rotations)" if turned else "none at the start's orientation"))
+        _finish({**_result_head(args, scene, r), "path": None}, result_out, html_out, scene,
+                None, decision=d)
         return EXIT_NO_PATH
     if r.slices is not None:  # auto turned the robot
         return _report_turning(args, scene, default_slices(scene, AUTO_SLICES), r, path_out,
@@ -395,30 +401,28 @@ def _result_head(args: argparse.Namespace, scene, r) -> dict:
     return {"scene": scene.name, "scene_file": str(args.scene), "planner": args.planner,
             "seed": args.seed, "time_budget": args.time, "solved": r.solved, "exact": r.exact,
             "valid_exact_recheck": r.valid, "status": r.status, "seconds": r.time,
-            "length": r.length, "tried": r.tried, "decision": _decision(r.decision)}
+            "length": r.length, "tried": r.tried, "decision": None if r.decision is None else
+            {k: getattr(r.decision, k) for k in ("answer", "reason", "depth", "clearance")}}
 
 
-def _decision(d) -> dict | None:
-    """A decision's fields for ``plan --result``."""
-    return None if d is None else {"answer": d.answer, "reason": d.reason, "depth": d.depth,
-                                   "clearance": d.clearance, "seconds": d.time}
-
-
-def _finish(result, result_out, html_out, scene, path) -> int:
-    """Write ``plan``'s JSON summary and HTML page (the scene, and ``path`` when proved);
-    exit status 0 when there is a proved path."""
+def _finish(result, result_out, html_out, scene, path, decision=None) -> int:
+    """Write ``plan``'s JSON summary and HTML page (the scene, and ``path`` when proved, or
+    the cells of a proof that there is none); exit status 0 when there is a proved path."""
     import json
 
     if result_out:
         write_atomic(result_out, lambda p: p.write_text(json.dumps(result, indent=1)))
         print(f"wrote {result_out}")
     if html_out:
-        from .viz.scene_view import SceneView, draw_scene
+        from .viz.draw import draw_scene
+        from .viz.scene_view import SceneView
 
         view = SceneView()
-        draw_scene(view, scene, path=path)
+        draw_scene(view, scene, path=path, decision=decision)
         write_atomic(html_out, lambda p: view.save(p))
-        print(f"wrote {html_out}" + ("" if path is not None else " (the scene only: no solution)"))
+        print(f"wrote {html_out}" + ("" if path is not None else " (the cells that prove no "
+                                     "path exists)" if decision is not None else
+                                     " (the scene only: no solution)"))
     return 0 if path is not None else 1
 
 
@@ -540,7 +544,8 @@ def _view(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .scene.files import load_scene
-    from .viz.scene_view import SceneView, draw_scene
+    from .viz.draw import draw_scene
+    from .viz.scene_view import SceneView
     from .viz.browser import screenshot
 
     _out(args.output or f"{Path(args.scene).stem}.html", ("html",), "-o")

@@ -25,7 +25,8 @@ from cspace.check.cross_check import path_collisions
 from cspace.scene.model import model_scene
 from cspace.planning.plan import plan
 from cspace.planning.ompl_plugin import verify_path
-from cspace.viz.scene_view import SceneView, draw_scene
+from cspace.viz.draw import draw_scene
+from cspace.viz.scene_view import SceneView
 
 ROOT = Path(__file__).resolve().parents[1]
 

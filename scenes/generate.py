@@ -1,6 +1,7 @@
 """Regenerate the shipped scenes: ``python scenes/generate.py`` (``--check`` only compares).
 
-Writes ``window.toml``, ``comb.toml``, ``maze.toml``, ``cavity.toml``, ``piano.toml`` and the robot mesh
+Writes ``window.toml``, ``comb.toml``, ``maze.toml``, ``cavity.toml``, ``piano.toml``, ``cage.toml``
+(the one scene without a path) and the robot mesh
 ``meshes/octahedron.obj`` beside this script. Every obstacle is an axis-aligned box (so exact
 C-obstacles exist for each through convex ⊕ convex sums), at most 40 per scene. The robots
 are convex with exact coordinates: the elongated octahedron ``meshes/octahedron.obj``
@@ -245,6 +246,33 @@ def piano() -> str:
                       start=(-1.2, -1.6, 0.5), goal=(1.2, 1.6, 0.5), boxes=boxes)
 
 
+def cage() -> str:
+    """A closed cage whose only opening, a slot, is narrower than the robot: no path exists,
+    at any orientation (the cube's narrowest width is its side)."""
+    side, slot, t, half = 0.4, 0.2, 0.1, 1.0  # robot cube side, slot width, wall, inner half
+    o = half + t  # outer half-width
+    boxes = [
+        box("wall-x-", (-o, -o, -o), (-half, o, o)),
+        box("wall-x+ low", (half, -o, -o), (o, -slot / 2, o)),
+        box("wall-x+ high", (half, slot / 2, -o), (o, o, o)),
+        box("wall-y-", (-half, -o, -o), (half, -half, o)),
+        box("wall-y+", (-half, half, -o), (half, o, o)),
+        box("floor", (-half, -half, -o), (half, half, -half)),
+        box("roof", (-half, -half, half), (half, half, o)),
+    ]
+    header = [
+        f"A cube robot {_num(side)} on a side shut in a cage: six walls {_num(t)} thick around "
+        f"x, y, z in [{_num(-half)}, {_num(half)}]; the +x wall",
+        f"is two halves with a slot {_num(slot)} wide between them (y in [{_num(-slot / 2)}, "
+        f"{_num(slot / 2)}]), half the cube's narrowest width.",
+        "No path exists at any orientation: `cspace plan` proves it (exit 3) from the "
+        "certified cells of the C-space.",
+    ]
+    return scene_toml("cage", header, {"box": (side, side, side)},
+                      bounds=((-2.0, -2.0, -2.0), (2.0, 2.0, 2.0)),
+                      start=(0.0, 0.0, 0.0), goal=(1.6, 1.6, 1.6), boxes=boxes)
+
+
 def render() -> dict[str, str]:
     """Relative path -> text of every generated file."""
     return {
@@ -254,6 +282,7 @@ def render() -> dict[str, str]:
         "maze.toml": maze(),
         "cavity.toml": cavity(),
         "piano.toml": piano(),
+        "cage.toml": cage(),
     }
 
 

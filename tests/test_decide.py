@@ -196,3 +196,72 @@ def test_plan_and_the_cli_answer_no_path(tmp_path):
     assert p.returncode == 3, (p.stdout, p.stderr)
     assert "no path at the start's orientation, proved" in p.stdout
     assert json.loads(out.read_text())["decision"]["answer"] == "no path"
+
+
+def test_turns_between_slices_do_not_open_the_cage(tmp_path):
+    """A cube never fits a slot half its width, turned or not: over 8 slices and the turns
+    between them there is no path either; `cspace plan` says so (exit 3) without flags."""
+    from cspace.planning.decide import decide_turning
+    from cspace.planning.plan import default_slices
+    from cspace.planning.turning import TurningCSpace
+
+    path = tmp_path / "cage.toml"
+    path.write_text(cage_toml(slot=0.2, offset=(250.0, 150.0, -300.0)))
+    scene = cspace.load_scene(path)
+    td = decide_turning(TurningCSpace(scene, default_slices(scene, 8)), scene.start, scene.goal)
+    assert td.answer == "no path" and len(td.components) == 8 and td.links > 0, td.reason
+    r = plan(scene, planner="auto", time=10.0, seed=1)
+    assert not r.solved and r.decision.answer == "no path"
+    assert [(t["planner"], t["slices"], t.get("answer")) for t in r.tried] == [
+        ("RRTConnect", None, None), ("decide", None, "no path"), ("decide", 8, "no path")]
+    p = subprocess.run([sys.executable, "-m", "cspace", "plan", str(path), "--time", "10",
+                        "--no-cache"], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 3, (p.stdout, p.stderr)
+    assert "none over 8 orientation slices" in p.stdout
+
+
+def test_turns_that_open_a_passage_are_not_ruled_out():
+    """The piano passes the doorway only turned: at its start orientation there is no path,
+    over slices the decision must not say so (and the turning planner then finds the way)."""
+    from pathlib import Path
+
+    from cspace.planning.decide import decide_turning
+    from cspace.planning.plan import default_slices
+    from cspace.planning.turning import TurningCSpace
+
+    scene = cspace.load_scene(Path(__file__).resolve().parents[1] / "scenes" / "piano.toml")
+    for n in (4, 8, 16):
+        td = decide_turning(TurningCSpace(scene, default_slices(scene, n)), scene.start,
+                            scene.goal)
+        assert td.answer == "unknown", (n, td.reason)
+
+
+def test_a_hull_proves_nothing_about_the_robot(tmp_path):
+    scene, _ = _cage(tmp_path, slot=0.2)
+    cs = cspace.model_scene(scene, robot_hull=True).cspace()
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "unknown" and "convex hull" in d.reason
+
+
+def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
+    """Blocked cells of open walls (triangle-pair C-obstacles) are found by a float filter
+    over the pieces' half-spaces; it must agree with the exact test of every corner."""
+    from cspace.planning.decide import _CORNERS, _inside_a_pair
+
+    scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, offset=(250.0, 150.0, -300.0))
+    rng = np.random.default_rng(0)
+    pairs = [co for co in cs.obstacles if co.kind == "pairs"]
+    assert len(pairs) == 7
+    for co in pairs[:3]:
+        impl = co._impl
+        B = np.asarray(co.bounds)
+        lo = B[0] + rng.random((80, 3)) * (B[1] - B[0])
+        hi = lo + rng.random((80, 3)) * np.array([0.02, 0.2, 0.6])[rng.permutation(3)]
+        C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])
+        fast = _inside_a_pair(impl, lo, hi, C)
+        cand = impl._set.candidates(impl._grid_units(lo), impl._grid_units(hi))
+        exact = np.zeros(len(lo), dtype=bool)
+        for r, i, j in cand.tolist():
+            exact[r] |= all(impl._in_piece(i, j, x) for x in C[r].tolist())
+        np.testing.assert_array_equal(fast, exact)
+        assert exact.any() and not exact.all()

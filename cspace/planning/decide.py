@@ -32,6 +32,9 @@ C-obstacles are grown outward within their ``error_bound`` (principle 2), so the
 **"path"**: start and goal joined through free cells (a polyline through the cells' centres and
 the middles of their contacts, shortcut), every segment proved by ``segment_free``.
 
+A C-space of the robot's convex hull (``robot_hull=True``) proves nothing about the robot:
+its "no path" is reported as "unknown".
+
 **"unknown"**: neither within the depth and the time given (walls whose C-obstacles only
 touch, or thinner than a finest cell; a gap narrower than a finest cell). The planners then
 run as without the decision. C-obstacles of kind ``'mesh'`` (non-convex sums) block no cell
@@ -45,6 +48,7 @@ exact union of the C-obstacles (issue #31) would remove the depth limit.
 from __future__ import annotations
 
 import time as _time
+import weakref
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -167,13 +171,48 @@ def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
                 out[rows] = piece.contains(C[rows].reshape(-1, 3)).reshape(-1, 8).all(axis=1)
         return out
     if kind == "pairs":
-        impl, out = co._impl, np.zeros(m, dtype=bool)
-        cand = impl._set.candidates(impl._grid_units(lo), impl._grid_units(hi))
-        for r, i, j in cand.tolist():
-            if not out[r] and all(impl._in_piece(i, j, x) for x in C[r].tolist()):
-                out[r] = True
-        return out
+        return _inside_a_pair(co._impl, lo, hi, C)
     return np.zeros(m, dtype=bool)
+
+
+# Each pair engine's pieces' half-spaces as the decision has needed them: (exact, float).
+_HALFSPACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# The float filter of a half-space value n . x - d (x = corner / step, exact; n small ints;
+# d rounded once to float): a few roundings of relative 2**-53 each; 2**-45 is far above.
+_PLANE_FILTER = 2.0 ** -45
+
+
+def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
+    """:func:`_inside_one_piece` for a triangle-pair C-obstacle: the pieces whose k-DOPs meet
+    a cell (the engine's tree), then each piece's half-spaces at the eight corners, in floats
+    with the filter above and exactly (Python integers) where it cannot tell."""
+    out = np.zeros(len(lo), dtype=bool)
+    cand = impl._set.candidates(impl._grid_units(lo), impl._grid_units(hi))
+    if not len(cand):
+        return out
+    cache = _HALFSPACES.setdefault(impl, {})
+    X = np.ldexp(C, -impl.exponent)  # grid units, exact
+    key = cand[:, 1] * (int(cand[:, 2].max()) + 1) + cand[:, 2]
+    _, first, which = np.unique(key, return_index=True, return_inverse=True)
+    for u, f in enumerate(first.tolist()):
+        rows = cand[which == u, 0]
+        rows = rows[~out[rows]]
+        if not len(rows):
+            continue
+        i, j = int(cand[f, 1]), int(cand[f, 2])
+        if (i, j) not in cache:
+            H = impl._halfspaces(i, j)
+            cache[i, j] = (H, np.array([n for n, _ in H], dtype=np.float64).reshape(-1, 3),
+                           np.array([float(d) for _, d in H]))
+        H, N, d = cache[i, j]
+        val = X[rows] @ N.T - d  # (r, 8, h)
+        err = _PLANE_FILTER * (np.abs(X[rows]) @ np.abs(N).T + np.abs(d))
+        inside = (val < -err).all(axis=(1, 2))
+        unsure = ~inside & ~(val > err).any(axis=(1, 2))
+        for r in rows[unsure].tolist():
+            inside[rows == r] = all(impl._in_piece(i, j, x) for x in C[r].tolist())
+        out[rows[inside]] = True
+    return out
 
 
 def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
@@ -291,6 +330,78 @@ def _components(mask: np.ndarray) -> np.ndarray:
     return labels
 
 
+def _setup(cspace, b: np.ndarray):
+    """The C-obstacles to label cells with (a lazy C-space's pairs near the bounds built
+    first), their boxes, the largest ``error_bound`` and the free label's margin."""
+    if hasattr(cspace, "build"):  # LazyCSpace: every pair that may meet the bounds, now
+        cspace.build(b[0], b[1])
+    obstacles = list(cspace.obstacles)
+    boxes = np.array([np.asarray(co.bounds, dtype=np.float64)
+                      for co in obstacles]).reshape(-1, 2, 3)
+    clearance = max((float(co.error_bound) for co in obstacles), default=0.0)
+    margin = _FREE_MARGIN * float(np.abs(b).max() + (b[1] - b[0]).max())
+    return obstacles, boxes, clearance, margin
+
+
+def _octree(obstacles, boxes, margin: float, g: _Grid, depth: int, deadline: float):
+    """Label the octree level by level. Yields ``(level, size, lo, sizes, labels, more)``
+    after each: the leaves so far (integer corners and sizes in finest cells), with this
+    level's cells still to split counted as mixed leaves; ``more``: some remain to split."""
+    first = min(FIRST_LEVEL, depth)
+    size = np.where(g.split, 1 << (depth - first), 1)
+    n0 = g.N // size
+    todo = np.stack(np.meshgrid(*[np.arange(n) for n in n0], indexing="ij"),
+                    -1).reshape(-1, 3) * size
+    leaves_lo, leaves_size, leaves_label = [], [], []
+    for level in range(first, depth + 1):
+        label = _labels(obstacles, boxes, g.floats(todo), g.floats(todo + size), margin, deadline)
+        split = (label == MIXED) & (level < depth)
+        keep = ~split
+        leaves_lo.append(todo[keep])
+        leaves_size.append(np.broadcast_to(size, (int(keep.sum()), 3)))
+        leaves_label.append(label[keep])
+        yield (level, size, np.concatenate(leaves_lo + [todo[split]]),
+               np.concatenate(leaves_size + [np.broadcast_to(size, (int(split.sum()), 3))]),
+               np.concatenate(leaves_label + [label[split]]), bool(split.any()))
+        if not split.any():
+            return
+        half = np.where(g.split, size // 2, 1)
+        offs = np.unique(_CORNERS * g.split, axis=0) * half  # flat axes: not cut
+        todo = (todo[split][:, None, :] + offs[None]).reshape(-1, 3)
+        size = half
+
+
+def _paint(g: _Grid, size, L_lo, L_sz, L_lab):
+    """The leaves on the grid of cells of ``size`` (leaves of earlier levels cover blocks of
+    it): ``(ids, labels)`` per cell."""
+    n = g.N // size
+    ids = np.full(tuple(n.tolist()), -1, dtype=np.int64)
+    I, W = L_lo // size, L_sz // size
+    for w in np.unique(W, axis=0):  # leaves of one size at once: their blocks of voxels
+        k = np.nonzero((W == w).all(axis=1))[0]
+        off = np.stack(np.meshgrid(*[np.arange(x) for x in w], indexing="ij"), -1).reshape(-1, 3)
+        V = (I[k][:, None, :] + off[None]).reshape(-1, 3)
+        ids[V[:, 0], V[:, 1], V[:, 2]] = np.repeat(k, len(off))
+    return ids, np.where(ids >= 0, L_lab[np.maximum(ids, 0)], BLOCKED)
+
+
+def _endpoints(cspace, b, start, goal, check=True):
+    q0 = np.asarray(start, dtype=np.float64).reshape(3)
+    q1 = np.asarray(goal, dtype=np.float64).reshape(3)
+    for name, q in (("start", q0), ("goal", q1)):
+        if not ((b[0] <= q) & (q <= b[1])).all():
+            raise InvalidArgumentError(f"{name} {q.tolist()} is outside the bounds {b.tolist()}")
+        if check and cspace.contains(q):
+            raise InvalidArgumentError(f"{name} {q.tolist()} is in collision")
+    return q0, q1
+
+
+def _depth(depth) -> int:
+    if not (1 <= int(depth) <= 10):
+        raise InvalidArgumentError(f"depth must be in 1..10, got {depth}")
+    return int(depth)
+
+
 def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float = 2.0,
            progress=None) -> Decision:
     """Decide whether the robot can translate from ``start`` to ``goal``, by certified cells.
@@ -298,7 +409,8 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     Parameters
     ----------
     cspace : CSpace
-        The C-obstacles at one orientation (``model_scene(scene).cspace()``).
+        The C-obstacles at one orientation (``model_scene(scene).cspace()``; a lazy one's
+        pairs near the bounds are built first).
     start, goal : (3,) float64
         Free translations inside ``bounds`` (scene units, scene frame).
     bounds : (2, 3) float64, optional
@@ -319,87 +431,45 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     """
     t0 = _time.perf_counter()
     deadline = t0 + float(time)
-    if not (1 <= int(depth) <= 10):
-        raise InvalidArgumentError(f"depth must be in 1..10, got {depth}")
-    depth = int(depth)
+    depth = _depth(depth)
     b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
-    q0 = np.asarray(start, dtype=np.float64).reshape(3)
-    q1 = np.asarray(goal, dtype=np.float64).reshape(3)
-    for name, q in (("start", q0), ("goal", q1)):
-        if not ((b[0] <= q) & (q <= b[1])).all():
-            raise InvalidArgumentError(f"{name} {q.tolist()} is outside the bounds {b.tolist()}")
-        if cspace.contains(q):
-            raise InvalidArgumentError(f"{name} {q.tolist()} is in collision")
+    q0, q1 = _endpoints(cspace, b, start, goal)
     g = _Grid(b, depth)
-    obstacles = list(cspace.obstacles)
-    boxes = np.array([np.asarray(co.bounds, dtype=np.float64) for co in obstacles]).reshape(-1, 2, 3)
-    clearance = max((float(co.error_bound) for co in obstacles), default=0.0)
-    margin = _FREE_MARGIN * float(np.abs(b).max() + (b[1] - b[0]).max())
-
+    obstacles, boxes, clearance, margin = _setup(cspace, b)
     first = min(FIRST_LEVEL, depth)
-    S = np.where(g.split, 1 << (depth - first), 1)
-    n0 = g.N // S
-    todo = np.stack(np.meshgrid(*[np.arange(n) for n in n0], indexing="ij"), -1).reshape(-1, 3) * S
-    size = S.copy()
-    leaves_lo, leaves_size, leaves_label = [], [], []
     answer, reason, reached, path = "unknown", "", first - 1, None
+    L = (np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0, np.int8))
     comp_start = wall = None
     try:
-        for level in range(first, depth + 1):
-            lo_i, hi_i = todo, todo + size
-            lo, hi = g.floats(lo_i), g.floats(hi_i)
-            label = _labels(obstacles, boxes, lo, hi, margin, deadline)
-            split = (label == MIXED) & (level < depth)
-            keep = ~split
-            leaves_lo.append(lo_i[keep])
-            leaves_size.append(np.broadcast_to(size, (int(keep.sum()), 3)))
-            leaves_label.append(label[keep])
-            reached = level
-            # the decision at this level: split cells still passable
-            L_lo = np.concatenate(leaves_lo + [lo_i[split]])
-            L_sz = np.concatenate(leaves_size + [np.broadcast_to(size, (int(split.sum()), 3))])
-            L_lab = np.concatenate(leaves_label + [label[split]])
-            answer, reason, path, comp_start, wall = _decide_level(cspace, g, q0, q1, L_lo, L_sz, L_lab,
-                                                             size, level, depth, b)
+        for level, size, L_lo, L_sz, L_lab, more in _octree(obstacles, boxes, margin, g, depth,
+                                                            deadline):
+            reached, L = level, (L_lo, L_sz, L_lab)
+            answer, reason, path, comp_start, wall = _decide_level(
+                cspace, g, q0, q1, L_lo, L_sz, L_lab, size, level)
             if progress is not None:
                 progress((level - first + 1) / (depth - first + 1), f"level {level}: {answer}")
-            if answer != "unknown" or not split.any():
-                leaves_lo.append(lo_i[split])  # cells left to split stay mixed leaves
-                leaves_size.append(np.broadcast_to(size, (int(split.sum()), 3)))
-                leaves_label.append(label[split])
+            if answer != "unknown":
                 break
-            # children of the split cells
-            half_size = np.where(g.split, size // 2, 1)
-            offs = np.unique(_CORNERS * g.split, axis=0) * half_size  # flat axes: not cut
-            todo = (lo_i[split][:, None, :] + offs[None]).reshape(-1, 3)
-            size = half_size
     except _OutOfTime:
-        reason = f"out of time at level {reached + 1}"
+        reason, comp_start = f"out of time at level {reached + 1}", None
+    if answer == "no path" and getattr(cspace, "robot_hull", False):
+        answer = "unknown"
+        reason = f"no path for the robot's convex hull ({reason}): no proof for the robot"
     if answer == "unknown" and not reason:
         reason = f"no wall found and no free route at depth {reached}"
-    L_lo = np.concatenate(leaves_lo) if leaves_lo else np.zeros((0, 3), np.int64)
-    L_sz = np.concatenate(leaves_size) if leaves_size else np.zeros((0, 3), np.int64)
-    L_lab = np.concatenate(leaves_label) if leaves_label else np.zeros(0, np.int8)
-    lo_f, hi_f = g.floats(L_lo), g.floats(L_lo + L_sz)
+    L_lo, L_sz, L_lab = L
     if comp_start is None or len(comp_start) != len(L_lo):  # out of time: none
         comp_start = wall = np.zeros(len(L_lo), dtype=bool)
     return Decision(answer=answer, path=path, clearance=clearance, depth=reached, bounds=b,
-                    cells_lo=lo_f, cells_hi=hi_f, labels=L_lab, start_component=comp_start, wall=wall,
+                    cells_lo=g.floats(L_lo), cells_hi=g.floats(L_lo + L_sz), labels=L_lab,
+                    start_component=comp_start, wall=wall,
                     time=_time.perf_counter() - t0, reason=reason)
 
 
-def _decide_level(cspace, g: _Grid, q0, q1, L_lo, L_sz, L_lab, size, level, depth, b):
-    """Components of the passable and of the free leaves on this level's grid (leaves of
-    earlier levels cover blocks of it): ``(answer, reason, path, start component mask)``."""
-    n = g.N // size
-    ids = np.full(tuple(n.tolist()), -1, dtype=np.int64)
-    I, W = L_lo // size, L_sz // size
-    for w in np.unique(W, axis=0):  # leaves of one size at once: their blocks of voxels
-        k = np.nonzero((W == w).all(axis=1))[0]
-        off = np.stack(np.meshgrid(*[np.arange(x) for x in w], indexing="ij"), -1).reshape(-1, 3)
-        V = (I[k][:, None, :] + off[None]).reshape(-1, 3)
-        ids[V[:, 0], V[:, 1], V[:, 2]] = np.repeat(k, len(off))
-    lab = np.where(ids >= 0, L_lab[np.maximum(ids, 0)], BLOCKED)
+def _decide_level(cspace, g: _Grid, q0, q1, L_lo, L_sz, L_lab, size, level):
+    """Components of the passable and of the free leaves on this level's grid:
+    ``(answer, reason, path, start component mask, wall mask)``."""
+    ids, lab = _paint(g, size, L_lo, L_sz, L_lab)
     comp = _components(lab != BLOCKED)
     at0, at1 = g.cells_at(q0, size), g.cells_at(q1, size)
     c0 = {int(comp[tuple(i)]) for i in at0} - {0}
@@ -477,3 +547,119 @@ def _shortcut(cspace, P: np.ndarray) -> np.ndarray:
         out.append(P[j])
         i = j
     return np.array(out)
+
+
+# --------------------------------------------------------------------------------------------
+# with turns: the components of every orientation, joined where a turn could join them
+
+
+@dataclass(repr=False)
+class TurningDecision:
+    """What :func:`decide_turning` found over a set of orientations.
+
+    ``answer`` is ``'no path'`` or ``'unknown'``: no sequence of translations at the set's
+    orientations and turns in place between neighbouring ones (as
+    :meth:`cspace.planning.turning.TurningCSpace.motion_free` certifies them) joins start
+    and goal, with a clearance above ``clearance``. Not a proof over all rotations.
+    ``components``: the passable components of each orientation; ``links``: the pairs of
+    components of neighbouring orientations a turn could join."""
+
+    answer: str
+    reason: str
+    clearance: float
+    depth: int
+    components: list
+    links: int
+    time: float
+
+    def __repr__(self) -> str:
+        return (f"TurningDecision(answer={self.answer!r}, orientations={len(self.components)}, "
+                f"components={sum(self.components)}, links={self.links}, time={self.time:.3f})")
+
+
+def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0) -> TurningDecision:
+    """Decide over orientations: can the robot go from ``start`` (at orientation 0) to
+    ``goal`` (at ``tcs.slices.goal``) by translations at the orientations of ``tcs`` and turns
+    in place between neighbouring ones?
+
+    Each orientation's cells are labelled to ``depth`` as in :func:`decide`, and its passable
+    cells split into components (closed cells, 26-connected). A certified turn in place at
+    ``q`` between neighbouring orientations ``i`` and ``j`` needs ``q`` free at both, so ``q``
+    lies in a passable cell of each: those two cells coincide or touch. Components of ``i``
+    and ``j`` with cells that coincide or touch are linked (a superset of the turns there
+    are). Start and goal in different classes of the linked components: ``'no path'``.
+
+    Parameters
+    ----------
+    tcs : TurningCSpace
+        The orientations (``tcs.slices``) and their C-spaces (``tcs.slice(k)``), over
+        ``tcs.bounds``.
+    start, goal : (3,) float64
+    depth : int, default 6
+    time : float, default 10.0
+        Past it: ``'unknown'``.
+    """
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    t0 = _time.perf_counter()
+    deadline = t0 + float(time)
+    depth = _depth(depth)
+    b = np.asarray(tcs.bounds, dtype=np.float64).reshape(2, 3)
+    slices = tcs.slices
+    n = len(slices)
+    g = _Grid(b, depth)
+    labels, counts, clearance = [], [], 0.0
+    try:
+        for k in range(n):
+            cs = tcs.slice(k)
+            obstacles, boxes, bound, margin = _setup(cs, b)
+            clearance = max(clearance, bound)
+            for _, size, L_lo, L_sz, L_lab, _more in _octree(obstacles, boxes, margin, g, depth,
+                                                             deadline):
+                pass
+            _, lab = _paint(g, size, L_lo, L_sz, L_lab)
+            comp = _components(lab != BLOCKED)
+            labels.append(comp)
+            counts.append(int(comp.max()))
+    except _OutOfTime:
+        return TurningDecision("unknown", f"out of time at orientation {len(labels)} of {n}",
+                               clearance, depth, counts, 0, _time.perf_counter() - t0)
+    offset = np.concatenate([[0], np.cumsum(counts)])  # node of (k, c): offset[k] + c - 1
+    A, B = [], []
+    shape = labels[0].shape
+    for i in range(n):
+        for j in range(i + 1, n):
+            if not slices.neighbours(i, j):
+                continue
+            for d in [(x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1)]:
+                src = tuple(slice(max(0, -x), shape[a] - max(0, x)) for a, x in enumerate(d))
+                dst = tuple(slice(max(0, x), shape[a] - max(0, -x)) for a, x in enumerate(d))
+                u, v = labels[i][src], labels[j][dst]
+                both = (u > 0) & (v > 0)
+                key = np.unique(u[both].astype(np.int64) * (counts[j] + 1) + v[both])
+                A.append(offset[i] + key // (counts[j] + 1) - 1)
+                B.append(offset[j] + key % (counts[j] + 1) - 1)
+    A = np.concatenate(A) if A else np.zeros(0, np.int64)
+    B = np.concatenate(B) if B else np.zeros(0, np.int64)
+    m = int(offset[-1])
+    _, cls = connected_components(coo_matrix((np.ones(len(A)), (A, B)), shape=(m, m)),
+                                  directed=False)
+    one = np.ones(3, dtype=np.int64)
+    q0, q1 = (np.asarray(q, dtype=np.float64).reshape(3) for q in (start, goal))
+
+    def classes(q, k):
+        return {int(cls[offset[k] + c - 1]) for c in
+                (int(labels[k][tuple(i)]) for i in g.cells_at(q, one)) if c > 0}
+
+    c0, c1 = classes(q0, 0), classes(q1, slices.goal)
+    links = len(np.unique(A * max(m, 1) + B))
+    if c0 and c1 and not (c0 & c1) and getattr(tcs, "robot_hull", False):
+        answer, reason = "unknown", "no path for the robot's convex hull: no proof for the robot"
+    elif c0 and c1 and not (c0 & c1):
+        answer, reason = "no path", (f"start and goal in different components over {n} "
+                                     "orientations joined by turns between neighbours")
+    else:
+        answer, reason = "unknown", f"start and goal may be joined at depth {depth}"
+    return TurningDecision(answer, reason, clearance, depth, counts, links,
+                           _time.perf_counter() - t0)

@@ -402,10 +402,14 @@ AUTO = "auto"
 #: ``planner='auto'``: the orientation slices of its last attempt (turns in place).
 AUTO_SLICES = 8
 #: ``planner='auto'``: each attempt at the start's orientation, its share of the budget and
-#: its cap in seconds (turns get what is left). ``'decide'``: :func:`cspace.planning.decide.decide` (a path
-#: through free cells, a proof that none exists, or unknown: then the planners go on).
+#: its cap in seconds (turns get what is left). ``'decide'``:
+#: :func:`cspace.planning.decide.decide` (a path through free cells, a proof that none
+#: exists, or unknown: then the planners go on).
 AUTO_SHARES = (("RRTConnect", "uniform", 0.05, 0.5), ("decide", None, 0.2, 2.0),
                ("PRM", "narrow", 0.3, 3.0))
+#: ``planner='auto'``: when the start's orientation has no path, the share of the budget for
+#: deciding over :data:`AUTO_SLICES` slices and the turns between them (before planning them).
+AUTO_TURN_DECIDE = 0.3
 
 
 def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: bool, bounds,
@@ -415,8 +419,10 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     this orientation, which skips the samplers), then PRM with the narrow-passage sampler
     (gaps a uniform sampler rarely hits), then, on a scene whose robot may turn, the turning
     planner over :data:`AUTO_SLICES` slices (a passage the robot fits through only turned)
-    with the rest of the budget. Stops at the first solution; every answer is certified as
-    :func:`plan`'s."""
+    with the rest of the budget. After a proof at the start's orientation, the decision over
+    those slices comes first (:func:`cspace.planning.decide.decide_turning`): a proof there too
+    ends the search (not solved, ``decision.answer == 'no path'``). Stops at the first
+    solution; every answer is certified as :func:`plan`'s."""
     if not (time > 0):
         raise InvalidArgumentError(f"time must be positive, got {time}")
     cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull, memory)
@@ -453,6 +459,12 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         if r.solved:
             break
     left = time - (_time.perf_counter() - t0)
+    if (d is not None and d.answer == "no path" and turns and scene is not None and left > 0
+            and _turns_proved_useless(scene, q0, q1, bounds, min(left, AUTO_TURN_DECIDE * time),
+                                      cache, robot_hull or cs.robot_hull, memory, tried)):
+        return replace(_decided(cs, d, bounds), tried=tried, time=_time.perf_counter() - t0,
+                       decision=d)
+    left = time - (_time.perf_counter() - t0)
     if not (r is not None and r.solved) and turns and scene is not None and left > 0:
         r = plan_turning(scene, default_slices(scene, AUTO_SLICES), start, goal,
                          planner="RRTConnect", time=left, seed=seed, simplify=simplify,
@@ -463,6 +475,22 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     if d is not None and d.answer == "no path" and not (r is not None and r.solved):
         r = r if r is not None and r.slices is not None else _decided(cs, d, bounds)
     return replace(r, tried=tried, time=_time.perf_counter() - t0, decision=d)
+
+
+def _turns_proved_useless(scene, q0, q1, bounds, budget, cache, robot_hull, memory,
+                          tried) -> bool:
+    """:func:`cspace.planning.decide.decide_turning` over :data:`AUTO_SLICES` slices: True
+    when it proves that no translations and turns between them join start and goal."""
+    from .decide import decide_turning
+    from .turning import TurningCSpace
+
+    slices = default_slices(scene, AUTO_SLICES)
+    tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull, memory=memory)
+    tcs.bounds = _bounds(bounds)
+    td = decide_turning(tcs, q0, q1, time=budget)
+    tried.append({"planner": "decide", "sampler": None, "slices": len(slices), "time": budget,
+                  "answer": td.answer, "seconds": td.time, "solved": False})
+    return td.answer == "no path"
 
 
 def _decided(cs, d, bounds) -> PlanResult:

@@ -717,10 +717,20 @@ class LazyCSpace(CSpace):
         pad = np.ldexp(np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, initial=0.0), -40)[:, None]
         lo, hi = lo - pad - 1e-300, hi + pad + 1e-300
         self._union = _UnionOf((), lazy=(lo, hi, self._make))
+        self._pair_lo, self._pair_hi = lo, hi
         #: (2, 3): the box every C-obstacle of this C-space lies in
         self.box = (np.stack([lo.min(axis=0), hi.max(axis=0)]) if len(lo)
                     else np.zeros((2, 3)))
         self._built = 0
+
+    def build(self, lo=None, hi=None) -> None:
+        """Build now every pair whose C-obstacles may meet the box ``[lo, hi]`` (scene units;
+        default: all), as queries there would: ``obstacles`` then holds them all."""
+        lo = np.full(3, -np.inf) if lo is None else np.asarray(lo, dtype=np.float64)
+        hi = np.full(3, np.inf) if hi is None else np.asarray(hi, dtype=np.float64)
+        meet = ((self._pair_lo <= hi) & (lo <= self._pair_hi)).all(axis=1)
+        for k in np.nonzero(meet)[0].tolist():
+            self._union._engine(k)
 
     def _make(self, k: int) -> _UnionOf:
         b, part = self._todo[k]

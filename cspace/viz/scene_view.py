@@ -68,7 +68,6 @@ from .browser import _OfflineWindow, log
 
 __all__ = [
     "SceneView",
-    "draw_scene",
     "BACKGROUND_COLOR",
     "OBSTACLE_COLOR",
     "ROBOT_COLOR",
@@ -103,6 +102,10 @@ SUPERSET_COLORS = {
     "corner": (44, 160, 44),
     "edge": (240, 192, 0),
 }
+
+
+#: Cells of a decision (:meth:`SceneView.add_cells`): translucent teal.
+CELLS_COLOR = (0, 150, 136)
 
 
 #: Floor grid lines drawn by :meth:`SceneView.frame`: light grey, no hue.
@@ -453,6 +456,15 @@ class SceneView:
         )
         self._grow(v)
 
+    def add_cells(self, name: str, vertices, faces=None, opacity: float = 0.25) -> None:
+        """Draw cells of a decision (:meth:`cspace.planning.decide.Decision.to_trimesh`: the
+        region the robot is confined to, or the wall that proves it), translucent teal
+        (``CELLS_COLOR``), at ``/cells/<name>``."""
+        v, f = _mesh(vertices, faces, "cells")
+        self._mesh_node(f"cells/{_name(name)}", v, f, CELLS_COLOR, opacity=_opacity(opacity),
+                        side=_FRONT_SIDE, edges=False, depthWrite=False)
+        self._grow(v)
+
     def add_superset(self, name: str, vertices, faces=None, kinds=None, *,
                      opacity: float = 1.0) -> None:
         """Draw a Minkowski-sum superset with its facets coloured by kind.
@@ -713,84 +725,3 @@ class SceneView:
     def __repr__(self) -> str:
         mode = f"live at {self.url}" if self.live else "offline"
         return f"<SceneView {mode}: {len(self._paths)} nodes>"
-
-
-# --------------------------------------------------------------------------------------
-# screenshots with headless Chromium
-
-
-def draw_scene(view: "SceneView", scene, *, path=None, cobstacles: bool = True,
-               superset: bool = False, animate: bool = True, cache=None) -> dict[str, str]:
-    """Draw a :class:`cspace.scene.scene.Scene`: obstacles, the robot at start and goal, C-obstacles, a path.
-
-    The scene is modelled and built as :func:`cspace.scene.model.model_scene` does (exact robot
-    parts; every body's C-obstacles, whatever the construction: CVMS, NCC-CVMS, pieces).
-    ``superset=True`` draws the untrimmed superset of a body whose build failed.
-
-    Parameters
-    ----------
-    view : SceneView
-    scene : Scene
-    path : (k, 3) float64, optional
-        Reference-point positions of a path; drawn as a polyline, and the robot is animated
-        along it when ``animate``.
-    cobstacles, superset : bool
-        Whether to draw the C-obstacles / the superset of a body whose build failed.
-    cache : COCache, path, True, or None
-        The disk cache the C-obstacles are built through (:func:`cspace.scene.model.model_scene`).
-
-    Returns
-    -------
-    report : dict[str, str]
-        For each obstacle body, what was drawn for it.
-    """
-    import warnings
-
-    from ..errors import InvalidMeshError
-    from ..scene.model import model_scene
-    from ..minkowski.superset import minkowski_superset
-
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")  # the scene already warned when it was loaded
-        m = model_scene(scene, cache=cache)
-    report: dict[str, str] = {}
-    for body in m.bodies:
-        view.add_obstacle(body.name, body.vertices, body.faces)
-        report[body.name] = "obstacle"
-        cos = body.cos
-        if cos and cobstacles:
-            for k, co in enumerate(cos):
-                view.add_cobstacle(body.name if len(cos) == 1 else f"{body.name} {k}",
-                                   co.vertices, co.faces)
-            how = ", ".join(sorted({p.construction for p in body.pairs}))
-            report[body.name] = (f"C-obstacle ({how}, {sum(co.n_facets for co in cos)} facets"
-                                 + (f" in {len(cos)} parts" if len(cos) > 1 else "") + ")")
-        elif body.error and superset and m.robot is not None:
-            try:
-                S = minkowski_superset((body.vertices, body.faces),
-                                       m.robot.reflected(scene.reference_point))
-            except InvalidMeshError as e:
-                report[body.name] = f"obstacle only: {e}"
-                continue
-            view.add_superset(body.name, S)
-            report[body.name] = (f"superset ({S.n_facets} facets): its C-obstacle failed to "
-                                 f"build: {body.error}")
-        elif body.error:
-            report[body.name] = f"obstacle only: its C-obstacle failed to build: {body.error}"
-        elif not cos:
-            report[body.name] = f"obstacle only ({body.kind}: {body.reason.split(': ', 1)[-1]})"
-    view.add_robot("start", scene.robot.vertices, scene.robot.faces, scene.start,
-                   reference=scene.reference_point)
-    view.add_robot("goal", scene.robot.vertices, scene.robot.faces, scene.goal,
-                   reference=scene.reference_point)
-    if path is not None:
-        # Waypoints a little larger than the default: a scene's path is its subject.
-        view.add_path("path", path, radius=0.015 * float(np.ptp(scene.bounds, axis=0).max()))
-        if animate:
-            view.animate_robot("start", path)
-    # Look across the start -> goal direction (from above) so a passage is seen edge-on.
-    travel = np.asarray(scene.goal, float) - np.asarray(scene.start, float)
-    side = np.cross(travel, [0.0, 0.0, 1.0])
-    if np.linalg.norm(side) > 0:
-        view.frame(direction=side / np.linalg.norm(side) + [0.0, 0.0, 0.6])
-    return report
