@@ -22,9 +22,10 @@ demo: $(STAMP)
 	$(VENV)/bin/cspace plan scenes/comb.toml --seed 1 --time 5 --explain --fcl-check \
 		-o out/comb_path.txt --html out/comb_plan.html --result out/comb_result.json
 
-# Needs Chromium (Debian: apt-get install -y chromium); rewrites the README picture.
+# Needs Chromium (Debian: apt-get install -y chromium); rewrites the README pictures.
 screenshot: $(STAMP)
 	$(PY) examples/view_convex.py --out out/convex_demo.html --screenshot docs/convex_demo.png
+	$(PY) examples/decide_scenes.py --out out --screenshot docs
 
 test: $(STAMP)
 	$(PY) -m pytest

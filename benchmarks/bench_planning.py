@@ -330,7 +330,7 @@ def auto_section() -> list[str]:
              "an FCL checker with discrete motions (its paths re-proved with exact "
              "`segment_free`; *wrong*: those it rejects). Times: mean seconds over the solved "
              "runs (auto: every attempt, the C-space built; peers: `solve()`).", "",
-             "| scene | auto solved | auto mean s | answered by | RRTConnect (exact) solved | "
+             "| scene | auto answered | auto mean s | answered by | RRTConnect (exact) solved | "
              "mean s | RRTConnect (FCL) solved | mean s | FCL wrong |",
              "|---|---|---|---|---|---|---|---|---|"]
     for path in sorted((ROOT / "scenes").glob("*.toml")):
@@ -339,10 +339,13 @@ def auto_section() -> list[str]:
         auto, by, ours, fcl, wrong = [], [], [], [], 0
         for seed in AUTO_SEEDS:
             r = plan(scene, planner="auto", time=AUTO_TIME, seed=seed)
-            if r.solved:
+            proved = r.decision is not None and r.decision.answer == "no path"
+            if r.solved or proved:  # a path, or the proof that there is none
                 auto.append(r.time)
                 t = r.tried[-1]
-                by.append(f"{t['planner']}" + (f" ({t['sampler']})" if t["sampler"]
+                by.append(("no path (proved" + (", with turns)" if t["slices"] else ")"))
+                          if not r.solved else
+                          f"{t['planner']}" + (f" ({t['sampler']})" if t["sampler"]
                                                not in ("uniform", None) else "")
                           + (" + turns" if t["slices"] else ""))
             o = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner="RRTConnect",
@@ -359,8 +362,10 @@ def auto_section() -> list[str]:
         lines.append(f"| {path.stem} | {len(auto)}/{n} | {mean(auto)} | {names} | "
                      f"{len(ours)}/{n} | {mean(ours)} | {len(fcl)}/{n} | {mean(fcl)} | {wrong} |")
         print(lines[-1], flush=True)
-    lines += ["", "Every shipped scene has a path (the piano's needs turns); scenes without "
-              "one: the next section.", ""]
+    lines += ["", "*auto answered*: a proved path, or for the cage (the one shipped scene "
+              "without a path) the proof that none exists, over 8 orientation slices and the "
+              "turns between them (`cspace plan` exit 3). More scenes with and without a path: "
+              "the next section.", ""]
     return lines
 
 
@@ -368,13 +373,13 @@ DECIDE_TIME = 10.0
 
 
 def decide_scenes(tmp: Path) -> list:
-    """``(name, scene, truth)``: cages without and with a way out (tests/test_decide.py), the
-    piano at its start orientation, and the other shipped scenes (all with a path)."""
+    """``(name, scene, truth)``: cages without and with a way out (tests/test_decide.py: moved
+    and scaled, open walls, a wide slot), then the shipped scenes (the cage without a path, the
+    piano without one at its start orientation, the others with one)."""
     from test_decide import cage_toml
 
     out = []
-    for name, kw, truth in (("cage (slot 0.2 < robot 0.4)", dict(slot=0.2), "no path"),
-                            ("cage at (250, 150, -300), x3", dict(
+    for name, kw, truth in (("cage at (250, 150, -300), x3", dict(
                                 slot=0.2, offset=(250.0, 150.0, -300.0), scale=3.0), "no path"),
                             ("cage, open walls", dict(slot=0.2, surfaces=True), "no path"),
                             ("cage (slot 0.6 > robot 0.4)", dict(slot=0.6), "path")):
@@ -383,7 +388,7 @@ def decide_scenes(tmp: Path) -> list:
         out.append((name, load(path), truth))
     for path in sorted((ROOT / "scenes").glob("*.toml")):
         out.append((path.stem + (" (no turns)" if path.stem == "piano" else ""), load(path),
-                    "no path" if path.stem == "piano" else "path"))
+                    "no path" if path.stem in ("piano", "cage") else "path"))
     return out
 
 
@@ -403,7 +408,7 @@ def decide_section() -> list[str]:
              "checker with discrete motions (*wrong*: paths exact `segment_free` rejects). A "
              "planner can only say 'not solved' (it runs out the clock); 'no path' is ours "
              "alone. *truth*: by construction (the cages' slot against the robot's width; "
-             "every shipped scene has a path, the piano only if it turns).", "",
+             "the other shipped scenes have a path, the piano only if it turns).", "",
              "| scene | truth | decide | decide s | auto answers | auto mean s | RRTConnect "
              "(exact) solved | PRM (exact) solved | RRTConnect (FCL) solved | FCL wrong |",
              "|---|---|---|---|---|---|---|---|---|---|"]

@@ -34,6 +34,14 @@ def test_plan_in_scene(tmp_path):
     assert "(cache miss)" not in again and again.count("(cache hit)") == 11
 
 
+def test_decide_scenes(tmp_path):
+    out = run(tmp_path, "decide_scenes.py", "--out", tmp_path)
+    assert "cage: no path (start and goal in different components" in out
+    assert "comb: path (a route through free cells" in out
+    for name in ("cage", "comb"):  # offline pages (their drawing is tested in test_viz)
+        assert (tmp_path / f"decide_{name}.html").stat().st_size > 10_000
+
+
 def test_own_ompl_setup(tmp_path):
     out = run(tmp_path, "own_ompl_setup.py")
     assert "status: Exact solution" in out and "exactly collision-free: True" in out

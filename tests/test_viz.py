@@ -416,3 +416,27 @@ def test_colours_are_documented_in_the_module_docstring():
                 *scene_view.SUPERSET_COLORS.values()]:
         assert str(tuple(rgb)) in doc and f"#{scene_view._hex(rgb):06x}" in doc, rgb
     assert scene_view.KINDS == SUPERSET_KINDS == cspace.FACET_KINDS
+
+
+def test_a_proof_that_no_path_exists_is_drawn_as_its_cells():
+    """draw_scene(decision=...) draws the cells the robot is confined to and the wall around
+    them, in the cells colour, one box (12 triangles) per cell."""
+    from cspace.planning.decide import decide
+    from cspace.scene.files import load_scene
+    from cspace.scene.model import model_scene
+
+    scene = load_scene(SCENES / "cage.toml")
+    d = decide(model_scene(scene).cspace(), scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "no path"
+    view = viz.SceneView(axes=False)
+    report = viz.draw_scene(view, scene, decision=d, animate=False)
+    assert report["decision"].startswith("no path")
+    objects = {c["path"]: c["object"] for c in scene_commands(view.static_html())
+               if c["type"] == "set_object"}
+    for name, cells in (("confined", d.start_component), ("wall", d.wall)):
+        obj = objects[f"/meshcat/cells/{name}"]
+        (geometry,) = obj["geometries"]
+        (material,) = obj["materials"]
+        index = np.frombuffer(geometry["data"]["index"]["array"].data, dtype=np.uint32)
+        assert len(index) == 3 * 12 * int(cells.sum()) > 0
+        assert material["color"] == scene_view._hex(scene_view.CELLS_COLOR)
