@@ -265,3 +265,33 @@ def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
             exact[r] |= all(impl._in_piece(i, j, x) for x in C[r].tolist())
         np.testing.assert_array_equal(fast, exact)
         assert exact.any() and not exact.all()
+
+
+def _hollow(tmp_path, start, goal, offset=(250.0, 150.0, -300.0)):
+    """A closed hollow box (outer side 2.4, a cavity of side 2.0 wound inwards): one
+    non-convex solid, summed by NCC-CVMS (kind 'mesh')."""
+    import trimesh
+
+    off = np.asarray(offset)
+    outer, inner = trimesh.creation.box((2.4, 2.4, 2.4)), trimesh.creation.box((2.0, 2.0, 2.0))
+    trimesh.Trimesh(np.vstack([outer.vertices, inner.vertices]) + off,
+                    np.vstack([outer.faces, inner.faces[:, ::-1] + 8]),
+                    process=False).export(tmp_path / "hollow.obj")
+    path = tmp_path / "hollow.toml"
+    path.write_text(f'name = "hollow"\n[robot]\nbox = [0.4, 0.4, 0.4]\n[planning]\n'
+                    f"bounds = [{(off - 2).tolist()}, {(off + 2).tolist()}]\n"
+                    f"start = {(off + start).tolist()}\ngoal = {(off + goal).tolist()}\n"
+                    '[[obstacles]]\nmesh = "hollow.obj"\n')
+    scene = cspace.load_scene(path)
+    return scene, cspace.model_scene(scene).cspace()
+
+
+def test_a_non_convex_solid_shuts_the_robot_in(tmp_path):
+    scene, cs = _hollow(tmp_path, start=(0, 0, 0), goal=(1.6, 1.6, 1.6))
+    assert [co.kind for co in cs.obstacles] == ["mesh"]
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "no path", d.reason
+    _check_wall_with_fcl(scene, d, n_cells=30)
+    outside, cs2 = _hollow(tmp_path, start=(-1.6, -1.6, -1.6), goal=(1.6, 1.6, 1.6))
+    d2 = decide(cs2, outside.start, outside.goal, bounds=outside.bounds)
+    assert d2.answer == "path" and verify_path(cs2, d2.path, outside.bounds)["valid"]

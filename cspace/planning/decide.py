@@ -8,7 +8,10 @@ planning bounds:
     The closed cell lies inside one convex piece of one C-obstacle: its eight corners are in
     that piece, by the piece's exact point test (a convex piece holds the hull of its
     points). Exact; a cell inside the union of several pieces but no single one is not
-    blocked (it stays passable: never a false proof).
+    blocked (it stays passable: never a false proof). Inside a non-convex sum (kind
+    ``'mesh'``): its centre is inside (exact) and farther from the surface than its
+    half-diagonal plus ``2**-20`` of the C-obstacle's size (a float distance, accurate to a
+    few ulps: the margin is what makes it certain).
 ``free``
     Every C-obstacle whose box meets the cell is kept off it: a convex piece by one of its
     facet planes (the cell's support value beyond the plane by more than ``2**-30`` of the
@@ -37,8 +40,7 @@ its "no path" is reported as "unknown".
 
 **"unknown"**: neither within the depth and the time given (walls whose C-obstacles only
 touch, or thinner than a finest cell; a gap narrower than a finest cell). The planners then
-run as without the decision. C-obstacles of kind ``'mesh'`` (non-convex sums) block no cell
-yet: their free space is over-approximated, which can only turn a proof into "unknown".
+run as without the decision.
 
 This is a certified cell decomposition (as in Zhang, Kim and Manocha, "Path non-existence
 computation using C-obstacle query", 2008), with the cells' labels decided exactly; the
@@ -148,8 +150,10 @@ class Decision:
 
 def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     """(m,) bool: the closed box ``[lo[r], hi[r]]`` lies in one convex piece of ``co``
-    (all eight corners in it, exactly). Kinds without convex pieces (``'mesh'``) answer
-    False, which is always safe."""
+    (all eight corners in it, exactly). A non-convex sum (``'mesh'``): the cell's centre is
+    inside (exact sign) and its distance to the surface exceeds the half-diagonal by
+    ``2**-20`` of the C-obstacle's size (the distance is float, accurate to a few ulps of the
+    coordinates, far below that margin), so the ball it spans, and the cell, are inside."""
     m = len(lo)
     C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])  # (m, 8, 3)
     kind = co.kind
@@ -172,6 +176,11 @@ def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         return out
     if kind == "pairs":
         return _inside_a_pair(co._impl, lo, hi, C)
+    if kind == "mesh":  # inside, and farther from the surface than any corner of the cell
+        B = np.asarray(co.bounds, dtype=np.float64)
+        margin = _FREE_MARGIN * float(np.abs(B).max() + (B[1] - B[0]).max())
+        sd = co.signed_distance((lo + hi) / 2)
+        return (sd < 0) & (-sd > np.linalg.norm(hi - lo, axis=1) / 2 + margin)
     return np.zeros(m, dtype=bool)
 
 
