@@ -451,14 +451,17 @@ def _replace_section(text: str, section: list[str], title: str) -> str:
     """``text`` with its section starting ``## {title}`` (up to the next ``## `` heading)
     replaced by ``section``, or ``section`` inserted before the closing note."""
     lines = text.split("\n")
+
+    def ends(line: str) -> bool:  # a section ends at the next heading, the note or a marker
+        return line.startswith(("## ", "Note:", "<!--"))
+
     starts = [i for i, line in enumerate(lines) if line.startswith(f"## {title}")]
     if starts:
         i = starts[0]
-        j = next((k for k in range(i + 1, len(lines)) if lines[k].startswith("## ")), None)
-        if j is None:
-            j = next(k for k in range(i + 1, len(lines)) if lines[k].startswith("Note:"))
+        j = next((k for k in range(i + 1, len(lines)) if ends(lines[k])), len(lines))
         return "\n".join(lines[:i] + section + lines[j:])
-    k = next(k for k, line in enumerate(lines) if line.startswith("Note:"))
+    k = next((k for k, line in enumerate(lines) if ends(line) and not line.startswith("## ")
+              and k > 0), len(lines))
     return "\n".join(lines[:k] + section + lines[k:])
 
 
