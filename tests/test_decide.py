@@ -295,3 +295,60 @@ def test_a_non_convex_solid_shuts_the_robot_in(tmp_path):
     outside, cs2 = _hollow(tmp_path, start=(-1.6, -1.6, -1.6), goal=(1.6, 1.6, 1.6))
     d2 = decide(cs2, outside.start, outside.goal, bounds=outside.bounds)
     assert d2.answer == "path" and verify_path(cs2, d2.path, outside.bounds)["valid"]
+
+
+def _wall_with_a_hole(rng, tmp_path):
+    """A wall across the bounds (x = 0) with a rectangular hole, a box robot, start and goal
+    on either side; moved, scaled, its bodies shuffled. The truth by construction: a path
+    exists iff the hole is wider than the robot on both axes."""
+    off = rng.choice([0.0, 1.0]) * np.array([250.0, 150.0, -300.0]) * rng.choice([1, 10])
+    scale = float(rng.choice([1.0, 3.0, 0.1]))
+    R = rng.uniform(0.2, 0.6, 3)
+    hy, hz = rng.uniform(0.1, 0.8, 2)
+    cy, cz = rng.uniform(-1, 1, 2)
+    t, E = rng.uniform(0.02, 0.3), 3.0
+    y0, y1, z0, z1 = cy - hy / 2, cy + hy / 2, cz - hz / 2, cz + hz / 2
+    boxes = [((0, (-E + y0) / 2, 0), (t, y0 + E, 2 * E)), ((0, (y1 + E) / 2, 0), (t, E - y1, 2 * E)),
+             ((0, cy, (-E + z0) / 2), (t, hy, z0 + E)), ((0, cy, (z1 + E) / 2), (t, hy, E - z1))]
+
+    def at(p):
+        return [float(x) for x in np.asarray(p) * scale + off]
+
+    lines = ['name = "wall"', "[robot]", f"box = {[float(x) for x in R * scale]}", "[planning]",
+             f"bounds = [{at((-2, -2, -2))}, {at((2, 2, 2))}]", f"start = {at((-1.5, 0, 0))}",
+             f"goal = {at((1.5, 0.3, -0.2))}"]
+    for k in rng.permutation(4):
+        c, s = boxes[k]
+        lines += ["[[obstacles]]", f"box = {[float(x) * scale for x in s]}", f"position = {at(c)}"]
+    path = tmp_path / "wall.toml"
+    path.write_text("\n".join(lines) + "\n")
+    scene = cspace.load_scene(path)
+    return scene, hy > R[1] and hz > R[2], min(hy - R[1], hz - R[2]) * scale
+
+
+def _never_contradicts_the_truth(tmp_path, seed, n):
+    rng = np.random.default_rng(seed)
+    answers = []
+    for _ in range(n):
+        scene, fits, spare = _wall_with_a_hole(rng, tmp_path)
+        cs = cspace.model_scene(scene).cspace()
+        if cs.contains(scene.start) or cs.contains(scene.goal):
+            continue
+        d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=10)
+        answers.append(d.answer)
+        if d.answer == "no path":  # allowed only where no path with clearance exists
+            assert not fits or spare <= d.clearance, (spare, d.reason)
+        if d.answer == "path":
+            assert fits and verify_path(cs, d.path, scene.bounds)["valid"]
+    return answers
+
+
+def test_walls_with_holes_never_get_a_wrong_answer(tmp_path):
+    answers = _never_contradicts_the_truth(tmp_path, 0, 8)
+    assert "no path" in answers and "path" in answers
+
+
+@pytest.mark.slow
+def test_walls_with_holes_never_get_a_wrong_answer_200(tmp_path):
+    answers = _never_contradicts_the_truth(tmp_path, 1, 200)
+    assert answers.count("no path") > 50 and answers.count("path") > 20

@@ -405,9 +405,16 @@ def _endpoints(cspace, b, start, goal, check=True):
     return q0, q1
 
 
+#: The deepest level: the cells are painted on a dense grid of ``2**(3 depth)`` (at 8, 16.8 M
+#: cells: about 0.4 GB of labels while components are found).
+MAX_DEPTH = 8
+
+
 def _depth(depth) -> int:
-    if not (1 <= int(depth) <= 10):
-        raise InvalidArgumentError(f"depth must be in 1..10, got {depth}")
+    if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not (
+            1 <= int(depth) <= MAX_DEPTH):
+        raise InvalidArgumentError(f"depth must be an int in 1..{MAX_DEPTH} (memory grows as "
+                                   f"8**depth), got {depth!r}")
     return int(depth)
 
 
