@@ -51,7 +51,7 @@ from __future__ import annotations
 
 import time as _time
 import weakref
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -116,7 +116,6 @@ class Decision:
     wall: np.ndarray
     time: float
     reason: str
-    counts: dict = field(default_factory=dict)
 
     def __repr__(self) -> str:
         n = {k: int(np.count_nonzero(self.labels == v))
@@ -136,12 +135,11 @@ class Decision:
             keep = self.wall
         else:
             raise InvalidArgumentError(f"which must be 'start' or 'blocked', got {which!r}")
-        boxes = []
-        for lo, hi in zip(self.cells_lo[keep], self.cells_hi[keep]):
-            b = trimesh.creation.box(np.maximum(hi - lo, 0.0))
-            b.apply_translation((lo + hi) / 2)
-            boxes.append(b)
-        return trimesh.util.concatenate(boxes) if boxes else trimesh.Trimesh()
+        unit = trimesh.creation.box(bounds=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
+        lo, hi = self.cells_lo[keep], self.cells_hi[keep]
+        V = lo[:, None, :] + np.asarray(unit.vertices)[None] * (hi - lo)[:, None, :]
+        F = np.asarray(unit.faces)[None] + 8 * np.arange(len(lo))[:, None, None]
+        return trimesh.Trimesh(V.reshape(-1, 3), F.reshape(-1, 3), process=False)
 
 
 # --------------------------------------------------------------------------------------------
