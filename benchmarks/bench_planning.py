@@ -442,8 +442,9 @@ def decide_section() -> list[str]:
               "axis) fits inside one convex piece of one C-obstacle, so C-obstacles that only "
               "touch, or a gap between them narrower than a cell, answer 'unknown' and the "
               "samplers go on (the window's and the cavity's gaps: 0.01 wide, a third of a "
-              "cell). With turns, a proof at the start's orientation sends `auto` straight to the turning "
-              "planner; a proof over orientations is not made yet.", ""]
+              "cell). With turns (the previous section), `auto` then decides over 8 orientation "
+              "slices and the turns between them (`decide_turning`) before planning them: a "
+              "proof that holds over those slices, not over every rotation.", ""]
     return lines
 
 
