@@ -316,7 +316,9 @@ def test_cli_turns_by_default_when_the_goal_does(tmp_path):
     assert np.allclose(Rotation.from_quat(rows[-1, 3:]).as_euler("xyz", degrees=True), [0, 0, 90])
     fixed = subprocess.run(base + ["--no-turns", "--time", "1"], capture_output=True, text=True,
                            timeout=300)
-    assert fixed.returncode == 1 and "36 orientation slices" not in fixed.stderr
+    # kept at the start's orientation, the piano has no path: proved (exit 3), not turned
+    assert fixed.returncode == 3 and "36 orientation slices" not in fixed.stderr
+    assert "no path, proved: none at the start's orientation" in fixed.stdout
 
 
 @pytest.mark.parametrize("move", [0, 1], ids=["as given", "at (250, 150, -300)"])
