@@ -352,3 +352,19 @@ def test_walls_with_holes_never_get_a_wrong_answer(tmp_path):
 def test_walls_with_holes_never_get_a_wrong_answer_200(tmp_path):
     answers = _never_contradicts_the_truth(tmp_path, 1, 200)
     assert answers.count("no path") > 50 and answers.count("path") > 20
+
+
+def test_slices_that_stop_at_different_levels_are_compared_on_one_grid(tmp_path):
+    """One small obstacle in a corner: some slices need no refinement at all, others do; the
+    components are still compared cell for cell (and nothing here is closed)."""
+    from cspace.planning.decide import decide_turning
+    from cspace.planning.plan import default_slices
+    from cspace.planning.turning import TurningCSpace
+
+    path = tmp_path / "corner.toml"
+    path.write_text('name = "corner"\n[robot]\nbox = [1.0, 0.1, 0.1]\n[planning]\n'
+                    "bounds = [[0, 0, 0], [4, 4, 4]]\nstart = [1, 1, 1]\ngoal = [3, 1, 1]\n"
+                    "[[obstacles]]\nbox = [0.2, 0.2, 0.2]\nposition = [4.5, 4.5, 3.95]\n")
+    scene = cspace.load_scene(path)
+    td = decide_turning(TurningCSpace(scene, default_slices(scene, 4)), scene.start, scene.goal)
+    assert td.answer == "unknown" and len(td.components) == 4, td.reason

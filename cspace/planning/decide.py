@@ -629,10 +629,11 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0) -> T
             cs = tcs.slice(k)
             obstacles, boxes, bound, margin = _setup(cs, b)
             clearance = max(clearance, bound)
-            for _, size, L_lo, L_sz, L_lab, _more in _octree(obstacles, boxes, margin, g, depth,
-                                                             deadline):
+            for _, _size, L_lo, L_sz, L_lab, _more in _octree(obstacles, boxes, margin, g, depth,
+                                                              deadline):
                 pass
-            _, lab = _paint(g, size, L_lo, L_sz, L_lab)
+            # on the finest grid, whatever level the slice stopped at: one shape for all
+            _, lab = _paint(g, np.ones(3, dtype=np.int64), L_lo, L_sz, L_lab)
             comp = _components(lab != BLOCKED)
             labels.append(comp)
             counts.append(int(comp.max()))
