@@ -344,8 +344,9 @@ def _plan(args: argparse.Namespace) -> int:
         print(f"  no path at the start's orientation, proved: {d.reason} (a wall of "
               f"{int(d.wall.sum())} cells inside the C-obstacles; for clearances above "
               f"{d.clearance:.3g})")
-    if d is not None and d.answer == "no path" and not r.solved and r.slices is None:
-        turned = [t for t in r.tried if t["planner"] == "decide" and t["slices"]]
+    turned = [t for t in r.tried or () if t["planner"] == "decide" and t["slices"]]
+    if (d is not None and d.answer == "no path" and not r.solved and r.slices is None
+            and (args.no_turns or (turned and turned[0]["answer"] == "no path"))):
         print(f"{scene.name}: no path, proved: "
               + (f"none over {turned[0]['slices']} orientation slices (turns about one "
                  "axis), translating at each and turning in place between neighbours (not a "

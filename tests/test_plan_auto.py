@@ -49,7 +49,7 @@ def test_auto_turns_the_robot_when_translations_find_no_path():
     kept = plan(scene, planner="auto", time=2.0, seed=1, turns=False)
     assert not kept.solved and kept.slices is None and len(kept.path) == 0
     assert [t["planner"] for t in kept.tried] == ["RRTConnect", "decide"]
-    assert kept.decision.answer == "no path" and kept.status == "No path (proved)"
+    assert kept.decision.answer == "no path" and kept.status.startswith("No path")
 
 
 def test_auto_answers_within_a_tiny_budget():

@@ -498,7 +498,8 @@ def _decided(cs, d, bounds) -> PlanResult:
     P = d.path if d.path is not None else np.zeros((0, 3))
     b = _bounds(bounds if bounds is not None else cs.bounds)
     valid = bool(len(P)) and verify_path(cs, P, b)["valid"]
-    status = {"path": "Exact solution", "no path": "No path (proved)"}.get(d.answer, "Unknown")
+    status = {"path": "Exact solution",
+              "no path": "No path at the start's orientation (proved)"}.get(d.answer, "Unknown")
     return PlanResult(path=P, solved=valid, exact=d.answer == "path", valid=valid,
                       planner="decide", motion="exact", time=d.time, solve_time=d.time,
                       n_states=len(P), status=status, state_checks=0, motion_checks=0,
