@@ -264,31 +264,28 @@ class _Piece:
 def _labels(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
             deadline: float) -> np.ndarray:
     """The label of each closed cell ``[lo[r], hi[r]]``."""
-    free = np.ones(len(lo), dtype=bool)
-    for k, co in enumerate(obstacles):
-        if _time.perf_counter() > deadline:
-            raise _OutOfTime
-        B = boxes[k]
-        rows = np.nonzero(free & (lo <= B[1]).all(axis=1) & (B[0] <= hi).all(axis=1))[0]
-        if len(rows):
-            free[rows] = _kept_off(co, lo[rows], hi[rows], margin)
+    free = _sweep(obstacles, boxes, lo, hi, True, False,
+                  lambda co, a, b: _kept_off(co, a, b, margin), deadline)
     label = np.where(free, FREE, MIXED).astype(np.int8)
     rest = np.nonzero(~free)[0]
-    label[rest[_blocked(obstacles, boxes, lo[rest], hi[rest], deadline)]] = BLOCKED
+    label[rest[_sweep(obstacles, boxes, lo[rest], hi[rest], False, True, _inside_one_piece,
+                      deadline)]] = BLOCKED
     return label
 
 
-def _blocked(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-             deadline: float) -> np.ndarray:
-    out = np.zeros(len(lo), dtype=bool)
+def _sweep(obstacles, boxes, lo, hi, initial: bool, within: bool, test, deadline) -> np.ndarray:
+    """A flag per cell, ``initial`` until a C-obstacle whose box the cell meets (``within``:
+    lies in) answers ``test(co, lo, hi)`` for it otherwise; past ``deadline``: out of time."""
+    flag = np.full(len(lo), initial, dtype=bool)
     for k, co in enumerate(obstacles):
         if _time.perf_counter() > deadline:
             raise _OutOfTime
         B = boxes[k]
-        rows = np.nonzero(~out & (B[0] <= lo).all(axis=1) & (hi <= B[1]).all(axis=1))[0]
+        near = ((B[0] <= lo) & (hi <= B[1]) if within else (lo <= B[1]) & (B[0] <= hi))
+        rows = np.nonzero((flag == initial) & near.all(axis=1))[0]
         if len(rows):
-            out[rows] = _inside_one_piece(co, lo[rows], hi[rows])
-    return out
+            flag[rows] = test(co, lo[rows], hi[rows])
+    return flag
 
 
 # --------------------------------------------------------------------------------------------
