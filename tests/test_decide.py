@@ -187,10 +187,10 @@ def test_bad_questions_get_named_errors(tmp_path):
 def test_plan_and_the_cli_answer_no_path(tmp_path):
     path = tmp_path / "cage.toml"
     path.write_text(cage_toml(slot=0.2))
-    r = plan(cspace.load_scene(path), planner="auto", time=3.0, seed=1, turns=False)
+    r = plan(cspace.load_scene(path), planner="auto", time=5.0, seed=1, turns=False)
     assert not r.solved and r.decision.answer == "no path" and len(r.path) == 0
     out = tmp_path / "r.json"
-    p = subprocess.run([sys.executable, "-m", "cspace", "plan", str(path), "--time", "3",
+    p = subprocess.run([sys.executable, "-m", "cspace", "plan", str(path), "--time", "5",
                         "--no-turns", "--no-cache", "--result", str(out)],
                        capture_output=True, text=True, timeout=300)
     assert p.returncode == 3, (p.stdout, p.stderr)

@@ -46,7 +46,7 @@ def test_auto_turns_the_robot_when_translations_find_no_path():
     # no path at the start's orientation: so it turned at once; over the slices, no proof
     assert r.decision.answer == "no path" and r.tried[2]["answer"] == "unknown"
     assert (np.diff(r.slices) != 0).any()  # it did turn
-    kept = plan(scene, planner="auto", time=2.0, seed=1, turns=False)
+    kept = plan(scene, planner="auto", time=5.0, seed=1, turns=False)
     assert not kept.solved and kept.slices is None and len(kept.path) == 0
     assert [t["planner"] for t in kept.tried] == ["RRTConnect", "decide"]
     assert kept.decision.answer == "no path" and kept.status.startswith("No path")
@@ -98,7 +98,7 @@ def test_cspace_plan_no_turns_keeps_auto_at_the_start_orientation(tmp_path):
     """The piano has no translation path at its start orientation: with --no-turns that is
     proved (exit 3), and no sampler is run after the proof."""
     out = tmp_path / "r.json"
-    p = _cli(SCENES / "piano.toml", "--time", 2, "--seed", 1, "--no-cache", "--no-turns",
+    p = _cli(SCENES / "piano.toml", "--time", 5, "--seed", 1, "--no-cache", "--no-turns",
              "--result", out)
     assert p.returncode == 3, p.stdout
     assert "orientation slices" not in p.stdout and "auto: PRM" not in p.stdout
