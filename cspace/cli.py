@@ -21,9 +21,10 @@
   one axis) or ``--orientations N`` (free flying) let the robot turn, every translation and
   turn in place certified (:func:`cspace.planning.plan.plan_turning`); a scene whose goal
   orientation differs from the start's is planned that way by default (36 slices;
-  ``--no-turns`` keeps the start's). Without ``--planner``, ``auto``: RRTConnect, then PRM
-  with the narrow-passage sampler, then turns over 8 slices, within ``--time``
-  (``plan(..., planner='auto')``). ``--workers`` / ``--scheduler`` build through an
+  ``--no-turns`` keeps the start's). Without ``--planner``, ``auto``: RRTConnect, the
+  decision by certified cells (:mod:`cspace.planning.decide`), PRM with the narrow-passage
+  sampler, then turns over 8 slices, within ``--time`` (``plan(..., planner='auto')``); exit
+  status 3 when no path exists, proved. ``--workers`` / ``--scheduler`` build through an
   executor, as for ``build``.
 - ``cspace view SCENE`` — :func:`cspace.viz.draw.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``.
@@ -725,15 +726,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles", **_help(
         "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html\n"
         "exit status: 0 a proved path; 1 none found in the time given; 2 bad input; "
-        f"{EXIT_NO_PATH} proved that none exists (--planner auto, at the start's orientation: "
-        f"with --no-turns, or when the robot cannot turn); {EXIT_MEMORY} over the memory "
-        "budget"))
+        f"{EXIT_NO_PATH} proved that none exists (--planner auto: at the start's orientation "
+        "with --no-turns, else over 8 orientation slices and the turns between them); "
+        f"{EXIT_MEMORY} over the memory budget"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     _model_options(p)
     p.add_argument("--planner", default="auto",
-                   help="any bound OMPL geometric planner, or 'auto' (default): a decision "
-                        "by certified cells (a path through free cells, or a proof that none "
-                        "exists), then RRTConnect, then PRM with the narrow-passage sampler, "
+                   help="any bound OMPL geometric planner, or 'auto' (default): RRTConnect, "
+                        "then a decision by certified cells (a path through free cells, or a "
+                        "proof that none exists), then PRM with the narrow-passage sampler, "
                         "then turns over orientation slices (not with --no-turns), within --time")
     p.add_argument("--time", type=_positive, default=5.0,
                    help="planning time budget in seconds")
