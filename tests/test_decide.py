@@ -368,3 +368,20 @@ def test_slices_that_stop_at_different_levels_are_compared_on_one_grid(tmp_path)
     scene = cspace.load_scene(path)
     td = decide_turning(TurningCSpace(scene, default_slices(scene, 4)), scene.start, scene.goal)
     assert td.answer == "unknown" and len(td.components) == 4, td.reason
+
+
+def test_surface_pieces_block_as_the_pairs_do(tmp_path):
+    """The same open walls as convex pieces per triangle (SurfaceObstacle, the reference the
+    scene's triangle pairs are tested against): the same proof, the wall checked by FCL."""
+    from cspace.cobstacle.surface import SurfaceObstacle
+
+    scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, offset=(250.0, 150.0, -300.0))
+    m = cspace.model_scene(scene)
+    (part,) = m.robot_parts
+    robot = m.margin.grow(part.operand)
+    walls = [SurfaceObstacle.build((b.vertices, b.faces), robot, scene.reference_point,
+                                   grid=m.grid) for b in m.bodies]
+    assert {co.kind for co in walls} == {"surface"}
+    d = decide(cspace.CSpace(walls, bounds=scene.bounds), scene.start, scene.goal)
+    assert d.answer == "no path", d.reason
+    _check_wall_with_fcl(scene, d, n_cells=20)

@@ -232,28 +232,24 @@ def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
         val = c @ A[:3] + A[3] - h @ np.abs(A[:3])
         tol = 2.0 ** -30 * ((np.abs(c) + h) @ np.abs(A[:3]) + np.abs(A[3]))
         return (val > tol).any(axis=1)
-    if kind in ("union", "surface"):
-        parts = co.parts if kind == "union" else [None] * len(co._impl.impl)
+    if kind in ("union", "surface"):  # every part (a surface's convex pieces) near the cell
+        members = ([(np.asarray(p.bounds, dtype=np.float64), p) for p in co.parts]
+                   if kind == "union" else
+                   [(np.stack([co._impl.lo[j], co._impl.hi[j]]), _Piece(piece))
+                    for j, piece in enumerate(co._impl.impl)])
         out = np.ones(len(lo), dtype=bool)
-        for j, part in enumerate(parts):
-            if part is not None:
-                B = np.asarray(part.bounds, dtype=np.float64)
-            else:
-                B = np.stack([co._impl.lo[j], co._impl.hi[j]])
+        for B, part in members:
             rows = np.nonzero(out & (lo <= B[1]).all(axis=1) & (B[0] <= hi).all(axis=1))[0]
-            if not len(rows):
-                continue
-            if part is not None:
+            if len(rows):
                 out[rows] = _kept_off(part, lo[rows], hi[rows], margin)
-            else:  # a surface's convex piece: its planes as a convex C-obstacle's
-                out[rows] = _kept_off(_Piece(co._impl.impl[j]), lo[rows], hi[rows], margin)
         return out
     half = np.linalg.norm(hi - lo, axis=1) / 2
     return co.signed_distance((lo + hi) / 2) > half + margin
 
 
 class _Piece:
-    """A convex engine seen as a convex C-obstacle by :func:`_kept_off`."""
+    """A surface's convex piece (its engine) seen as a convex C-obstacle by :func:`_kept_off`:
+    its planes are a convex C-obstacle's."""
 
     kind = "convex"
 
@@ -325,6 +321,14 @@ class _Grid:
             per_axis.append(range(lo, max(hi, lo) + 1))
         return np.array([(i, j, k) for i in per_axis[0] for j in per_axis[1]
                          for k in per_axis[2]], dtype=np.int64)
+
+
+def _shift(shape, d) -> tuple[tuple, tuple]:
+    """Slices pairing each cell of a grid of ``shape`` with its neighbour at offset ``d``:
+    ``grid[src]`` and ``grid[dst]`` line up."""
+    src = tuple(slice(max(0, -x), shape[a] - max(0, x)) for a, x in enumerate(d))
+    dst = tuple(slice(max(0, x), shape[a] - max(0, -x)) for a, x in enumerate(d))
+    return src, dst
 
 
 def _components(mask: np.ndarray) -> np.ndarray:
@@ -517,8 +521,7 @@ def _free_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, at0, at1):
     a_all, b_all = [], []
     shape = ids.shape
     for d in _NEIGHBOURS:
-        src = tuple(slice(max(0, -x), shape[a] - max(0, x)) for a, x in enumerate(d))
-        dst = tuple(slice(max(0, x), shape[a] - max(0, -x)) for a, x in enumerate(d))
+        src, dst = _shift(shape, d)
         both = free[src] & free[dst]
         a, c = ids[src][both], ids[dst][both]
         keep = a != c
@@ -645,8 +648,7 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0) -> T
             if not slices.neighbours(i, j):
                 continue
             for d in [(x, y, z) for x in (-1, 0, 1) for y in (-1, 0, 1) for z in (-1, 0, 1)]:
-                src = tuple(slice(max(0, -x), shape[a] - max(0, x)) for a, x in enumerate(d))
-                dst = tuple(slice(max(0, x), shape[a] - max(0, -x)) for a, x in enumerate(d))
+                src, dst = _shift(shape, d)
                 u, v = labels[i][src], labels[j][dst]
                 both = (u > 0) & (v > 0)
                 key = np.unique(u[both].astype(np.int64) * (counts[j] + 1) + v[both])
