@@ -246,7 +246,7 @@ def test_a_hull_proves_nothing_about_the_robot(tmp_path):
 def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
     """Blocked cells of open walls (triangle-pair C-obstacles) are found by a float filter
     over the pieces' half-spaces; it must agree with the exact test of every corner."""
-    from cspace.planning.decide import _CORNERS, _inside_a_pair
+    from cspace.planning.cells import _CORNERS, _inside_a_pair
 
     scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, offset=(250.0, 150.0, -300.0))
     rng = np.random.default_rng(0)

@@ -21,16 +21,22 @@ from cspace.planning.plan import AUTO_SLICES, plan, verify_path
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
 
-@pytest.mark.parametrize("name, first", [("window", "PRM"), ("cavity", "PRM"),
-                                         ("comb", "RRTConnect")])
+@pytest.mark.parametrize("name, first", [("window", ("decide", "PRM")),
+                                         ("cavity", ("decide", "PRM")),
+                                         ("comb", ("RRTConnect",))])
 def test_auto_solves_narrow_gaps_at_the_start_orientation(name, first):
+    """The gaps of window and cavity are a third of the decision's finest octree cell: its
+    refinement along routes finds them within its share of the budget on this machine; on a
+    slower one the narrow sampler after it does."""
     scene = cspace.load_scene(SCENES / f"{name}.toml")
     cs = cspace.CSpace.from_scene(scene)
     for seed in (1, 2, 3):
         r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner="auto", time=5.0,
                  seed=seed)
         assert r.solved and r.slices is None, (name, seed, r.tried)
-        assert r.tried[-1]["planner"] == first and r.tried[-1]["solved"]
+        assert r.tried[-1]["planner"] in first and r.tried[-1]["solved"]
+        if r.tried[-1]["planner"] == "decide":
+            assert r.decision.answer == "path"
         assert all(not t["solved"] for t in r.tried[:-1])
         assert verify_path(cs, r.path, scene.bounds)["valid"]
         np.testing.assert_array_equal(r.path[0], scene.start)

@@ -38,41 +38,35 @@ the middles of their contacts, shortcut), every segment proved by ``segment_free
 A C-space of the robot's convex hull (``robot_hull=True``) proves nothing about the robot:
 its "no path" is reported as "unknown".
 
-**"unknown"**: neither within the depth and the time given (walls whose C-obstacles only
-touch, or thinner than a finest cell; a gap narrower than a finest cell). The planners then
-run as without the decision.
+**Below the finest level**: undecided there, :func:`.corridor.refine_route` splits the mixed
+cells along the cheapest route between start and goal, again and again (a gap narrower than a
+cell; a wall the octree's cells could not fill). Its "path" and "no path" mean the same.
+
+**"unknown"**: neither within the time given (C-obstacles that only touch; a gap so narrow
+for its length that the cells along it do not fit the budget). The planners then run as
+without the decision.
 
 This is a certified cell decomposition (as in Zhang, Kim and Manocha, "Path non-existence
 computation using C-obstacle query", 2008), with the cells' labels decided exactly; the
-exact union of the C-obstacles (issue #31) would remove the depth limit.
+exact union of the C-obstacles (issue #31) would remove the limits.
 """
 
 from __future__ import annotations
 
 import time as _time
-import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import InvalidArgumentError
+from .cells import (BLOCKED, FREE, MIXED, _CORNERS, _components, _free_leaf_graph, _Grid,
+                    _labels, _OutOfTime, _polyline, _setup, _shift)
+from .corridor import refine_route
 
-#: Cell labels.
-BLOCKED, MIXED, FREE = 0, 1, 2
 #: Answers of :func:`decide`.
 ANSWERS = ("no path", "path", "unknown")
 #: The first level cut into cells (8 per axis), and the default finest level.
 FIRST_LEVEL, DEPTH = 3, 7
-# The free label's margin, relative to the bounds' size (signed_distance's float error is a
-# few ulps of the coordinates; 2**-20 is far above it and far below any cell).
-_FREE_MARGIN = 2.0 ** -20
-_CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.int64)
-_NEIGHBOURS = [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0, 1)
-               if (i, j, k) > (0, 0, 0)]
-
-
-class _OutOfTime(Exception):
-    pass
 
 
 @dataclass(repr=False)
@@ -142,215 +136,6 @@ class Decision:
         return trimesh.Trimesh(V.reshape(-1, 3), F.reshape(-1, 3), process=False)
 
 
-# --------------------------------------------------------------------------------------------
-# the blocked label: inside one convex piece of one C-obstacle
-
-
-def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """(m,) bool: the closed box ``[lo[r], hi[r]]`` lies in one convex piece of ``co``
-    (all eight corners in it, exactly). A non-convex sum (``'mesh'``): the cell's centre is
-    inside (exact sign) and its distance to the surface exceeds the half-diagonal by
-    ``2**-20`` of the C-obstacle's size (the distance is float, accurate to a few ulps of the
-    coordinates, far below that margin), so the ball it spans, and the cell, are inside."""
-    m = len(lo)
-    C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])  # (m, 8, 3)
-    kind = co.kind
-    if kind == "convex":
-        return co.contains(C.reshape(-1, 3)).reshape(m, 8).all(axis=1)
-    if kind == "union":
-        out = np.zeros(m, dtype=bool)
-        for part in co.parts:
-            rows = np.nonzero(~out)[0]
-            if len(rows):
-                out[rows] = _inside_one_piece(part, lo[rows], hi[rows])
-        return out
-    if kind == "surface":
-        impl, out = co._impl, np.zeros(m, dtype=bool)
-        for j, piece in enumerate(impl.impl):
-            rows = np.nonzero(~out & (impl.lo[j] <= lo).all(axis=1)
-                              & (hi <= impl.hi[j]).all(axis=1))[0]
-            if len(rows):
-                out[rows] = piece.contains(C[rows].reshape(-1, 3)).reshape(-1, 8).all(axis=1)
-        return out
-    if kind == "pairs":
-        return _inside_a_pair(co._impl, lo, hi, C)
-    if kind == "mesh":  # inside, and farther from the surface than any corner of the cell
-        B = np.asarray(co.bounds, dtype=np.float64)
-        margin = _FREE_MARGIN * float(np.abs(B).max() + (B[1] - B[0]).max())
-        sd = co.signed_distance((lo + hi) / 2)
-        return (sd < 0) & (-sd > np.linalg.norm(hi - lo, axis=1) / 2 + margin)
-    return np.zeros(m, dtype=bool)
-
-
-# Each pair engine's pieces' half-spaces as the decision has needed them: (exact, float).
-_HALFSPACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# The float filter of a half-space value n . x - d (x = corner / step, exact; n small ints;
-# d rounded once to float): a few roundings of relative 2**-53 each; 2**-45 is far above.
-_PLANE_FILTER = 2.0 ** -45
-
-
-def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
-    """:func:`_inside_one_piece` for a triangle-pair C-obstacle: the pieces whose k-DOPs meet
-    a cell (the engine's tree), then each piece's half-spaces at the eight corners, in floats
-    with the filter above and exactly (Python integers) where it cannot tell."""
-    out = np.zeros(len(lo), dtype=bool)
-    cand = impl._set.candidates(impl._grid_units(lo), impl._grid_units(hi))
-    if not len(cand):
-        return out
-    cache = _HALFSPACES.setdefault(impl, {})
-    X = np.ldexp(C, -impl.exponent)  # grid units, exact
-    key = cand[:, 1] * (int(cand[:, 2].max()) + 1) + cand[:, 2]
-    _, first, which = np.unique(key, return_index=True, return_inverse=True)
-    for u, f in enumerate(first.tolist()):
-        rows = cand[which == u, 0]
-        rows = rows[~out[rows]]
-        if not len(rows):
-            continue
-        i, j = int(cand[f, 1]), int(cand[f, 2])
-        if (i, j) not in cache:
-            H = impl._halfspaces(i, j)
-            cache[i, j] = (H, np.array([n for n, _ in H], dtype=np.float64).reshape(-1, 3),
-                           np.array([float(d) for _, d in H]))
-        H, N, d = cache[i, j]
-        val = X[rows] @ N.T - d  # (r, 8, h)
-        err = _PLANE_FILTER * (np.abs(X[rows]) @ np.abs(N).T + np.abs(d))
-        inside = (val < -err).all(axis=(1, 2))
-        unsure = ~inside & ~(val > err).any(axis=(1, 2))
-        for r in rows[unsure].tolist():
-            inside[rows == r] = all(impl._in_piece(i, j, x) for x in C[r].tolist())
-        out[rows[inside]] = True
-    return out
-
-
-def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
-    """(m,) bool: ``co`` certainly misses the closed box (see the ``free`` label)."""
-    kind = co.kind
-    if kind == "convex":
-        e = co._impl.exponent
-        A = co._impl.A
-        c, h = np.ldexp((lo + hi) / 2, -e), np.ldexp((hi - lo) / 2, -e)
-        val = c @ A[:3] + A[3] - h @ np.abs(A[:3])
-        tol = 2.0 ** -30 * ((np.abs(c) + h) @ np.abs(A[:3]) + np.abs(A[3]))
-        return (val > tol).any(axis=1)
-    if kind in ("union", "surface"):  # every part (a surface's convex pieces) near the cell
-        members = ([(np.asarray(p.bounds, dtype=np.float64), p) for p in co.parts]
-                   if kind == "union" else
-                   [(np.stack([co._impl.lo[j], co._impl.hi[j]]), _Piece(piece))
-                    for j, piece in enumerate(co._impl.impl)])
-        out = np.ones(len(lo), dtype=bool)
-        for B, part in members:
-            rows = np.nonzero(out & (lo <= B[1]).all(axis=1) & (B[0] <= hi).all(axis=1))[0]
-            if len(rows):
-                out[rows] = _kept_off(part, lo[rows], hi[rows], margin)
-        return out
-    half = np.linalg.norm(hi - lo, axis=1) / 2
-    return co.signed_distance((lo + hi) / 2) > half + margin
-
-
-class _Piece:
-    """A surface's convex piece (its engine) seen as a convex C-obstacle by :func:`_kept_off`:
-    its planes are a convex C-obstacle's."""
-
-    kind = "convex"
-
-    def __init__(self, impl):
-        self._impl = impl
-
-
-def _labels(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
-            deadline: float) -> np.ndarray:
-    """The label of each closed cell ``[lo[r], hi[r]]``."""
-    free = _sweep(obstacles, boxes, lo, hi, True, False,
-                  lambda co, a, b: _kept_off(co, a, b, margin), deadline)
-    label = np.where(free, FREE, MIXED).astype(np.int8)
-    rest = np.nonzero(~free)[0]
-    label[rest[_sweep(obstacles, boxes, lo[rest], hi[rest], False, True, _inside_one_piece,
-                      deadline)]] = BLOCKED
-    return label
-
-
-def _sweep(obstacles, boxes, lo, hi, initial: bool, within: bool, test, deadline) -> np.ndarray:
-    """A flag per cell, ``initial`` until a C-obstacle whose box the cell meets (``within``:
-    lies in) answers ``test(co, lo, hi)`` for it otherwise; past ``deadline``: out of time."""
-    flag = np.full(len(lo), initial, dtype=bool)
-    for k, co in enumerate(obstacles):
-        if _time.perf_counter() > deadline:
-            raise _OutOfTime
-        B = boxes[k]
-        near = ((B[0] <= lo) & (hi <= B[1]) if within else (lo <= B[1]) & (B[0] <= hi))
-        rows = np.nonzero((flag == initial) & near.all(axis=1))[0]
-        if len(rows):
-            flag[rows] = test(co, lo[rows], hi[rows])
-    return flag
-
-
-# --------------------------------------------------------------------------------------------
-# the octree
-
-
-class _Grid:
-    """The finest grid over the bounds: ``N[a]`` cells on axis ``a`` (1 on a flat axis), cell
-    corner ``i`` at ``x[a][i]`` (float64, strictly increasing, the bounds' ends exact)."""
-
-    def __init__(self, b: np.ndarray, depth: int):
-        self.b = b
-        self.split = b[1] > b[0]
-        self.N = np.where(self.split, 1 << depth, 1).astype(np.int64)
-        self.x = []
-        for a in range(3):
-            i = np.arange(self.N[a] + 1, dtype=np.float64)
-            x = b[0, a] + (b[1, a] - b[0, a]) * (i / self.N[a])
-            x[0], x[-1] = b[0, a], b[1, a]
-            x = np.clip(x, b[0, a], b[1, a])
-            if self.split[a] and not (np.diff(x) > 0).all():
-                raise InvalidArgumentError("the bounds are too small for the decision's cells")
-            self.x.append(x)
-
-    def floats(self, I: np.ndarray) -> np.ndarray:
-        """Float coordinates of integer corner indices ``I (k, 3)``."""
-        return np.stack([self.x[a][I[:, a]] for a in range(3)], axis=1)
-
-    def cells_at(self, q: np.ndarray, step: np.ndarray) -> np.ndarray:
-        """Indices (in units of ``step``) of every cell of that size whose closed box holds
-        ``q``: one or two per axis (``q`` on a corner plane belongs to both sides)."""
-        per_axis = []
-        for a in range(3):
-            xs = self.x[a][:: int(step[a])]
-            lo = max(int(np.searchsorted(xs, q[a], side="left")) - 1, 0)
-            hi = min(int(np.searchsorted(xs, q[a], side="right")) - 1, len(xs) - 2)
-            per_axis.append(range(lo, max(hi, lo) + 1))
-        return np.array([(i, j, k) for i in per_axis[0] for j in per_axis[1]
-                         for k in per_axis[2]], dtype=np.int64)
-
-
-def _shift(shape, d) -> tuple[tuple, tuple]:
-    """Slices pairing each cell of a grid of ``shape`` with its neighbour at offset ``d``:
-    ``grid[src]`` and ``grid[dst]`` line up."""
-    src = tuple(slice(max(0, -x), shape[a] - max(0, x)) for a, x in enumerate(d))
-    dst = tuple(slice(max(0, x), shape[a] - max(0, -x)) for a, x in enumerate(d))
-    return src, dst
-
-
-def _components(mask: np.ndarray) -> np.ndarray:
-    from scipy import ndimage
-
-    labels, _ = ndimage.label(mask, structure=np.ones((3, 3, 3), dtype=bool))
-    return labels
-
-
-def _setup(cspace, b: np.ndarray):
-    """The C-obstacles to label cells with (a lazy C-space's pairs near the bounds built
-    first), their boxes, the largest ``error_bound`` and the free label's margin."""
-    if hasattr(cspace, "build"):  # LazyCSpace: every pair that may meet the bounds, now
-        cspace.build(b[0], b[1])
-    obstacles = list(cspace.obstacles)
-    boxes = np.array([np.asarray(co.bounds, dtype=np.float64)
-                      for co in obstacles]).reshape(-1, 2, 3)
-    clearance = max((float(co.error_bound) for co in obstacles), default=0.0)
-    margin = _FREE_MARGIN * float(np.abs(b).max() + (b[1] - b[0]).max())
-    return obstacles, boxes, clearance, margin
-
-
 def _octree(obstacles, boxes, margin: float, g: _Grid, depth: int, deadline: float):
     """Label the octree level by level. Yields ``(level, size, lo, sizes, labels, more)``
     after each: the leaves so far (integer corners and sizes in finest cells), with this
@@ -418,7 +203,7 @@ def _depth(depth) -> int:
 
 
 def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float = 2.0,
-           progress=None) -> Decision:
+           refine: bool = True, progress=None) -> Decision:
     """Decide whether the robot can translate from ``start`` to ``goal``, by certified cells.
 
     Parameters
@@ -435,6 +220,10 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     time : float, default 2.0
         Wall-second budget; past it the answer is ``'unknown'`` (the levels done still say
         "no path" if they proved it).
+    refine : bool, default True
+        When the octree ends undecided, go on below ``depth`` along routes between start
+        and goal (:func:`cspace.planning.corridor.refine_route`), up to
+        ``2**-(depth + 20)`` of the bounds: gaps finer than the octree's cells.
     progress : callable, optional
         ``progress(fraction, message)`` after each level.
 
@@ -465,6 +254,12 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
                 progress((level - first + 1) / (depth - first + 1), f"level {level}: {answer}")
             if answer != "unknown":
                 break
+        else:  # the octree ended undecided: on below its finest level, along routes
+            if refine and L[0].size:
+                ids, lab = _paint(g, size, *L)
+                answer, reason, path = refine_route(
+                    cspace, g, q0, q1, ids, lab, L[0], L[1], size, obstacles, boxes, margin,
+                    deadline, g.cells_at(q0, size), g.cells_at(q1, size))
     except _OutOfTime:
         reason, comp_start = f"out of time at level {reached + 1}", None
     if answer == "no path" and getattr(cspace, "robot_hull", False):
@@ -509,7 +304,6 @@ def _decide_level(cspace, g: _Grid, q0, q1, L_lo, L_sz, L_lab, size, level):
 def _free_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, at0, at1):
     """A polyline through free leaves from ``q0`` to ``q1`` (both in free cells), every segment
     proved, or None."""
-    from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import breadth_first_order
 
     free = lab == FREE
@@ -517,21 +311,11 @@ def _free_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, at0, at1):
     s1 = [int(ids[tuple(i)]) for i in at1 if free[tuple(i)]]
     if not s0 or not s1:
         return None
-    # leaf adjacency through touching free voxels (26 neighbours)
-    a_all, b_all = [], []
-    shape = ids.shape
-    for d in _NEIGHBOURS:
-        src, dst = _shift(shape, d)
-        both = free[src] & free[dst]
-        a, c = ids[src][both], ids[dst][both]
-        keep = a != c
-        a_all.append(a[keep])
-        b_all.append(c[keep])
-    A, B = np.concatenate(a_all), np.concatenate(b_all)
-    n = len(L_lo)
-    G = coo_matrix((np.ones(len(A)), (A, B)), shape=(n, n)).tocsr()
-    G = G + G.T
-    order, pred = breadth_first_order(G, s0[0], directed=False, return_predecessors=True)
+    comp = _components(free)
+    if not {int(comp[tuple(i)]) for i in at0} & {int(comp[tuple(i)]) for i in at1} - {0}:
+        return None  # not joined by free cells: no need for the leaves' graph
+    order, pred = breadth_first_order(_free_leaf_graph(ids, free, len(L_lo)), s0[0],
+                                      directed=False, return_predecessors=True)
     target = next((t for t in s1 if t == s0[0] or pred[t] >= 0), None)
     if target is None:
         return None
@@ -539,28 +323,7 @@ def _free_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, at0, at1):
     while chain[-1] != s0[0]:
         chain.append(int(pred[chain[-1]]))
     chain.reverse()
-    lo = g.floats(L_lo)
-    hi = g.floats(L_lo + L_sz)
-    pts = [q0, (lo[chain[0]] + hi[chain[0]]) / 2]
-    for u, v in zip(chain, chain[1:]):
-        pts.append((np.maximum(lo[u], lo[v]) + np.minimum(hi[u], hi[v])) / 2)  # their contact
-        pts.append((lo[v] + hi[v]) / 2)
-    pts.append(q1)
-    P = _shortcut(cspace, np.array(pts))
-    ok = cspace.segment_free(P[:-1], P[1:])
-    return P if bool(np.all(ok)) else None
-
-
-def _shortcut(cspace, P: np.ndarray) -> np.ndarray:
-    """Greedy: from each kept waypoint, the farthest later one in straight sight (exact)."""
-    out, i = [P[0]], 0
-    while i < len(P) - 1:
-        later = np.arange(len(P) - 1, i, -1)
-        ok = cspace.segment_free(np.broadcast_to(P[i], (len(later), 3)), P[later])
-        j = int(later[np.argmax(ok)]) if ok.any() else i + 1
-        out.append(P[j])
-        i = j
-    return np.array(out)
+    return _polyline(cspace, q0, q1, g.floats(L_lo), g.floats(L_lo + L_sz), chain)
 
 
 # --------------------------------------------------------------------------------------------

@@ -1,0 +1,320 @@
+"""Refining cells along one route: a path through gaps finer than the decision's octree.
+
+When :func:`.decide`'s octree ends with start and goal in one component of passable cells but
+not joined by free ones (a gap narrower than its finest cell), :func:`refine_route` goes on
+below that level, but only where a route needs it:
+
+1. The graph: one node per component of the octree's free cells, one per passable mixed cell
+   of the start's component; an edge where two closed cells touch (a face, an edge or a
+   corner), decided on integers (cells are boxes of a grid ``2**EXTRA`` times finer than the
+   octree's finest, with float corners monotone in the integers, so touching boxes touch in
+   floats too).
+2. The cheapest route from the cells holding the start to those holding the goal (a mixed
+   cell costs 1, a free one nothing). If every cell on it is free, the route is a path:
+   the cells' centres and contacts, shortcut, every segment proved by ``segment_free``.
+3. Otherwise each mixed cell on the route is split in eight and its children labelled
+   (:func:`.cells._labels`); blocked children leave the graph, the others join it with the
+   edges of the cells they touch (a child touches only what its parent or a split neighbour's
+   children touch). Back to 2.
+
+A mixed cell at the finest level (``2**-(depth + EXTRA)`` of the bounds) is never split; a
+route through one costs ``STUCK``, so routes avoid it while another exists.
+
+**"no path"**: the graph always holds every passable cell of the start's component (a split
+only removes blocked children, each inside one convex piece of a C-obstacle, exactly), so
+goal cells out of the start's reach prove that no path exists, as in :func:`.decide`. A
+"path" is proved segment by segment; the labels ``free`` steer, they prove nothing.
+"""
+
+from __future__ import annotations
+
+import time as _time
+
+import numpy as np
+
+from .cells import (BLOCKED, FREE, MIXED, _CORNERS, _NEIGHBOURS, _components,
+                    _free_leaf_graph, _labels, _OutOfTime, _polyline, _shift)
+
+#: Levels below the octree's finest that a route may refine to.
+EXTRA = 20
+#: The cost of a route through a mixed cell that cannot be split.
+STUCK = 1e6
+#: The cost of a mixed cell whose centre collides, per unit of its side (1 when the centre is
+#: free): routes go first where the cells' free parts are (a gap), not where C-obstacles only
+#: overlap (cells covered by several pieces never turn free); and a cost by size keeps a
+#: refined route cheaper than its untouched neighbours (depth first, not every parallel one).
+CENTRE_IN_COLLISION = 8.0
+#: The most cells split at once (the route's first ones): bounds the time past the deadline.
+BATCH = 4096
+_FREE_COST = 1e-9  # not zero: scipy's graphs drop explicit zeros
+
+
+class _Cells:
+    """The graph's nodes: ``nF`` free components (nodes ``0..nF-1``), then leaves, each a box
+    ``[lo, lo + sz]`` in fine units (``S`` per voxel of the painted grid) with its float box,
+    label and ``alive`` flag; and its undirected edges ``ea, eb``."""
+
+    def __init__(self, g, size, fcomp, mixed_voxels, nF: int):
+        self.g, self.size, self.S = g, np.asarray(size, dtype=np.int64), 1 << EXTRA
+        self.n_vox = fcomp.shape
+        self.fcomp = fcomp
+        self.nF = nF
+        k = len(mixed_voxels)
+        self.lo = np.zeros((nF + k, 3), np.int64)
+        self.sz = np.zeros(nF + k, np.int64)
+        self.lo[nF:] = mixed_voxels * self.S
+        self.sz[nF:] = self.S
+        self.label = np.full(nF + k, MIXED, np.int8)
+        self.weight = np.ones(nF + k)  # a mixed cell's cost: see CENTRE_IN_COLLISION
+        self.label[:nF] = FREE
+        self.alive = np.ones(nF + k, bool)
+        self.flo, self.fhi = np.zeros((nF + k, 3)), np.zeros((nF + k, 3))
+        self.flo[nF:] = self.floats(self.lo[nF:])
+        self.fhi[nF:] = self.floats(self.upper(self.lo[nF:], self.S))
+        self.ea = [np.zeros(0, np.int64)]  # [unique edges, then new ones to add]
+        self.eb = [np.zeros(0, np.int64)]
+
+    def floats(self, I: np.ndarray) -> np.ndarray:
+        """Float coordinates of fine integer corners: the octree's grid corner at a voxel's
+        corner, linear inside a voxel (clipped to it), so monotone in ``I``."""
+        out = np.empty(I.shape)
+        for a in range(3):
+            v, r = np.divmod(I[:, a], self.S)
+            x = self.g.x[a]
+            n = self.n_vox[a]
+            lo = x[np.minimum(v, n) * self.size[a]]
+            hi = x[np.minimum(v + 1, n) * self.size[a]]
+            out[:, a] = np.clip(lo + (hi - lo) * (r / self.S), lo, hi)
+        return out
+
+    def flat(self) -> np.ndarray:
+        """(3,) int64: 1 on the axes the grid cuts, 0 on flat ones."""
+        return self.g.split.astype(np.int64)
+
+    def upper(self, lo: np.ndarray, sz: np.ndarray) -> np.ndarray:
+        """The upper corners of cells at ``lo`` of side ``sz`` (none on a flat axis)."""
+        return lo + np.asarray(sz)[..., None] * self.flat()
+
+    def voxels_touching(self, lo: np.ndarray, hi: np.ndarray):
+        """``(rows, voxels)``: every voxel of the painted grid whose closed box touches the
+        closed fine box ``[lo[r], hi[r]]``."""
+        first = np.maximum((lo + self.S - 1) // self.S - 1, 0)
+        last = np.minimum(hi // self.S, np.array(self.n_vox) - 1)
+        rows, vox = [], []
+        for off in np.array([[i, j, k] for i in range(3) for j in range(3) for k in range(3)]):
+            V = first + off
+            ok = (V <= last).all(axis=1)
+            rows.append(np.nonzero(ok)[0])
+            vox.append(V[ok])
+        return np.concatenate(rows), np.concatenate(vox)
+
+    def add(self, lo, sz, label, weight) -> np.ndarray:
+        n = len(self.sz)
+        self.weight = np.concatenate([self.weight, weight])
+        self.lo = np.concatenate([self.lo, lo])
+        self.sz = np.concatenate([self.sz, sz])
+        self.label = np.concatenate([self.label, label])
+        self.alive = np.concatenate([self.alive, np.ones(len(sz), bool)])
+        self.flo = np.concatenate([self.flo, self.floats(lo)])
+        self.fhi = np.concatenate([self.fhi, self.floats(self.upper(lo, sz))])
+        return np.arange(n, n + len(sz))
+
+    def graph(self):
+        from scipy.sparse import coo_matrix
+
+        n = len(self.sz)
+        # every edge once: the kept ones are unique already; new ones all meet a new node
+        A, B = np.concatenate(self.ea[1:]), np.concatenate(self.eb[1:])
+        key = np.unique(np.minimum(A, B) * n + np.maximum(A, B))
+        A, B = np.concatenate([self.ea[0], key // n]), np.concatenate([self.eb[0], key % n])
+        keep = self.alive[A] & self.alive[B]
+        A, B = A[keep], B[keep]
+        self.ea, self.eb = [A], [B]
+        cost = np.where(self.label == FREE, _FREE_COST,
+                        np.where(self.sz > 1, self.weight * (self.sz / self.S), STUCK))
+        return coo_matrix((np.concatenate([cost[B], cost[A]]),
+                           (np.concatenate([A, B]), np.concatenate([B, A]))),
+                          shape=(n, n)).tocsr()
+
+    def holding(self, q: np.ndarray, at: np.ndarray) -> list:
+        """Nodes whose closed cell holds ``q``: free components of the voxels ``at`` (those
+        of the painted grid holding it) and the live leaves whose float box holds it."""
+        comps = {int(self.fcomp[tuple(v)]) - 1 for v in at} - {-1}
+        leaf = self.alive & (self.flo <= q).all(axis=1) & (q <= self.fhi).all(axis=1)
+        leaf[: self.nF] = False
+        return sorted(comps | set(np.nonzero(leaf)[0].tolist()))
+
+
+def _weights(cspace, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The cost of mixed cells: :data:`CENTRE_IN_COLLISION` where the centre collides, else 1
+    (the exact test steers the routes; it decides nothing)."""
+    if not len(lo):
+        return np.ones(0)
+    return np.where(cspace.contains((lo + hi) / 2), CENTRE_IN_COLLISION, 1.0)
+
+
+def _initial(cells: _Cells, node_of: np.ndarray) -> None:
+    """Edges between touching nodes of the painted grid (26 neighbours of each voxel)."""
+    shape = node_of.shape
+    for d in _NEIGHBOURS:
+        src, dst = _shift(shape, d)
+        u, v = node_of[src], node_of[dst]
+        ok = (u >= 0) & (v >= 0) & (u != v)
+        cells.ea.append(u[ok])
+        cells.eb.append(v[ok])
+
+
+def _split(cspace, cells: _Cells, G, parents: np.ndarray, obstacles, boxes, margin,
+           deadline) -> int:
+    """Split ``parents`` (mixed leaves) in eight; keep the children not blocked, with their
+    edges. Returns how many children were kept."""
+    flat = cells.flat()
+    offs = np.unique(_CORNERS * flat, axis=0)
+    half = cells.sz[parents] // 2
+    lo = (cells.lo[parents][:, None, :] + offs[None] * half[:, None, None]).reshape(-1, 3)
+    sz = np.repeat(half, len(offs))
+    parent = np.repeat(parents, len(offs))
+    label = _labels(obstacles, boxes, cells.floats(lo), cells.floats(cells.upper(lo, sz)),
+                    margin, deadline)
+    keep = label != BLOCKED
+    lo, sz, parent, label = lo[keep], sz[keep], parent[keep], label[keep]
+    weight = np.ones(len(sz))
+    mixed = label == MIXED
+    weight[mixed] = _weights(cspace, cells.floats(lo[mixed]),
+                             cells.floats(cells.upper(lo[mixed], sz[mixed])))
+    new = cells.add(lo, sz, label, weight)
+    cells.alive[parents] = False
+    # candidates of each child: its parent's neighbours (leaves), its siblings, and the
+    # children of split neighbours
+    kids: dict = {}
+    for c, p in zip(new.tolist(), parent.tolist()):
+        kids.setdefault(p, []).append(c)
+    ca, cb = [], []
+    for p in parents.tolist():
+        mine = kids.get(p, [])
+        if not mine:
+            continue
+        nb = G.indices[G.indptr[p]:G.indptr[p + 1]]
+        cand = [x for x in nb.tolist() if x >= cells.nF and cells.alive[x]]
+        for q in [p] + nb.tolist():
+            cand.extend(kids.get(q, []))
+        cand = np.unique(np.array(cand, dtype=np.int64))
+        a = np.repeat(np.array(mine), len(cand))
+        b = np.tile(cand, len(mine))
+        ca.append(a)
+        cb.append(b)
+    if ca:
+        a, b = np.concatenate(ca), np.concatenate(cb)
+        hi_a, hi_b = cells.upper(cells.lo[a], cells.sz[a]), cells.upper(cells.lo[b], cells.sz[b])
+        touch = (a != b) & ((cells.lo[a] <= hi_b) & (cells.lo[b] <= hi_a)).all(axis=1)
+        a, b = a[touch], b[touch]
+        cells.ea.append(np.minimum(a, b))
+        cells.eb.append(np.maximum(a, b))
+    # the free components each child touches
+    rows, vox = cells.voxels_touching(lo, cells.upper(lo, sz))
+    comp = cells.fcomp[vox[:, 0], vox[:, 1], vox[:, 2]].astype(np.int64) - 1
+    ok = comp >= 0
+    cells.ea.append(comp[ok])
+    cells.eb.append(new[rows[ok]])
+    return len(new)
+
+
+def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes,
+                 margin: float, deadline: float, at0, at1):
+    """Refine along routes until one is free, the goal is out of reach, or time is up.
+
+    ``g``, ``ids``, ``lab``, ``L_lo``, ``L_sz`` and ``size``: the octree's last level as
+    :func:`.decide` painted it (voxels of ``size`` finest cells; ``ids`` the leaf of each,
+    ``lab`` its label); ``at0``, ``at1``: the voxels holding start and goal.
+
+    Returns ``(answer, reason, path)``: ``'path'`` with a proved polyline, ``'no path'``, or
+    ``'unknown'`` (out of time, or every route passes a cell that cannot be split).
+    """
+    from scipy.sparse.csgraph import dijkstra
+
+    t0 = _time.perf_counter()
+    fcomp = _components(lab == FREE)
+    nF = int(fcomp.max())
+    passable = _components(lab != BLOCKED)
+    mine = ({int(passable[tuple(v)]) for v in at0} | {int(passable[tuple(v)]) for v in at1}) - {0}
+    mixed = (lab == MIXED) & np.isin(passable, list(mine))
+    vox = np.argwhere(mixed)
+    cells = _Cells(g, size, fcomp, vox, nF)
+    cells.weight[nF:] = _weights(cspace, cells.flo[nF:], cells.fhi[nF:])
+    node_of = np.where(fcomp > 0, fcomp.astype(np.int64) - 1, -1)
+    node_of[mixed] = nF + np.arange(len(vox))
+    _initial(cells, node_of)
+    split = 0
+    while _time.perf_counter() < deadline:
+        G = cells.graph()
+        src, dst = cells.holding(q0, at0), cells.holding(q1, at1)
+        dist, pred, _ = dijkstra(G, indices=src, min_only=True, return_predecessors=True)
+        t = min(dst, key=lambda x: dist[x])
+        if not np.isfinite(dist[t]):
+            return ("no path", f"start and goal in different components after {split} cells "
+                    f"refined along routes ({_time.perf_counter() - t0:.2f} s)", None)
+        route = [t]
+        while route[-1] not in src:
+            route.append(int(pred[route[-1]]))
+        route.reverse()
+        route = np.array(route)
+        todo = route[(route >= nF) & (cells.label[route] == MIXED)]
+        if not len(todo):
+            path = _route_path(cspace, cells, g, q0, q1, ids, lab, L_lo, L_sz, size, route,
+                               at0, at1)
+            if path is None:
+                return ("unknown", "a route through free cells failed its exact proof", None)
+            below = int(np.log2(cells.S // cells.sz[route[route >= nF]].min(initial=cells.S)))
+            return ("path", f"a route through free cells after {split} cells refined along "
+                    f"routes, down to {below} levels below the octree", path)
+        todo = todo[cells.sz[todo] > 1][:BATCH]
+        if not len(todo):
+            return ("unknown", f"every route passes a cell {EXTRA} levels below the octree's "
+                    "finest that is neither free nor blocked", None)
+        try:
+            split += _split(cspace, cells, G, todo, obstacles, boxes, margin, deadline)
+        except _OutOfTime:
+            break
+    return ("unknown", f"out of time refining routes ({split} cells)", None)
+
+
+def _route_path(cspace, cells: _Cells, g, q0, q1, ids, lab, L_lo, L_sz, size, route, at0, at1):
+    """The route's cells as a chain of boxes (each free component expanded to a chain of the
+    octree's free leaves between its neighbours on the route), then :func:`_polyline`."""
+    from scipy.sparse.csgraph import dijkstra
+
+    GF = _free_leaf_graph(ids, lab == FREE, len(L_lo))
+    lo_d, hi_d = g.floats(L_lo), g.floats(L_lo + L_sz)
+
+    def leaves(c, vox):
+        """The octree's leaves of free component ``c`` among the voxels ``vox``."""
+        return sorted({int(ids[tuple(v)]) for v in vox if int(cells.fcomp[tuple(v)]) == c + 1})
+
+    def near(k):
+        """The voxels touching route cell ``k`` (a leaf of ``cells``)."""
+        lo = cells.lo[k][None]
+        return cells.voxels_touching(lo, cells.upper(lo, cells.sz[k]))[1]
+
+    boxes_lo, boxes_hi = [], []
+    for i, k in enumerate(route.tolist()):
+        if k >= cells.nF:
+            boxes_lo.append(cells.flo[k])
+            boxes_hi.append(cells.fhi[k])
+            continue
+        src = leaves(k, at0 if i == 0 else near(route[i - 1]))
+        dst = leaves(k, at1 if i == len(route) - 1 else near(route[i + 1]))
+        if not src or not dst:
+            return None
+        dist, pred, _ = dijkstra(GF, indices=src, min_only=True, unweighted=True,
+                                 return_predecessors=True)
+        t = min(dst, key=lambda x: dist[x])
+        if not np.isfinite(dist[t]):
+            return None
+        chain = [t]
+        while chain[-1] not in src:
+            chain.append(int(pred[chain[-1]]))
+        for leaf in reversed(chain):
+            boxes_lo.append(lo_d[leaf])
+            boxes_hi.append(hi_d[leaf])
+    lo, hi = np.array(boxes_lo), np.array(boxes_hi)
+    return _polyline(cspace, q0, q1, lo, hi, list(range(len(lo))))
