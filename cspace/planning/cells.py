@@ -16,7 +16,9 @@ import weakref
 
 import numpy as np
 
+from ..cobstacle.pairs import _slab_columns
 from ..errors import InvalidArgumentError
+from ..geometry.exact import _FILTER, _TINY
 
 #: Cell labels.
 BLOCKED, MIXED, FREE = 0, 1, 2
@@ -30,7 +32,6 @@ _NEIGHBOURS = [(i, j, k) for i in (-1, 0, 1) for j in (-1, 0, 1) for k in (-1, 0
 
 class _OutOfTime(Exception):
     pass
-
 
 
 # --------------------------------------------------------------------------------------------
@@ -73,43 +74,54 @@ def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.zeros(m, dtype=bool)
 
 
-# Each pair engine's pieces' half-spaces as the decision has needed them: (exact, float).
-_HALFSPACES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# The float filter of a half-space value n . x - d (x = corner / step, exact; n small ints;
-# d rounded once to float): a few roundings of relative 2**-53 each; 2**-45 is far above.
-_PLANE_FILTER = 2.0 ** -45
+# Each pair engine's triangles' boxes (grid units): obstacle side lo, hi; robot side lo, hi.
+_TRIANGLE_BOXES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+# Candidate (cell, pair) rows whose slabs are evaluated at once: (rows, 8, 2K) floats, K <= 38.
+_PAIR_BLOCK = 8192
+
+
+def _piece_boxes(impl, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The boxes (grid units, float64) of the pieces ``S[i] ⊕ T[j] ⊕ [-g, g]``."""
+    if impl not in _TRIANGLE_BOXES:
+        S, T = np.asarray(impl.S, np.int64), np.asarray(impl.T, np.int64)
+        _TRIANGLE_BOXES[impl] = (S.min(axis=1), S.max(axis=1), T.min(axis=1), T.max(axis=1))
+    s_lo, s_hi, t_lo, t_hi = _TRIANGLE_BOXES[impl]
+    g = np.asarray(impl.g, np.int64)
+    # exact below 2**53 (a grid's integers, origin included, stay there); were one to round,
+    # a pair would only be dropped: a cell not labelled blocked proves nothing wrong
+    return ((s_lo[i] + t_lo[j] - g).astype(np.float64),
+            (s_hi[i] + t_hi[j] + g).astype(np.float64))
 
 
 def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
     """:func:`_inside_one_piece` for a triangle-pair C-obstacle: the pieces whose k-DOPs meet
-    a cell (the engine's tree), then each piece's half-spaces at the eight corners, in floats
-    with the filter above and exactly (Python integers) where it cannot tell."""
+    a cell (the engine's tree) and whose boxes hold it, then each piece's slabs at the eight
+    corners, in floats with the engine's own filter (:func:`~cspace.cobstacle.pairs.
+    _slab_columns`: the rounding of normals, supports and products bounded) and exactly
+    (Python integers) for the corners it cannot tell."""
     out = np.zeros(len(lo), dtype=bool)
-    cand = impl._set.candidates(impl._grid_units(lo), impl._grid_units(hi))
-    if not len(cand):
-        return out
-    cache = _HALFSPACES.setdefault(impl, {})
-    X = np.ldexp(C, -impl.exponent)  # grid units, exact
-    key = cand[:, 1] * (int(cand[:, 2].max()) + 1) + cand[:, 2]
-    _, first, which = np.unique(key, return_index=True, return_inverse=True)
-    for u, f in enumerate(first.tolist()):
-        rows = cand[which == u, 0]
-        rows = rows[~out[rows]]
-        if not len(rows):
-            continue
-        i, j = int(cand[f, 1]), int(cand[f, 2])
-        if (i, j) not in cache:
-            H = impl._halfspaces(i, j)
-            cache[i, j] = (H, np.array([n for n, _ in H], dtype=np.float64).reshape(-1, 3),
-                           np.array([float(d) for _, d in H]))
-        H, N, d = cache[i, j]
-        val = X[rows] @ N.T - d  # (r, 8, h)
-        err = _PLANE_FILTER * (np.abs(X[rows]) @ np.abs(N).T + np.abs(d))
+    X_lo, X_hi = impl._grid_units(lo), impl._grid_units(hi)  # exact: powers of two
+    cand = impl._set.candidates(X_lo, X_hi)
+    if len(cand):
+        # A cell inside a piece lies inside the piece's box: this drops only pairs that
+        # cannot hold it, and at coarse levels nearly all of them, before any slab is built.
+        p_lo, p_hi = _piece_boxes(impl, cand[:, 1], cand[:, 2])
+        r = cand[:, 0]
+        cand = cand[((p_lo <= X_lo[r]) & (X_hi[r] <= p_hi)).all(axis=1)]
+    gf = np.asarray(impl.g, dtype=np.float64)
+    Q = np.ones((len(lo), 8, 4))
+    Q[:, :, :3] = impl._grid_units(C.reshape(-1, 3)).reshape(-1, 8, 3)
+    for s in range(0, len(cand), _PAIR_BLOCK):
+        r, i, j = cand[s:s + _PAIR_BLOCK].T
+        A, absA = _slab_columns(impl.S[i], impl.T[j], bool(gf.any()), gf)
+        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+            val = np.matmul(Q[r], A)  # (c, 8, 2K): a . [corner, 1] <= 0 inside a slab side
+            err = _FILTER * np.matmul(np.abs(Q[r]), absA) + _TINY
         inside = (val < -err).all(axis=(1, 2))
         unsure = ~inside & ~(val > err).any(axis=(1, 2))
-        for r in rows[unsure].tolist():
-            inside[rows == r] = all(impl._in_piece(i, j, x) for x in C[r].tolist())
-        out[rows[inside]] = True
+        for k in np.nonzero(unsure & ~out[r])[0].tolist():
+            inside[k] = all(impl._in_piece(int(i[k]), int(j[k]), x) for x in C[r[k]].tolist())
+        out[r[inside]] = True
     return out
 
 
@@ -134,8 +146,14 @@ def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
             if len(rows):
                 out[rows] = _kept_off(part, lo[rows], hi[rows], margin)
         return out
-    half = np.linalg.norm(hi - lo, axis=1) / 2
-    return co.signed_distance((lo + hi) / 2) > half + margin
+    # the distance only where the centre is outside: a centre inside is never kept off, and
+    # a non-convex C-obstacle's depth inside (its signed distance there) is the costly part
+    centre, out = (lo + hi) / 2, np.zeros(len(lo), dtype=bool)
+    rows = np.nonzero(~np.asarray(co.contains(centre), dtype=bool))[0]
+    if len(rows):
+        half = np.linalg.norm(hi[rows] - lo[rows], axis=1) / 2
+        out[rows] = co.signed_distance(centre[rows]) > half + margin
+    return out
 
 
 class _Piece:
@@ -146,6 +164,11 @@ class _Piece:
 
     def __init__(self, impl):
         self._impl = impl
+
+
+# Cells one test call takes between reads of the clock. On the Parasol bug trap (a pair
+# C-obstacle of 3212 x 66 triangles) a 20 s budget was overrun by 0.5-1 s with it.
+_SWEEP_CHUNK = 1024
 
 
 def _labels(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
@@ -170,8 +193,11 @@ def _sweep(obstacles, boxes, lo, hi, initial: bool, within: bool, test, deadline
         B = boxes[k]
         near = ((B[0] <= lo) & (hi <= B[1]) if within else (lo <= B[1]) & (B[0] <= hi))
         rows = np.nonzero((flag == initial) & near.all(axis=1))[0]
-        if len(rows):
-            flag[rows] = test(co, lo[rows], hi[rows])
+        for s in range(0, len(rows), _SWEEP_CHUNK):  # the clock read between chunks
+            if s and _time.perf_counter() > deadline:
+                raise _OutOfTime
+            part = rows[s:s + _SWEEP_CHUNK]
+            flag[part] = test(co, lo[part], hi[part])
     return flag
 
 
