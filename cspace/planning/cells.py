@@ -166,9 +166,11 @@ class _Piece:
         self._impl = impl
 
 
-# Cells one test call takes between reads of the clock. On the Parasol bug trap (a pair
-# C-obstacle of 3212 x 66 triangles) a 20 s budget was overrun by 0.5-1 s with it.
-_SWEEP_CHUNK = 1024
+# Between reads of the clock a test call takes about _SWEEP_SECONDS: its first call 256
+# cells, each next sized by the last one's rate (a pair C-obstacle answers from hundreds to
+# millions of cells a second: the Parasol alpha puzzle's 0.94 million pairs overran a 10 s
+# budget by 4 s with 1024 cells a call).
+_SWEEP_FIRST, _SWEEP_SECONDS = 256, 0.25
 
 
 def _labels(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
@@ -193,11 +195,16 @@ def _sweep(obstacles, boxes, lo, hi, initial: bool, within: bool, test, deadline
         B = boxes[k]
         near = ((B[0] <= lo) & (hi <= B[1]) if within else (lo <= B[1]) & (B[0] <= hi))
         rows = np.nonzero((flag == initial) & near.all(axis=1))[0]
-        for s in range(0, len(rows), _SWEEP_CHUNK):  # the clock read between chunks
-            if s and _time.perf_counter() > deadline:
+        s, n = 0, _SWEEP_FIRST
+        while s < len(rows):
+            t = _time.perf_counter()
+            if s and t > deadline:
                 raise _OutOfTime
-            part = rows[s:s + _SWEEP_CHUNK]
+            part = rows[s:s + n]
             flag[part] = test(co, lo[part], hi[part])
+            s += len(part)
+            rate = len(part) / max(_time.perf_counter() - t, 1e-6)
+            n = int(min(max(rate * _SWEEP_SECONDS, 64), 1 << 16))
     return flag
 
 
