@@ -106,3 +106,70 @@ def test_the_shipped_narrow_gaps_are_decided():
         assert d.answer == "path", (name, d.reason)
         assert verify_path(cs, d.path, scene.bounds)["valid"]
         assert _fcl_clean(scene, cs, d.path)
+
+
+def _c_boxes_scene(tmp_path, name, c_boxes, start, goal, offset, scale):
+    """Obstacle boxes whose C-obstacles (against the ROBOT cube) are the boxes ``c_boxes``
+    ((lo, hi) pairs): each shrunk by the robot's half-width; then moved and scaled."""
+    h, off = ROBOT / 2, np.asarray(offset, dtype=np.float64)
+
+    def at(p):
+        return repr([float(x) for x in np.asarray(p, dtype=np.float64) * scale + off])
+
+    lines = [f'name = "{name}"', "[robot]", f"box = {[ROBOT * scale] * 3}", "[planning]",
+             f"bounds = [{at((-2, -2, -2))}, {at((2, 2, 2))}]", f"start = {at(start)}",
+             f"goal = {at(goal)}"]
+    for lo, hi in c_boxes:
+        lo, hi = np.asarray(lo, float) + h, np.asarray(hi, float) - h
+        lines += ["[[obstacles]]", f"box = {[float(x) * scale for x in hi - lo]}",
+                  f"position = {at((lo + hi) / 2)}"]
+    path = tmp_path / f"{name}.toml"
+    path.write_text("\n".join(lines) + "\n")
+    scene = cspace.load_scene(path)
+    return scene, cspace.model_scene(scene).cspace()
+
+
+@pytest.mark.parametrize("move", [dict(offset=(0, 0, 0), scale=1.0),
+                                  dict(offset=FAR, scale=3.0)])
+def test_c_obstacles_touching_along_an_edge_never_let_a_path_through(tmp_path, move):
+    """A wall (x in [-0.5, 0.5], beyond the bounds in y and z) whose C-obstacles fill the
+    quadrants y, z <= 0 and y, z >= 0; the pocket y >= 0, z <= 0 opens to the start's side
+    only, the pocket y <= 0, z >= 0 to the goal's only (caps). The two pockets meet only along
+    the line y = z = 0, where the two C-obstacles touch: touching is a collision, so there is
+    no path. Cells cannot separate pockets that share an edge: 'unknown' is the right answer
+    for the cells; 'path' would be a false free."""
+    E, t, w = 3.0, 0.5, 0.6
+    c_boxes = [((-t, -E, -E), (t, 0, 0)), ((-t, 0, 0), (t, E, E)),
+               ((t, 0, -E), (t + w, E, 0)), ((-t - w, -E, 0), (-t, 0, E))]
+    scene, cs = _c_boxes_scene(tmp_path, "edge", c_boxes, (-1.5, 0.5, -0.5), (1.5, -0.5, 0.5),
+                               **move)
+    assert not cs.contains(scene.start) and not cs.contains(scene.goal)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=3.0)
+    assert d.answer != "path", d.reason
+    # the pockets are free (1e-4 from the line too: above the C-obstacles' error_bound, the
+    # outward growth) and the line between them, where the C-obstacles touch, is not
+    mid = (np.asarray(scene.bounds)[0] + np.asarray(scene.bounds)[1]) / 2
+    pockets = mid + move["scale"] * np.array([[0, 0.5, -0.5], [0, -0.5, 0.5],
+                                              [0, 1e-4, -1e-4], [0, -1e-4, 1e-4]])
+    assert not cs.contains(pockets).any()
+    line = mid + np.outer(np.linspace(-0.4, 0.4, 9), [move["scale"], 0, 0])
+    assert cs.contains(line).all()
+    assert not cs.segment_free(pockets[2], pockets[3])
+
+
+@pytest.mark.parametrize("move", [dict(offset=(0, 0, 0), scale=1.0),
+                                  dict(offset=FAR, scale=3.0)])
+def test_a_path_never_slips_between_c_obstacles_touching_at_a_vertex(tmp_path, move):
+    """Two C-obstacle boxes touching at one point, the straight line from start to goal
+    through it; around them the bounds are free. The answer must be a path (around) whose
+    every segment is re-proved and which FCL finds clean on the raw meshes, never one through
+    the vertex (a point of both C-obstacles)."""
+    c_boxes = [((-1.0, -1.0, -1.0), (0.0, 0.0, 0.0)), ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))]
+    scene, cs = _c_boxes_scene(tmp_path, "vertex", c_boxes, (-1.5, 1.5, 1.5),
+                               (1.5, -1.5, -1.5), **move)
+    vertex = (np.asarray(scene.bounds)[0] + np.asarray(scene.bounds)[1]) / 2
+    assert cs.contains(vertex) and not cs.segment_free(scene.start, scene.goal)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=5.0)
+    assert d.answer == "path", d.reason
+    assert verify_path(cs, d.path, scene.bounds)["valid"]
+    assert _fcl_clean(scene, cs, d.path)
