@@ -98,6 +98,10 @@ def _same_model(m, r):
             _same_arrays(getattr(a, f), getattr(b, f), f"{what}: {f}")
         if a.kind == "convex":
             _same_polytope(a._solid, b._solid, what)
+        if a.kind == "solid":
+            for f in ("ints", "faces", "components"):
+                _same_arrays(getattr(a._solid, f), getattr(b._solid, f), f"{what}: solid {f}")
+            assert (a._solid.grid, a._solid.name) == (b._solid.grid, b._solid.name), what
         assert [(p.part, p.construction, len(p.cos)) for p in a.pairs] == \
                [(p.part, p.construction, len(p.cos)) for p in b.pairs], what
         assert (a.co is None) == (b.co is None), what
@@ -150,6 +154,27 @@ def test_a_snapshot_restores_convex_bodies_without_modelling_them(tmp_path, monk
     restored = model_scene(scene, cache=tmp_path)
     assert len(calls) == 1  # the robot's; no obstacle body is welded again
     assert restored.counts()["convex"] == 60
+    monkeypatch.undo()
+    _same_model(model_scene(scene), restored)
+
+
+def test_a_snapshot_restores_solids_without_checking_them_again(tmp_path, monkeypatch):
+    """Non-convex solids (L-shapes) come back validated: no classification, no
+    self-intersection test per load (they were most of a cached 10^4-body load)."""
+    import cspace.scene.classify as classify_module
+
+    V, F = l_shape()
+    bodies = [Body(f"L{i}", (V - V.mean(axis=0)) * 0.3 + AT + [i * 0.6 - 2.5, 0, 0], F, "L")
+              for i in range(8)]
+    scene = _scene(_robot("box"), bodies)
+    made = model_scene(scene, cache=tmp_path)
+    assert made.counts()["solid"] == 8
+    calls = []
+    real = classify_module._closed_kind
+    monkeypatch.setattr(classify_module, "_closed_kind",
+                        lambda *a: calls.append(a) or real(*a))
+    restored = model_scene(scene, cache=COCache(tmp_path))
+    assert calls == [] and restored.counts()["solid"] == 8
     monkeypatch.undo()
     _same_model(model_scene(scene), restored)
 

@@ -13,11 +13,16 @@ What a snapshot holds, per modelled body in :func:`cspace.scene.model.model_scen
   ``excess``): its welded grid integers, triangles, reason and polytope; when the
   robot is one convex part, its C-obstacle's polytope too (what a
   per-pair cache entry holds, assembled the same way: :func:`cspace.scene.build._assemble`);
-- **classified again** (every other classified body: solid, surface, a convex hull that
-  stands for a bent body, one dropped by the bounds): its welded grid integers, triangles and
-  whether it is a double-sided sheet; :func:`cspace.scene.classify._classify` decides it again
-  on restore and its C-obstacles come through their per-pair entries (such bodies are few,
-  and their builds dear);
+- **a solid** (a closed, non-convex 2-manifold that does not meet itself): its welded grid
+  integers and triangles, its reason, and the validated mesh (welded, oriented, its shells),
+  restored without the checks that made it (validation and the self-intersection test, a
+  few milliseconds per body: at 10^4 boxes and 200 L-shapes they were most of a cached load);
+  its C-obstacles come through their per-pair entries;
+- **classified again** (every other classified body: surface, a convex hull that stands for a
+  bent body, one dropped by the bounds): its welded grid integers, triangles and whether it is
+  a double-sided sheet; :func:`cspace.scene.classify._classify` decides it again on restore
+  and its C-obstacles come through their per-pair entries (such bodies are few, and their
+  builds dear);
 - **dropped before classification** (far parts; every triangle collapsed): name and reason.
 
 Also: the grid, the scene's margin and per scene body what welding dropped. The key covers
@@ -42,6 +47,7 @@ import numpy as np
 
 from ..cobstacle.margin import Margin
 from ..geometry.exact import Grid
+from ..mesh.closed import ClosedMesh
 from ..mesh.convex import ConvexPolytope
 from .cache import _POLYTOPE, FORMAT
 from .classify import BodyModel, _classify
@@ -49,9 +55,9 @@ from .classify import BodyModel, _classify
 __all__ = ["snapshot_key", "snapshot_arrays", "Snapshot"]
 
 # Bump when what a snapshot holds, or how it is read, changes.
-SNAPSHOT = 1
+SNAPSHOT = 2
 
-_RESTORED, _CLASSIFY, _DROPPED = 0, 1, 2
+_RESTORED, _CLASSIFY, _DROPPED, _SOLID = 0, 1, 2, 3
 
 
 def snapshot_key(scene, grid: Grid | None, robot_hull: bool, conservative: bool,
@@ -100,6 +106,10 @@ def _restorable(b: BodyModel) -> bool:
     return b.kind == "convex" and not b._solid.excess and not b.changed
 
 
+def _a_solid(b: BodyModel) -> bool:
+    return b.kind == "solid" and isinstance(b._solid, ClosedMesh) and not b.changed
+
+
 def _compact(a: np.ndarray) -> np.ndarray:
     """int32 when every value fits (grid integers of a 26-bit grid do), else int64."""
     small = not len(a) or (int(a.min()) >= -2**31 and int(a.max()) < 2**31)
@@ -113,8 +123,10 @@ def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
     bodies are built again)."""
     if any(b.error for b in bodies):
         return None
-    codes = np.array([_RESTORED if _restorable(b) else _CLASSIFY if len(b.faces) else _DROPPED
+    codes = np.array([_RESTORED if _restorable(b) else _SOLID if _a_solid(b)
+                      else _CLASSIFY if len(b.faces) else _DROPPED
                       for b in bodies], dtype=np.int8)
+    solids = [b._solid for b, c in zip(bodies, codes) if c == _SOLID]
     restored = [b for b, c in zip(bodies, codes) if c == _RESTORED]
     # the convex C-obstacles, when every restored body has its one (one convex robot part),
     # grown by the scene's margin (as a convex body's always is: it is not stored)
@@ -143,6 +155,14 @@ def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
                           dtype=np.int64).reshape(-1, 2),
     }
     out |= _packed("poly", [b._solid for b in restored])
+    out |= {"solid_ints": _compact(np.concatenate([m.ints for m in solids]) if solids
+                                   else np.zeros((0, 3), np.int64)),
+            "solid_faces": _compact(np.concatenate([m.faces for m in solids]) if solids
+                                    else np.zeros((0, 3), np.int64)),
+            "solid_components": _compact(np.concatenate([m.components for m in solids])
+                                         if solids else np.zeros(0, np.int64)),
+            "solid_sizes": np.array([(len(m.ints), len(m.faces)) for m in solids],
+                                    dtype=np.int64).reshape(-1, 2)}
     if with_cos:
         out |= _packed("co", [b.co.polytope for b in restored])
     return out
@@ -208,13 +228,18 @@ class Snapshot:
         the layout; this guards against a snapshot written by other code)."""
         a, bodies = self.arrays, self.meta.get("bodies")
         need = ("codes", "sheet", "ints", "faces", "sizes", "poly_rows",
-                *(f"poly_{f}" for f, _ in _POLYTOPE))
+                *(f"poly_{f}" for f, _ in _POLYTOPE), "solid_ints", "solid_faces",
+                "solid_components", "solid_sizes")
         if not isinstance(bodies, list) or any(k not in a for k in need):
             return False
         codes = a["codes"]
         shaped, restored = int((codes != _DROPPED).sum()), int((codes == _RESTORED).sum())
-        sizes = a["sizes"]
+        sizes, solid = a["sizes"], a["solid_sizes"]
         return (len(codes) == len(bodies) and sizes.shape == (shaped, 2)
+                and solid.shape == (int((codes == _SOLID).sum()), 2)
+                and int(solid[:, 0].sum()) == len(a["solid_ints"])
+                and int(solid[:, 1].sum()) == len(a["solid_faces"])
+                == len(a["solid_components"])
                 and len(a["sheet"]) == shaped
                 and int(sizes[:, 0].sum()) == len(a["ints"])
                 and int(sizes[:, 1].sum()) == len(a["faces"])
@@ -250,8 +275,11 @@ class Snapshot:
                                                     [f"{n}+-{robot_name}" for n in names])])
         sheet = a["sheet"].tolist()
         reasons = self.meta["reasons"]
+        m_ints, m_faces = a["solid_ints"].astype(np.int64), a["solid_faces"].astype(np.int64)
+        m_comp = a["solid_components"].astype(np.int64)
+        mv_at, mf_at = _slices(a["solid_sizes"][:, 0]), _slices(a["solid_sizes"][:, 1])
         out, co_arrays = [], {}
-        k = r = 0  # shaped body, restored body
+        k = r = m = 0  # shaped body, restored body, solid
         for code, (name, source, why) in zip(a["codes"].tolist(), self.meta["bodies"]):
             if code == _DROPPED:
                 out.append(BodyModel(name, source, "dropped", reasons[why], np.zeros((0, 3)),
@@ -261,6 +289,14 @@ class Snapshot:
             if code == _CLASSIFY:
                 out.append(_classify(name, source, P, F, minus_r_box, bounds_g, grid,
                                      convex_robot, memo, sheet=sheet[k]))
+            elif code == _SOLID:  # validated when the snapshot was written (its key: the code)
+                f0, f1 = mf_at[m], mf_at[m + 1]
+                mesh = ClosedMesh._trusted(m_ints[mv_at[m]:mv_at[m + 1]], m_faces[f0:f1],
+                                           grid, name, m_comp[f0:f1])
+                out.append(BodyModel(name, source, "solid", reasons[why],
+                                     vertices[v_at[k]:v_at[k + 1]], F, _ints=P, _solid=mesh,
+                                     _sheet=sheet[k]))
+                m += 1
             else:
                 body = BodyModel(name, source, "convex", reasons[why],
                                  vertices[v_at[k]:v_at[k + 1]], F, _ints=P, _solid=polys[r],
