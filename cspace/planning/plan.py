@@ -589,7 +589,6 @@ def plan_turning(scene, slices, start=None, goal=None, *, planner: str = "RRTCon
         if not tcs.state_free(q, k):
             raise InvalidArgumentError(f"{what} {q.tolist()} is in collision at its orientation "
                                        f"({slices.label(k)}; touching counts)")
-    n = len(slices)
     first = None
     t_plan = _time.perf_counter()
     if slices.goal == 0:
