@@ -376,7 +376,8 @@ DECIDE_TIME = 10.0
 def decide_scenes(tmp: Path) -> list:
     """``(name, scene, truth)``: cages without and with a way out (tests/test_decide.py: moved
     and scaled, open walls, a wide slot), then the shipped scenes (the cage without a path, the
-    piano without one at its start orientation, the others with one)."""
+    piano without one at its start orientation, the others with one), then two real scenes
+    when ../shared/data is there."""
     from test_decide import cage_toml
 
     out = []
@@ -405,6 +406,12 @@ def decide_scenes(tmp: Path) -> list:
     for path in sorted((ROOT / "scenes").glob("*.toml")):
         out.append((path.stem + (" (no turns)" if path.stem == "piano" else ""), load(path),
                     "no path" if path.stem in ("piano", "cage") else "path"))
+    if SHARED.is_dir():  # real scenes: non-convex robots against thousands of triangles
+        out.append(("FCL env.obj with rob.obj (117 C-obstacles)",
+                    load(ROOT / "scenes" / "shared" / "fcl_env.toml"), "path"))
+        out.append(("Parasol bug trap, start orientation (3212 x 66 triangle pairs)",
+                    load(SHARED / "parasol_open_ppl_env" / "bug_trap1.0" / "bug-trap.env"),
+                    "not known"))
     return out
 
 
@@ -424,7 +431,9 @@ def decide_section() -> list[str]:
              "checker with discrete motions (*wrong*: paths exact `segment_free` rejects). A "
              "planner can only say 'not solved' (it runs out the clock); 'no path' is ours "
              "alone. *truth*: by construction (the cages' slot against the robot's width; "
-             "the other shipped scenes have a path, the piano only if it turns).", "",
+             "the other shipped scenes have a path, the piano only if it turns); of the real "
+             "scenes, FCL's has a path (the planners find one), and whether the bug trap "
+             "lets its stick bug out without turning is not known.", "",
              "| scene | truth | octree alone | decide | decide s | auto answers | auto mean s | "
              "RRTConnect (exact) solved | PRM (exact) solved | RRTConnect (FCL) solved | "
              "FCL wrong |",
