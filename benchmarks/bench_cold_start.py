@@ -69,11 +69,26 @@ print(json.dumps({{"triangles": len(F), "cold": cold, "warm": warm}}))
 
 
 FCL_SETUP = """
-import sys, time, tomllib
+import os, sys, time, tomllib
 t = time.perf_counter()
 import fcl, numpy as np
 scene = tomllib.load(open(sys.argv[1], "rb"))
-objs = [fcl.CollisionObject(fcl.Box(*o["box"]), fcl.Transform(np.array(o["position"], float)))
+meshes = {}
+def geometry(o):  # a box, or a mesh file scaled (one BVH model per file and scale, shared)
+    if "box" in o:
+        return fcl.Box(*o["box"])
+    key = (o["mesh"], o.get("scale", 1.0))
+    if key not in meshes:
+        rows = open(os.path.join(os.path.dirname(sys.argv[1]), o["mesh"])).read().split("\\n")
+        V = np.array([r.split()[1:] for r in rows if r.startswith("v ")], float) * key[1]
+        F = np.array([r.split()[1:] for r in rows if r.startswith("f ")], int) - 1
+        m = fcl.BVHModel()
+        m.beginModel(len(V), len(F))
+        m.addSubModel(V, F)
+        m.endModel()
+        meshes[key] = m
+    return meshes[key]
+objs = [fcl.CollisionObject(geometry(o), fcl.Transform(np.array(o["position"], float)))
         for o in scene["obstacles"]]
 manager = fcl.DynamicAABBTreeCollisionManager()
 manager.registerObjects(objs)
@@ -102,10 +117,22 @@ print(json.dumps({"import": t0 - t, "read": t1 - t0, "model": model.seconds["mod
 """
 
 
-def boxes_scene(path: Path, n: int, seed: int = 0) -> Path:
+def boxes_scene(path: Path, n: int, seed: int = 0, l_every: int = 0) -> Path:
     """A scene file of ``n`` random boxes in a cube of side ``10 (n / 1000)^(1/3)`` at
-    (250, 150, -300), and a 0.3 x 0.15 x 0.1 box robot."""
+    (250, 150, -300), and a 0.3 x 0.15 x 0.1 box robot; ``l_every``: every ``l_every``-th
+    body instead a non-convex L-shape (``L.obj`` beside the file, scaled 0.15: the mix of
+    ``bench_scale.synthetic_world``)."""
     import numpy as np
+
+    if l_every:
+        sys.path.insert(0, str(ROOT / "tests"))
+        import zoo
+
+        V, F = zoo.l_shape()
+        V = V - V.mean(axis=0)
+        (path.parent / "L.obj").write_text(
+            "".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in V.tolist())
+            + "".join(f"f {a + 1} {b + 1} {c + 1}\n" for a, b, c in F.tolist()))
 
     rng = np.random.default_rng(seed)
     side = 10.0 * (n / 1000) ** (1 / 3)
@@ -115,8 +142,9 @@ def boxes_scene(path: Path, n: int, seed: int = 0) -> Path:
              f"start = {(at + 0.01).tolist()}", f"goal = {(at + side - 0.01).tolist()}", ""]
     for i in range(n):
         size, centre = rng.uniform(0.05, 0.4, 3), at + rng.uniform(0.0, side, 3)
-        lines += ["[[obstacles]]", f'name = "b{i}"',
-                  "box = [" + ", ".join(f"{x:.4f}" for x in size) + "]",
+        shape = (['mesh = "L.obj"', "scale = 0.15"] if l_every and i % l_every == 7 else
+                 ["box = [" + ", ".join(f"{x:.4f}" for x in size) + "]"])
+        lines += ["[[obstacles]]", f'name = "b{i}"', *shape,
                   "position = [" + ", ".join(f"{x:.4f}" for x in centre) + "]", ""]
     path.write_text("\n".join(lines))
     return path
@@ -138,17 +166,20 @@ def cli_build(scene: Path, cache: Path) -> tuple[float, float]:
     return wall, float(built.group(2))
 
 
-def build_rows(sizes=(1000, 10000), repeats: int = 5) -> list[dict]:
-    """Per scene size: ``cspace build`` with an empty cache and with it filled (median of
-    ``repeats`` fresh processes for 10^3, one for larger), and FCL's set-up."""
+def build_rows(sizes=((1000, 0), (10000, 0), (10000, 50)), repeats: int = 5) -> list[dict]:
+    """Per scene (size, every how many bodies an L-shape): ``cspace build`` with an empty
+    cache and with it filled (median of ``repeats`` fresh processes for 10^3, one for larger),
+    and FCL's set-up."""
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
-        for n in sizes:
-            scene = boxes_scene(Path(tmp) / f"boxes{n}.toml", n)
+        for n, l_every in sizes:
+            folder = Path(tmp) / f"scene{n}-{l_every}"
+            folder.mkdir()
+            scene = boxes_scene(folder / f"boxes{n}.toml", n, l_every=l_every)
             k = repeats if n <= 1000 else 1
             cold, warm, fcl_ = [], [], []
             for i in range(k):
-                cache = Path(tmp) / f"cache{n}-{i}"
+                cache = folder / f"cache{i}"
                 cold.append(cli_build(scene, cache))
                 warm.append(cli_build(scene, cache))
                 fcl_.append(float(subprocess.run(
@@ -156,10 +187,11 @@ def build_rows(sizes=(1000, 10000), repeats: int = 5) -> list[dict]:
                     text=True, timeout=900, check=True).stdout.split()[-1]))
             # where a cached run's time goes, in one more fresh process
             phases = json.loads(subprocess.run(
-                [sys.executable, "-c", PHASES, str(scene), str(Path(tmp) / f"cache{n}-0")],
+                [sys.executable, "-c", PHASES, str(scene), str(folder / "cache0")],
                 capture_output=True, text=True, timeout=900, check=True).stdout.split("\n")[-2])
             med = lambda xs: statistics.median(xs)  # noqa: E731
-            rows.append({"n": n, "runs": k, "cold": med([w for w, _ in cold]),
+            label = f"{n}" + (f", every {l_every}th an L-shape" if l_every else "")
+            rows.append({"n": n, "label": label, "runs": k, "cold": med([w for w, _ in cold]),
                          "cold_build": med([b for _, b in cold]),
                          "warm": med([w for w, _ in warm]), "warm_build": med([b for _, b in warm]),
                          "fcl": med(fcl_), "phases": phases})
@@ -206,19 +238,21 @@ def main() -> None:
     lines += [
         "", "## `cspace build` of many boxes, a fresh process", "",
         "A scene file of N random boxes (0.05-0.4 a side) centred at (250, 150, -300) and a box "
-        "robot; `cspace build SCENE --cache-dir EMPTY` in a fresh process (*cold*: wall time of "
+        "robot (one scene also with every 50th body a non-convex L-shape, a mesh file: the mix "
+        "of `benchmarks/reports/scale.md`, whose 200 solids the snapshot restores validated); "
+        "`cspace build SCENE --cache-dir EMPTY` in a fresh process (*cold*: wall time of "
         "the whole command, import, reading, modelling, building, writing the cache), then the "
         "same command again (*cached*: the model and every C-obstacle restored from the "
         "scene's snapshot in the pack). *Build* is the time the command prints for building the C-obstacles. *FCL set-up*: a fresh process "
         "that reads the same file and makes FCL's boxes in a dynamic AABB tree manager, in the "
         "same run (what FCL pays before its first query; it builds no C-obstacle). Median of "
         "the processes run.", "",
-        "| N boxes | processes | cold, all (s) | cold, build (s) | cached, all (s) | "
+        "| N bodies | processes | cold, all (s) | cold, build (s) | cached, all (s) | "
         "cached, build (s) | cold / cached | FCL set-up (s) | cold / FCL set-up |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in builds:
-        lines.append(f"| {r['n']} | {r['runs']} | {r['cold']:.2f} | {r['cold_build']:.2f} | "
+        lines.append(f"| {r['label']} | {r['runs']} | {r['cold']:.2f} | {r['cold_build']:.2f} | "
                      f"{r['warm']:.2f} | {r['warm_build']:.2f} | {r['cold'] / r['warm']:.2f} | "
                      f"{r['fcl']:.2f} | {r['cold'] / r['fcl']:.1f} |")
     lines += [
@@ -230,14 +264,15 @@ def main() -> None:
         "making the C-obstacles (from the snapshot), making the queryable `CSpace` (its box "
         "tree over every C-obstacle), and the first query. *Loaded* is modelling + "
         "C-obstacles + `CSpace`: everything after the file is read.", "",
-        "| N boxes | import (s) | reading the file (s) | modelling (s) | C-obstacles (s) | "
+        "| N bodies | import (s) | reading the file (s) | modelling (s) | C-obstacles (s) | "
         "CSpace (s) | first query (s) | **loaded** (s) | bodies from the cache |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in builds:
         ph = r["phases"]
         loaded = ph["model"] + ph["build"] + ph["cspace"]
-        lines.append(f"| {r['n']} | {ph['import']:.2f} | {ph['read']:.2f} | {ph['model']:.2f} | "
+        lines.append(f"| {r['label']} | {ph['import']:.2f} | {ph['read']:.2f} | "
+                     f"{ph['model']:.2f} | "
                      f"{ph['build']:.2f} | {ph['cspace']:.2f} | {ph['query']:.4f} | "
                      f"**{loaded:.2f}** | {ph['restored']} of {r['n']} |")
     text = "\n".join(lines) + "\n"
