@@ -76,8 +76,9 @@ def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 
 # Each pair engine's triangles' boxes (grid units): obstacle side lo, hi; robot side lo, hi.
 _TRIANGLE_BOXES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# Candidate (cell, pair) rows whose slabs are evaluated at once: (rows, 8, 2K) floats, K <= 38.
-_PAIR_BLOCK = 8192
+# Pairs whose slabs are built at once ((pairs, 4, 2K) floats, K <= 38), and (cell, pair) rows
+# evaluated at once ((rows, 8, 2K) floats).
+_PAIR_BLOCK, _ROW_BLOCK = 4096, 8192
 
 
 def _piece_boxes(impl, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,17 +112,30 @@ def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
     gf = np.asarray(impl.g, dtype=np.float64)
     Q = np.ones((len(lo), 8, 4))
     Q[:, :, :3] = impl._grid_units(C.reshape(-1, 3)).reshape(-1, 8, 3)
-    for s in range(0, len(cand), _PAIR_BLOCK):
-        r, i, j = cand[s:s + _PAIR_BLOCK].T
-        A, absA = _slab_columns(impl.S[i], impl.T[j], bool(gf.any()), gf)
-        with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-            val = np.matmul(Q[r], A)  # (c, 8, 2K): a . [corner, 1] <= 0 inside a slab side
-            err = _FILTER * np.matmul(np.abs(Q[r]), absA) + _TINY
-        inside = (val < -err).all(axis=(1, 2))
-        unsure = ~inside & ~(val > err).any(axis=(1, 2))
-        for k in np.nonzero(unsure & ~out[r])[0].tolist():
-            inside[k] = all(impl._in_piece(int(i[k]), int(j[k]), x) for x in C[r[k]].tolist())
-        out[r[inside]] = True
+    # each pair's slabs once per call (a pair meets about four cells of a level), the rows
+    # grouped by pair so that a block of pairs is a run of rows
+    nT = len(impl.T)
+    upair, inv = np.unique(cand[:, 1] * nT + cand[:, 2], return_inverse=True)
+    order = np.argsort(inv, kind="stable")
+    cand, inv = cand[order], inv.reshape(-1)[order]
+    for b in range(0, len(upair), _PAIR_BLOCK):
+        ui, uj = np.divmod(upair[b:b + _PAIR_BLOCK], nT)
+        A, absA = _slab_columns(impl.S[ui], impl.T[uj], bool(gf.any()), gf)
+        r0, r1 = np.searchsorted(inv, [b, b + _PAIR_BLOCK]).tolist()
+        for s in range(r0, r1, _ROW_BLOCK):
+            r, i, j = cand[s:min(s + _ROW_BLOCK, r1)].T
+            k = inv[s:min(s + _ROW_BLOCK, r1)] - b
+            live = ~out[r]  # cells an earlier pair holds need no other
+            r, i, j, k = r[live], i[live], j[live], k[live]
+            with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                val = np.matmul(Q[r], A[k])  # (c, 8, 2K): a . [corner, 1] <= 0 in a slab
+                err = _FILTER * np.matmul(np.abs(Q[r]), absA[k]) + _TINY
+            inside = (val < -err).all(axis=(1, 2))
+            unsure = ~inside & ~(val > err).any(axis=(1, 2))
+            for q in np.nonzero(unsure & ~out[r])[0].tolist():
+                inside[q] = all(impl._in_piece(int(i[q]), int(j[q]), x)
+                                for x in C[r[q]].tolist())
+            out[r[inside]] = True
     return out
 
 
