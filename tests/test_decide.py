@@ -23,11 +23,16 @@ ROBOT = 0.4  # the cube robot's side
 
 
 def cage_toml(slot: float, *, offset=(0.0, 0.0, 0.0), scale: float = 1.0, axes=(0, 1, 2),
-              order=None, surfaces: bool = False, tmp=None) -> str:
+              order=None, surfaces: bool = False, tmp=None, turn=None) -> str:
     """A closed cage of six walls around the origin (inner half-width 1), the +x wall in two
     halves with a slot ``slot`` wide (along y) between them; start inside, goal outside.
     Moved by ``offset``, scaled by ``scale``, its axes permuted by ``axes``, its bodies in
-    ``order``; ``surfaces``: each wall an open one-sided square (an OBJ in ``tmp``)."""
+    ``order``; ``surfaces``: each wall an open one-sided square (an OBJ in ``tmp``); ``turn``:
+    roll, pitch, yaw in degrees (the scene files' extrinsic XYZ) turning the walls and the
+    robot about the cage's centre, the bounds staying axis-aligned (and larger)."""
+    from scipy.spatial.transform import Rotation
+
+    R = np.eye(3) if turn is None else Rotation.from_euler("xyz", turn, degrees=True).as_matrix()
     walls = [((-1.05, 0, 0), (0.1, 2.2, 2.2)),
              ((1.05, -(0.55 + slot / 4), 0), (0.1, 1.1 - slot / 2, 2.2)),
              ((1.05, 0.55 + slot / 4, 0), (0.1, 1.1 - slot / 2, 2.2)),
@@ -35,16 +40,18 @@ def cage_toml(slot: float, *, offset=(0.0, 0.0, 0.0), scale: float = 1.0, axes=(
              ((0, 0, -1.05), (2.2, 2.2, 0.1)), ((0, 0, 1.05), (2.2, 2.2, 0.1))]
     order = range(len(walls)) if order is None else order
 
-    def place(p):
-        p = np.asarray(p, dtype=np.float64)[list(axes)] * scale + np.asarray(offset)
+    def place(p, turned=True):
+        p = np.asarray(p, dtype=np.float64)[list(axes)]
+        p = (R @ p if turned else p) * scale + np.asarray(offset)
         return "[" + ", ".join(repr(float(x)) for x in p) + "]"
 
     def size(s):
         return "[" + ", ".join(repr(float(x) * scale) for x in np.asarray(s)[list(axes)]) + "]"
 
-    b = 2.0
-    lines = ['name = "cage"', "[robot]", f"box = [{ROBOT * scale}, {ROBOT * scale}, {ROBOT * scale}]",
-             "[planning]", f"bounds = [{place((-b, -b, -b))}, {place((b, b, b))}]",
+    b = 2.0 if turn is None else 2.9  # holds the turned goal, 1.6 sqrt(3) from the centre
+    turned = [] if turn is None else [f"orientation = {[float(a) for a in turn]}"]
+    lines = ['name = "cage"', "[robot]", f"box = {[ROBOT * scale] * 3}", *turned, "[planning]",
+             f"bounds = [{place((-b, -b, -b), False)}, {place((b, b, b), False)}]",
              f"start = {place((0, 0, 0))}", f"goal = {place((1.6, 1.6, 1.6))}"]
     for k in order:
         c, s = walls[k]
@@ -65,7 +72,7 @@ def cage_toml(slot: float, *, offset=(0.0, 0.0, 0.0), scale: float = 1.0, axes=(
                             + "f 1 2 3\nf 1 3 4\n")
             lines.append(f'mesh = "{path}"')
         else:
-            lines += [f"box = {size(s)}", f"position = {place(c)}"]
+            lines += [f"box = {size(s)}", f"position = {place(c)}", *turned]
     return "\n".join(lines) + "\n"
 
 
@@ -110,6 +117,9 @@ def test_a_cage_whose_slot_is_narrower_than_the_robot_has_no_path(tmp_path):
     dict(scale=0.01),
     dict(axes=(2, 0, 1), order=[6, 5, 4, 3, 2, 1, 0]),
     dict(offset=(-1e4, 3e3, 7.5), scale=7.0, axes=(1, 2, 0)),
+    dict(turn=(17.0, -31.0, 52.0)),
+    dict(offset=(250.0, 150.0, -300.0), scale=3.0, turn=(-63.0, 11.0, 140.0)),
+    dict(turn=(17.0, -31.0, 52.0), surfaces=True),
 ])
 def test_no_path_is_the_same_answer_wherever_the_cage_is(tmp_path, move):
     scene, cs = _cage(tmp_path, slot=0.2, **move)
@@ -119,7 +129,8 @@ def test_no_path_is_the_same_answer_wherever_the_cage_is(tmp_path, move):
 
 
 @pytest.mark.parametrize("move", [dict(), dict(offset=(250.0, 150.0, -300.0), scale=3.0),
-                                  dict(axes=(1, 2, 0))])
+                                  dict(axes=(1, 2, 0)),
+                                  dict(offset=(250.0, 150.0, -300.0), turn=(17.0, -31.0, 52.0))])
 def test_a_slot_wider_than_the_robot_is_never_called_closed(tmp_path, move):
     """Slot 0.6 for a robot of 0.4 (C-space gap 0.2, ~6 finest cells): a path through free
     cells, proved exactly and by FCL."""
