@@ -5,6 +5,7 @@ cells sit; and a wall the octree could not prove is proved by refining."""
 
 from __future__ import annotations
 
+import dataclasses
 import sys
 
 import numpy as np
@@ -15,10 +16,11 @@ from cspace.check.cross_check import path_collisions
 from cspace.planning.plan import verify_path
 
 sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
-from test_decide import ROBOT, _cage  # noqa: E402
+from test_decide import ROBOT, _cage, _check_wall_with_fcl  # noqa: E402
 
 decide_module = sys.modules["cspace.planning.decide"]
 decide = decide_module.decide
+BLOCKED = decide_module.BLOCKED
 FAR = (250.0, 150.0, -300.0)
 
 
@@ -60,6 +62,14 @@ def test_refining_never_opens_a_closed_slot(tmp_path, slot):
         alone = decide(cs, scene.start, scene.goal, bounds=b, refine=False)
         assert alone.answer == "unknown"
         assert d.answer == "no path" and "refined" in d.reason, d.reason
+        # the refined wall is in the certificate, finer than the octree's cells, and every
+        # cell of it collides by FCL on the raw meshes (or within the stated clearance)
+        finest = (b[1] - b[0]) / 2 ** d.depth
+        fine = d.wall & ((d.cells_hi - d.cells_lo) < 0.75 * finest).any(axis=1)
+        assert fine.any() and (d.labels[d.wall] == BLOCKED).all()
+        _check_wall_with_fcl(scene, d, n_cells=40)
+        _check_wall_with_fcl(scene, dataclasses.replace(d, wall=fine), n_cells=40, seed=1)
+        assert len(d.to_trimesh("blocked").faces) == 12 * int(d.wall.sum())
 
 
 def test_a_slot_the_robot_barely_fits_through_is_found_or_left_unknown(tmp_path):

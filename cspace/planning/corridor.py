@@ -73,6 +73,15 @@ class _Cells:
         self.fhi[nF:] = self.floats(self.upper(self.lo[nF:], self.S))
         self.ea = [np.zeros(0, np.int64)]  # [unique edges, then new ones to add]
         self.eb = [np.zeros(0, np.int64)]
+        self.walls = []  # (lo, hi) floats of the children proved blocked, per split
+
+    def wall(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every cell a split proved blocked (closed boxes, scene frame): with 'no path',
+        the refined part of the wall (a superset of what touches the start's region)."""
+        if not self.walls:
+            return np.zeros((0, 3)), np.zeros((0, 3))
+        return (np.concatenate([a for a, _ in self.walls]),
+                np.concatenate([b for _, b in self.walls]))
 
     def floats(self, I: np.ndarray) -> np.ndarray:
         """Float coordinates of fine integer corners: the octree's grid corner at a voxel's
@@ -182,6 +191,9 @@ def _split(cspace, cells: _Cells, G, parents: np.ndarray, obstacles, boxes, marg
     label = _labels(obstacles, boxes, cells.floats(lo), cells.floats(cells.upper(lo, sz)),
                     margin, deadline)
     keep = label != BLOCKED
+    if not keep.all():
+        cells.walls.append((cells.floats(lo[~keep]),
+                            cells.floats(cells.upper(lo[~keep], sz[~keep]))))
     lo, sz, parent, label = lo[keep], sz[keep], parent[keep], label[keep]
     weight = np.ones(len(sz))
     mixed = label == MIXED
@@ -232,8 +244,9 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
     :func:`.decide` painted it (voxels of ``size`` finest cells; ``ids`` the leaf of each,
     ``lab`` its label); ``at0``, ``at1``: the voxels holding start and goal.
 
-    Returns ``(answer, reason, path)``: ``'path'`` with a proved polyline, ``'no path'``, or
-    ``'unknown'`` (out of time, or every route passes a cell that cannot be split).
+    Returns ``(answer, reason, path, (wall_lo, wall_hi))``: ``'path'`` with a proved polyline,
+    ``'no path'``, or ``'unknown'`` (out of time, or every route passes a cell that cannot be
+    split), and the cells the splits proved blocked (:meth:`_Cells.wall`).
     """
     from scipy.sparse.csgraph import dijkstra
 
@@ -248,7 +261,8 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
     try:
         cells.weight[nF:] = _weights(cspace, cells.flo[nF:], cells.fhi[nF:], deadline)
     except _OutOfTime:
-        return ("unknown", f"out of time weighing {len(vox)} cells to refine", None)
+        return ("unknown", f"out of time weighing {len(vox)} cells to refine", None,
+                cells.wall())
     node_of = np.where(fcomp > 0, fcomp.astype(np.int64) - 1, -1)
     node_of[mixed] = nF + np.arange(len(vox))
     _initial(cells, node_of)
@@ -260,7 +274,8 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
         t = min(dst, key=lambda x: dist[x])
         if not np.isfinite(dist[t]):
             return ("no path", f"start and goal in different components after {split} cells "
-                    f"refined along routes ({_time.perf_counter() - t0:.2f} s)", None)
+                    f"refined along routes ({_time.perf_counter() - t0:.2f} s)", None,
+                    cells.wall())
         route = [t]
         while route[-1] not in src:
             route.append(int(pred[route[-1]]))
@@ -271,19 +286,20 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
             path = _route_path(cspace, cells, g, q0, q1, ids, lab, L_lo, L_sz, size, route,
                                at0, at1)
             if path is None:
-                return ("unknown", "a route through free cells failed its exact proof", None)
+                return ("unknown", "a route through free cells failed its exact proof", None,
+                        cells.wall())
             below = int(np.log2(cells.S // cells.sz[route[route >= nF]].min(initial=cells.S)))
             return ("path", f"a route through free cells after {split} cells refined along "
-                    f"routes, down to {below} levels below the octree", path)
+                    f"routes, down to {below} levels below the octree", path, cells.wall())
         todo = todo[cells.sz[todo] > 1][:BATCH]
         if not len(todo):
             return ("unknown", f"every route passes a cell {EXTRA} levels below the octree's "
-                    "finest that is neither free nor blocked", None)
+                    "finest that is neither free nor blocked", None, cells.wall())
         try:
             split += _split(cspace, cells, G, todo, obstacles, boxes, margin, deadline)
         except _OutOfTime:
             break
-    return ("unknown", f"out of time refining routes ({split} cells)", None)
+    return ("unknown", f"out of time refining routes ({split} cells)", None, cells.wall())
 
 
 def _route_path(cspace, cells: _Cells, g, q0, q1, ids, lab, L_lo, L_sz, size, route, at0, at1):

@@ -85,13 +85,17 @@ class Decision:
         The finest level reached (cells ``2**-depth`` of the bounds per axis).
     bounds : (2, 3) float64
     cells_lo, cells_hi : (k, 3) float64
-        The leaf cells (closed boxes, scene frame), and ``labels`` (k,) int8 of theirs.
+        The leaf cells (closed boxes, scene frame), and ``labels`` (k,) int8 of theirs: the
+        octree's finest level reached, then the cells the refinement below it proved
+        blocked.
     start_component : (k,) bool
         The passable leaves connected to the start (with ``'no path'``: the region the
         robot cannot leave).
     wall : (k,) bool
         The blocked leaves touching the start's component: with ``'no path'``, the wall
-        that proves it (each inside one convex piece of a C-obstacle).
+        that proves it (each inside one convex piece of a C-obstacle); a proof found by the
+        refinement adds every cell it proved blocked (a superset of the wall's refined
+        part).
     time : float
         Wall seconds.
     reason : str
@@ -244,6 +248,7 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     answer, reason, reached, path = "unknown", "", first - 1, None
     L = (np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0, np.int8))
     comp_start = wall = None
+    refined = (np.zeros((0, 3)), np.zeros((0, 3)))  # cells the refinement proved blocked
     try:
         for level, size, L_lo, L_sz, L_lab, more in _octree(obstacles, boxes, margin, g, depth,
                                                             deadline):
@@ -257,7 +262,7 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
         else:  # the octree ended undecided: on below its finest level, along routes
             if refine and L[0].size:
                 ids, lab = _paint(g, size, *L)
-                answer, reason, path = refine_route(
+                answer, reason, path, refined = refine_route(
                     cspace, g, q0, q1, ids, lab, L[0], L[1], size, obstacles, boxes, margin,
                     deadline, g.cells_at(q0, size), g.cells_at(q1, size))
     except _OutOfTime:
@@ -270,9 +275,13 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     L_lo, L_sz, L_lab = L
     if comp_start is None or len(comp_start) != len(L_lo):  # out of time: none
         comp_start = wall = np.zeros(len(L_lo), dtype=bool)
+    k = len(refined[0])  # the refined wall after the octree's leaves
     return Decision(answer=answer, path=path, clearance=clearance, depth=reached, bounds=b,
-                    cells_lo=g.floats(L_lo), cells_hi=g.floats(L_lo + L_sz), labels=L_lab,
-                    start_component=comp_start, wall=wall,
+                    cells_lo=np.vstack([g.floats(L_lo), refined[0]]),
+                    cells_hi=np.vstack([g.floats(L_lo + L_sz), refined[1]]),
+                    labels=np.concatenate([L_lab, np.full(k, BLOCKED, np.int8)]),
+                    start_component=np.concatenate([comp_start, np.zeros(k, bool)]),
+                    wall=np.concatenate([wall, np.full(k, answer == "no path")]),
                     time=_time.perf_counter() - t0, reason=reason)
 
 
