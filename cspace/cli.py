@@ -735,7 +735,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="any bound OMPL geometric planner, or 'auto' (default): RRTConnect, "
                         "then a decision by certified cells (a path through free cells, or a "
                         "proof that none exists), then PRM with the narrow-passage sampler, "
-                        "then turns over orientation slices (not with --no-turns), within --time")
+                        "then turns over orientation slices (with --no-turns: the decision "
+                        "again, with the rest), within --time")
     p.add_argument("--time", type=_positive, default=5.0,
                    help="planning time budget in seconds")
     p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (none: a new one each run)")

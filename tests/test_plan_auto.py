@@ -112,3 +112,18 @@ def test_cspace_plan_no_turns_keeps_auto_at_the_start_orientation(tmp_path):
     summary = json.loads(out.read_text())
     assert summary["decision"]["answer"] == "no path" and summary["path"] is None
     assert not summary["solved"]
+
+
+def test_translations_only_give_the_rest_of_the_budget_to_the_decision(monkeypatch):
+    """With turns=False and nothing found, what is left of the budget goes to deciding again
+    (a proof may take minutes). The first decision is given far too little time here (its
+    share set to 1e-4 s), so it ends 'unknown'; the second proves the cage closed."""
+    plan_module = sys.modules["cspace.planning.plan"]  # the package shadows it by plan()
+    shares = [(p, s, 1e-5 if p == "decide" else f, 1e-4 if p == "decide" else c)
+              for p, s, f, c in plan_module.AUTO_SHARES]
+    monkeypatch.setattr(plan_module, "AUTO_SHARES", tuple(shares))
+    r = plan(cspace.load_scene(SCENES / "cage.toml"), planner="auto", time=10.0, seed=1,
+             turns=False)
+    assert [t["planner"] for t in r.tried] == ["RRTConnect", "decide", "PRM", "decide"]
+    assert r.tried[1]["answer"] == "unknown" and r.tried[3]["answer"] == "no path"
+    assert not r.solved and r.decision.answer == "no path" and r.time < 10.0

@@ -419,10 +419,12 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     this orientation, which skips the samplers), then PRM with the narrow-passage sampler
     (gaps a uniform sampler rarely hits), then, on a scene whose robot may turn, the turning
     planner over :data:`AUTO_SLICES` slices (a passage the robot fits through only turned)
-    with the rest of the budget. After a proof at the start's orientation, the decision over
-    those slices comes first (:func:`cspace.planning.decide.decide_turning`): a proof there too
-    ends the search (not solved, ``decision.answer == 'no path'``). Stops at the first
-    solution; every answer is certified as :func:`plan`'s."""
+    with the rest of the budget; translations only (``turns=False``), the rest goes to the
+    decision again, when it is more than the first decision had. After a proof at the start's
+    orientation, the decision over those slices comes first
+    (:func:`cspace.planning.decide.decide_turning`): a proof there too ends the search (not
+    solved, ``decision.answer == 'no path'``). Stops at the first solution; every answer is
+    certified as :func:`plan`'s."""
     if not (time > 0):
         raise InvalidArgumentError(f"time must be positive, got {time}")
     cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull, memory)
@@ -436,7 +438,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     r = None
     q0, q1 = (_endpoint(cs, q, _bounds(bounds if bounds is not None else cs.bounds), w)
               for q, w in ((start, "start"), (goal, "goal")))
-    d = None
+    d, d_budget = None, 0.0
     for n, (planner, sampler, share, cap) in enumerate(AUTO_SHARES):
         budget = min(cap, share * time)
         if n:  # the first planner always runs: there is always a path or a status
@@ -444,7 +446,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         if budget <= 0:
             break
         if planner == "decide":
-            d = decide(cs, q0, q1, bounds=bounds, time=budget)
+            d, d_budget = decide(cs, q0, q1, bounds=bounds, time=budget), budget
             tried.append({"planner": "decide", "sampler": None, "slices": None, "time": budget,
                           "answer": d.answer, "seconds": d.time, "solved": d.answer == "path"})
             if d.answer == "path":
@@ -458,6 +460,16 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
                       "seconds": r.time, "solved": r.solved})
         if r.solved:
             break
+    left = time - (_time.perf_counter() - t0)
+    if (not (r is not None and r.solved) and not (turns and scene is not None)
+            and d is not None and d.answer == "unknown" and left > d_budget):
+        # Translations only, nothing found, and more time left than the decision had: the rest
+        # goes to deciding again (a proof may take minutes: the Parasol bug trap's, 133 s).
+        d = decide(cs, q0, q1, bounds=bounds, time=left)
+        tried.append({"planner": "decide", "sampler": None, "slices": None, "time": left,
+                      "answer": d.answer, "seconds": d.time, "solved": d.answer == "path"})
+        if d.answer == "path":
+            r = _decided(cs, d, bounds)
     left = time - (_time.perf_counter() - t0)
     if (d is not None and d.answer == "no path" and turns and scene is not None and left > 0
             and _turns_proved_useless(scene, q0, q1, bounds, min(left, AUTO_TURN_DECIDE * time),
