@@ -112,6 +112,8 @@ def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
     gf = np.asarray(impl.g, dtype=np.float64)
     Q = np.ones((len(lo), 8, 4))
     Q[:, :, :3] = impl._grid_units(C.reshape(-1, 3)).reshape(-1, 8, 3)
+    Qc = np.ones((len(lo), 1, 4))
+    Qc[:, 0, :3] = impl._grid_units((lo + hi) / 2)  # rounded, still between lo and hi
     # each pair's slabs once per call (a pair meets about four cells of a level), the rows
     # grouped by pair so that a block of pairs is a run of rows
     nT = len(impl.T)
@@ -127,9 +129,16 @@ def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
             k = inv[s:min(s + _ROW_BLOCK, r1)] - b
             live = ~out[r]  # cells an earlier pair holds need no other
             r, i, j, k = r[live], i[live], j[live], k[live]
+            # a cell inside a piece has its centre inside: the corners only where the centre
+            # is not certainly outside a slab (one point, not eight, for most pairs)
             with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-                val = np.matmul(Q[r], A[k])  # (c, 8, 2K): a . [corner, 1] <= 0 in a slab
-                err = _FILTER * np.matmul(np.abs(Q[r]), absA[k]) + _TINY
+                Ak, Bk = A[k], absA[k]
+                val = np.matmul(Qc[r], Ak)
+                live = ~(val > _FILTER * np.matmul(np.abs(Qc[r]), Bk) + _TINY).any(axis=(1, 2))
+            r, i, j, Ak, Bk = r[live], i[live], j[live], Ak[live], Bk[live]
+            with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                val = np.matmul(Q[r], Ak)  # (c, 8, 2K): a . [corner, 1] <= 0 in a slab
+                err = _FILTER * np.matmul(np.abs(Q[r]), Bk) + _TINY
             inside = (val < -err).all(axis=(1, 2))
             unsure = ~inside & ~(val > err).any(axis=(1, 2))
             for q in np.nonzero(unsure & ~out[r])[0].tolist():
