@@ -518,10 +518,11 @@ def long_section() -> list[str]:
 
 LONG_CAVEAT = ("A 'no path' holds for paths whose clearance exceeds the C-obstacles' "
                "`error_bound` (the bug trap's: its triangle pairs grown by their snapping "
-               "bound). Cells the refinement proves blocked are not returned with the "
-               "decision (only the octree's are), so FCL has not checked this wall cell by "
-               "cell as the tests check the cages'; the planners' minute is the only outside "
-               "check.")
+               "bound). The decision returns its wall, the octree's cells and those the "
+               "refinement proved blocked; `make test-slow` "
+               "(`test_the_bug_trap_is_proved_closed_at_its_start_orientation`) checks 60 of "
+               "each by FCL on the raw meshes (corners, centre, random points collide, or lie "
+               "within that clearance).")
 
 
 def _replace_section(text: str, section: list[str], title: str) -> str:
