@@ -135,8 +135,7 @@ def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
                 Ak, Bk = A[k], absA[k]
                 val = np.matmul(Qc[r], Ak)
                 live = ~(val > _FILTER * np.matmul(np.abs(Qc[r]), Bk) + _TINY).any(axis=(1, 2))
-            r, i, j, Ak, Bk = r[live], i[live], j[live], Ak[live], Bk[live]
-            with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+                r, i, j, Ak, Bk = r[live], i[live], j[live], Ak[live], Bk[live]
                 val = np.matmul(Q[r], Ak)  # (c, 8, 2K): a . [corner, 1] <= 0 in a slab
                 err = _FILTER * np.matmul(np.abs(Q[r]), Bk) + _TINY
             inside = (val < -err).all(axis=(1, 2))

@@ -464,7 +464,8 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     if (not (r is not None and r.solved) and not (turns and scene is not None)
             and d is not None and d.answer == "unknown" and left > d_budget):
         # Translations only, nothing found, and more time left than the decision had: the rest
-        # goes to deciding again (a proof may take minutes: the Parasol bug trap's, 133 s).
+        # goes to deciding again (a proof may take minutes: the Parasol bug trap's,
+        # benchmarks/reports/planning.md "Long decisions").
         d = decide(cs, q0, q1, bounds=bounds, time=left)
         tried.append({"planner": "decide", "sampler": None, "slices": None, "time": left,
                       "answer": d.answer, "seconds": d.time, "solved": d.answer == "path"})

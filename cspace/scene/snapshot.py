@@ -116,6 +116,13 @@ def _compact(a: np.ndarray) -> np.ndarray:
     return a.astype(np.int32 if small else np.int64)
 
 
+def _joined(parts: list, cols: int) -> np.ndarray:
+    """``parts`` end to end (rows of ``cols`` columns; 0: a flat array), compacted."""
+    if parts:
+        return _compact(np.concatenate(parts))
+    return _compact(np.zeros((0, cols) if cols else 0, dtype=np.int64))
+
+
 def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
                     one_convex_part: bool) -> dict | None:
     """The snapshot of a finished build (``model_scene``'s bodies, in order), as the arrays
@@ -147,20 +154,15 @@ def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
         "meta": np.frombuffer(json.dumps(meta).encode(), dtype=np.uint8),
         "codes": codes,
         "sheet": np.array([bool(b._sheet) for b in shaped], dtype=bool),
-        "ints": _compact(np.concatenate([b._ints for b in shaped]) if shaped
-                         else np.zeros((0, 3), np.int64)),
-        "faces": _compact(np.concatenate([b.faces for b in shaped]) if shaped
-                          else np.zeros((0, 3), np.int64)),
+        "ints": _joined([b._ints for b in shaped], 3),
+        "faces": _joined([b.faces for b in shaped], 3),
         "sizes": np.array([(len(b._ints), len(b.faces)) for b in shaped],
                           dtype=np.int64).reshape(-1, 2),
     }
     out |= _packed("poly", [b._solid for b in restored])
-    out |= {"solid_ints": _compact(np.concatenate([m.ints for m in solids]) if solids
-                                   else np.zeros((0, 3), np.int64)),
-            "solid_faces": _compact(np.concatenate([m.faces for m in solids]) if solids
-                                    else np.zeros((0, 3), np.int64)),
-            "solid_components": _compact(np.concatenate([m.components for m in solids])
-                                         if solids else np.zeros(0, np.int64)),
+    out |= {"solid_ints": _joined([m.ints for m in solids], 3),
+            "solid_faces": _joined([m.faces for m in solids], 3),
+            "solid_components": _joined([m.components for m in solids], 0),
             "solid_sizes": np.array([(len(m.ints), len(m.faces)) for m in solids],
                                     dtype=np.int64).reshape(-1, 2)}
     if with_cos:
@@ -174,9 +176,7 @@ def _packed(name: str, polytopes: list) -> dict:
     out = {f"{name}_rows": np.array([[len(getattr(p, f)) for f, _ in _POLYTOPE]
                                      for p in polytopes], dtype=np.int64).reshape(-1, 6)}
     for f, cols in _POLYTOPE:
-        parts = [getattr(p, f) for p in polytopes]
-        empty = np.zeros((0, cols) if cols else 0, dtype=np.int64)
-        out[f"{name}_{f}"] = _compact(np.concatenate(parts) if parts else empty)
+        out[f"{name}_{f}"] = _joined([getattr(p, f) for p in polytopes], cols)
     return out
 
 
