@@ -343,8 +343,8 @@ def _plan(args: argparse.Namespace) -> int:
     d = r.decision
     if d is not None and d.answer == "no path":
         print(f"  no path at the start's orientation, proved: {d.reason} (a wall of "
-              f"{int(d.wall.sum())} cells inside the C-obstacles; for clearances above "
-              f"{d.clearance:.3g})")
+              f"{int(d.wall.sum())} cells inside the C-obstacles or near them; for "
+              f"clearances above {d.clearance:.3g})")
     turned = [t for t in r.tried or () if t["planner"] == "decide" and t["slices"]]
     if (d is not None and d.answer == "no path" and not r.solved and r.slices is None
             and (args.no_turns or (turned and turned[0]["answer"] == "no path"))):

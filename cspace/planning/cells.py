@@ -20,8 +20,8 @@ from ..cobstacle.pairs import _slab_columns
 from ..errors import InvalidArgumentError
 from ..geometry.exact import _FILTER, _TINY
 
-#: Cell labels.
-BLOCKED, MIXED, FREE = 0, 1, 2
+#: Cell labels. ``NEAR``: blocked within a stated distance (:func:`_nudged`), not inside.
+BLOCKED, MIXED, FREE, NEAR = 0, 1, 2, 3
 # The free label's margin, relative to the bounds' size (signed_distance's float error is a
 # few ulps of the coordinates; 2**-20 is far above it and far below any cell).
 _FREE_MARGIN = 2.0 ** -20
@@ -196,15 +196,51 @@ _SWEEP_FIRST, _SWEEP_SECONDS = 256, 0.25
 
 
 def _labels(obstacles, boxes: np.ndarray, lo: np.ndarray, hi: np.ndarray, margin: float,
-            deadline: float) -> np.ndarray:
-    """The label of each closed cell ``[lo[r], hi[r]]``."""
+            deadline: float, nudge: float = 0.0) -> np.ndarray:
+    """The label of each closed cell ``[lo[r], hi[r]]``; with ``nudge`` > 0, a cell within
+    ``nudge`` of one convex piece is blocked too (:func:`_nudged`: :data:`NEAR`)."""
     free = _sweep(obstacles, boxes, lo, hi, True, False,
                   lambda co, a, b: _kept_off(co, a, b, margin), deadline)
     label = np.where(free, FREE, MIXED).astype(np.int8)
     rest = np.nonzero(~free)[0]
-    label[rest[_sweep(obstacles, boxes, lo[rest], hi[rest], False, True, _inside_one_piece,
-                      deadline)]] = BLOCKED
+    inside = _sweep(obstacles, boxes, lo[rest], hi[rest], False, True, _inside_one_piece,
+                    deadline)
+    label[rest[inside]] = BLOCKED
+    if nudge > 0:
+        rest = rest[~inside]
+        label[rest[_nudged(obstacles, boxes, lo[rest], hi[rest], nudge, deadline)]] = NEAR
     return label
+
+
+# The 26 directions a cell is moved in by _nudged: a cell moves only along its thin sides.
+_DIRECTIONS = np.array([d for d in np.ndindex(3, 3, 3) if d != (1, 1, 1)], np.float64) - 1.0
+
+
+def _nudged(obstacles, boxes, lo: np.ndarray, hi: np.ndarray, delta: float,
+            deadline: float) -> np.ndarray:
+    """(m,) bool: the closed cell lies within ``delta`` of one convex piece of a C-obstacle:
+    its copy moved by some ``v``, ``|v| <= delta``, lies in the piece (the exact blocked test
+    on the moved corners), so each of its points has a point of the piece within ``|v|``.
+
+    ``v`` has length ``delta / 2`` along one of 26 directions (axes, face and body diagonals),
+    nonzero only on the cell's sides no longer than that: a cell across the plane where two
+    C-obstacles touch (an edge, a vertex) and thinner than ``delta / 2`` across it moves into
+    one of them. The moved corners are rounded: each coordinate by at most ``2**-53`` of its
+    magnitude, so the move is at most ``delta / 2 + 2**-51 * max|x|``, below ``delta`` when
+    ``delta > 2**-49 * max|x|``; smaller, the test is skipped (nothing is nudged)."""
+    out = np.zeros(len(lo), dtype=bool)
+    t = delta / 2
+    if not len(lo) or delta <= 2.0 ** -49 * float(np.abs(np.vstack([lo, hi])).max()):
+        return out
+    thin = (hi - lo) <= t
+    for d in _DIRECTIONS:
+        on = d != 0
+        rows = np.nonzero(~out & thin[:, on].all(axis=1))[0]
+        if len(rows):
+            v = d * (t / np.sqrt(np.count_nonzero(on)) * (1 - 2.0 ** -40))
+            out[rows] = _sweep(obstacles, boxes, lo[rows] + v, hi[rows] + v, False, True,
+                               _inside_one_piece, deadline)
+    return out
 
 
 def _sweep(obstacles, boxes, lo, hi, initial: bool, within: bool, test, deadline) -> np.ndarray:

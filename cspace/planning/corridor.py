@@ -4,8 +4,8 @@ When :func:`.decide`'s octree ends with start and goal in one component of passa
 not joined by free ones (a gap narrower than its finest cell), :func:`refine_route` goes on
 below that level, but only where a route needs it:
 
-1. The graph: one node per component of the octree's free cells, one per passable mixed cell
-   of the start's component; an edge where two closed cells touch (a face, an edge or a
+1. The graph: one node per component of the octree's free cells, one per box of passable mixed
+   cells of the start's component (aligned pairs merged, :func:`_coarsen`); an edge where two closed cells touch (a face, an edge or a
    corner), decided on integers (cells are boxes of a grid ``2**EXTRA`` times finer than the
    octree's finest, with float corners monotone in the integers, so touching boxes touch in
    floats too).
@@ -13,15 +13,20 @@ below that level, but only where a route needs it:
    cell costs 1, a free one nothing). If every cell on it is free, the route is a path:
    the cells' centres and contacts, shortcut, every segment proved by ``segment_free``.
 3. Otherwise each mixed cell on the route is split in eight and its children labelled
-   (:func:`.cells._labels`); blocked children leave the graph, the others join it with the
-   edges of the cells they touch (a child touches only what its parent or a split neighbour's
-   children touch). Back to 2.
+   (:func:`.cells._labels`); mixed children are merged back along the axes their labels do
+   not change on (:func:`_children`: slabs across a slot, bars along an edge); blocked
+   children leave the graph, the others join it with the edges of the cells they touch (a
+   child touches only what its parent or a split neighbour's children touch). Back to 2.
 
-A mixed cell at the finest level (``2**-(depth + EXTRA)`` of the bounds) is never split; a
-route through one costs ``STUCK``, so routes avoid it while another exists.
+A mixed cell at the finest level (``2**-(depth + EXTRA)`` of the bounds on every axis) is never
+split; a route through one costs ``STUCK``, so routes avoid it while another exists. With
+``nudge`` > 0 a child within ``nudge`` of one convex piece is blocked too (``NEAR``,
+:func:`.cells._nudged`): C-obstacles that touch are walled where they meet, and "no path"
+then holds for clearances above ``error_bound + nudge``.
 
 **"no path"**: the graph always holds every passable cell of the start's component (a split
-only removes blocked children, each inside one convex piece of a C-obstacle, exactly), so
+only removes blocked children, each inside one convex piece of a C-obstacle, exactly, or
+within ``nudge`` of one), so
 goal cells out of the start's reach prove that no path exists, as in :func:`.decide`. A
 "path" is proved segment by segment; the labels ``free`` steer, they prove nothing.
 """
@@ -32,7 +37,7 @@ import time as _time
 
 import numpy as np
 
-from .cells import (BLOCKED, FREE, MIXED, _CORNERS, _NEIGHBOURS, _components,
+from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _NEIGHBOURS, _components,
                     _free_leaf_graph, _labels, _OutOfTime, _polyline, _shift)
 
 #: Levels below the octree's finest that a route may refine to.
@@ -54,34 +59,34 @@ class _Cells:
     ``[lo, lo + sz]`` in fine units (``S`` per voxel of the painted grid) with its float box,
     label and ``alive`` flag; and its undirected edges ``ea, eb``."""
 
-    def __init__(self, g, size, fcomp, mixed_voxels, nF: int):
+    def __init__(self, g, size, fcomp, mixed_voxels, nF: int, extent=None):
         self.g, self.size, self.S = g, np.asarray(size, dtype=np.int64), 1 << EXTRA
         self.n_vox = fcomp.shape
         self.fcomp = fcomp
         self.nF = nF
         k = len(mixed_voxels)
         self.lo = np.zeros((nF + k, 3), np.int64)
-        self.sz = np.zeros(nF + k, np.int64)
+        self.sz = np.zeros((nF + k, 3), np.int64)  # per axis: 0 on a flat one
         self.lo[nF:] = mixed_voxels * self.S
-        self.sz[nF:] = self.S
+        self.sz[nF:] = self.S * self.flat() * (1 if extent is None else extent)
         self.label = np.full(nF + k, MIXED, np.int8)
         self.weight = np.ones(nF + k)  # a mixed cell's cost: see CENTRE_IN_COLLISION
         self.label[:nF] = FREE
         self.alive = np.ones(nF + k, bool)
         self.flo, self.fhi = np.zeros((nF + k, 3)), np.zeros((nF + k, 3))
         self.flo[nF:] = self.floats(self.lo[nF:])
-        self.fhi[nF:] = self.floats(self.upper(self.lo[nF:], self.S))
+        self.fhi[nF:] = self.floats(self.upper(self.lo[nF:], self.sz[nF:]))
         self.ea = [np.zeros(0, np.int64)]  # [unique edges, then new ones to add]
         self.eb = [np.zeros(0, np.int64)]
-        self.walls = []  # (lo, hi) floats of the children proved blocked, per split
+        self.walls = []  # (lo, hi, label) of the children proved blocked, per split
 
-    def wall(self) -> tuple[np.ndarray, np.ndarray]:
-        """Every cell a split proved blocked (closed boxes, scene frame): with 'no path',
-        the refined part of the wall (a superset of what touches the start's region)."""
+    def wall(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Every cell a split proved blocked (closed boxes, scene frame, and their labels:
+        ``BLOCKED`` inside a piece, ``NEAR`` within the nudge of one): with 'no path', the
+        refined part of the wall (a superset of what touches the start's region)."""
         if not self.walls:
-            return np.zeros((0, 3)), np.zeros((0, 3))
-        return (np.concatenate([a for a, _ in self.walls]),
-                np.concatenate([b for _, b in self.walls]))
+            return np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int8)
+        return tuple(np.concatenate([w[k] for w in self.walls]) for k in range(3))
 
     def floats(self, I: np.ndarray) -> np.ndarray:
         """Float coordinates of fine integer corners: the octree's grid corner at a voxel's
@@ -100,9 +105,16 @@ class _Cells:
         """(3,) int64: 1 on the axes the grid cuts, 0 on flat ones."""
         return self.g.split.astype(np.int64)
 
-    def upper(self, lo: np.ndarray, sz: np.ndarray) -> np.ndarray:
-        """The upper corners of cells at ``lo`` of side ``sz`` (none on a flat axis)."""
-        return lo + np.asarray(sz)[..., None] * self.flat()
+    @staticmethod
+    def upper(lo: np.ndarray, sz: np.ndarray) -> np.ndarray:
+        """The upper corners of cells at ``lo`` of sides ``sz`` (0 on a flat axis)."""
+        return lo + sz
+
+    def side(self, sz: np.ndarray) -> np.ndarray:
+        """A cell's size for its cost, in fine units: the geometric mean of its sides on the
+        axes the grid cuts (a slab thin across a gap is cheaper than its cube)."""
+        cut = self.flat().astype(bool)
+        return np.exp(np.log(np.maximum(sz[:, cut], 1)).mean(axis=1))
 
     def voxels_touching(self, lo: np.ndarray, hi: np.ndarray):
         """``(rows, voxels)``: every voxel of the painted grid whose closed box touches the
@@ -140,7 +152,8 @@ class _Cells:
         A, B = A[keep], B[keep]
         self.ea, self.eb = [A], [B]
         cost = np.where(self.label == FREE, _FREE_COST,
-                        np.where(self.sz > 1, self.weight * (self.sz / self.S), STUCK))
+                        np.where((self.sz > 1).any(axis=1),
+                                 self.weight * (self.side(self.sz) / self.S), STUCK))
         return coo_matrix((np.concatenate([cost[B], cost[A]]),
                            (np.concatenate([A, B]), np.concatenate([B, A]))),
                           shape=(n, n)).tocsr()
@@ -178,22 +191,57 @@ def _initial(cells: _Cells, node_of: np.ndarray) -> None:
         cells.eb.append(v[ok])
 
 
+# octant index 4i + 2j + k (as _CORNERS): the octants low on each axis, and the bit of an axis
+_LOW = [np.nonzero(_CORNERS[:, a] == 0)[0] for a in range(3)]
+_BIT = np.array([4, 2, 1])
+
+
+def _children(cells: _Cells, parents: np.ndarray, obstacles, boxes, margin, deadline,
+              nudge: float):
+    """The children of ``parents``: ``(lo, sz, label, parent)``.
+
+    Each parent is cut in two on every axis where its side exceeds one fine unit, and the
+    octants labelled. Where the labels change along some axis but not along another, the
+    mixed octants are merged along the unchanging one: across a slot between two walls the
+    octants on a wall's side are blocked and the others mixed, so the mixed half stays one
+    slab (it thins across the slot, keeps its length along it); along an edge where two
+    C-obstacles meet it stays one bar. A merged cell is labelled mixed without a test (a
+    mixed label proves nothing; the decided octants keep theirs), so a route through a gap
+    needs cells in proportion to its length, not to its length over its width."""
+    psz = cells.sz[parents]
+    can = psz > 1
+    half = np.where(can, psz // 2, psz)
+    valid = ~(_CORNERS.astype(bool)[None] & ~can[:, None, :]).any(axis=2)  # (p, 8)
+    olo = cells.lo[parents][:, None, :] + _CORNERS[None] * half[:, None, :]
+    osz = np.broadcast_to(half[:, None, :], olo.shape)
+    pi, oi = np.nonzero(valid)
+    lab = np.full(valid.shape, -1, np.int8)
+    lab[pi, oi] = _labels(obstacles, boxes, cells.floats(olo[pi, oi]),
+                          cells.floats(cells.upper(olo[pi, oi], osz[pi, oi])), margin, deadline,
+                          nudge)
+    same = np.stack([(lab[:, _LOW[a]] == lab[:, _LOW[a] + _BIT[a]]).all(axis=1)
+                     for a in range(3)], axis=1)
+    merge = can & same & (can & ~same).any(axis=1)[:, None]  # (p, 3)
+    mixed = lab == MIXED
+    first = ((_CORNERS[None] * merge[:, None, :]) == 0).all(axis=2)  # (p, 8): a group's low
+    keep = valid & (~mixed | first)
+    csz = np.where((mixed[:, :, None] & merge[:, None, :]), psz[:, None, :], osz)
+    pi, oi = np.nonzero(keep)
+    return olo[pi, oi], csz[pi, oi], lab[pi, oi], parents[pi]
+
+
 def _split(cspace, cells: _Cells, G, parents: np.ndarray, obstacles, boxes, margin,
-           deadline) -> int:
-    """Split ``parents`` (mixed leaves) in eight; keep the children not blocked, with their
-    edges. Returns how many children were kept."""
-    flat = cells.flat()
-    offs = np.unique(_CORNERS * flat, axis=0)
-    half = cells.sz[parents] // 2
-    lo = (cells.lo[parents][:, None, :] + offs[None] * half[:, None, None]).reshape(-1, 3)
-    sz = np.repeat(half, len(offs))
-    parent = np.repeat(parents, len(offs))
-    label = _labels(obstacles, boxes, cells.floats(lo), cells.floats(cells.upper(lo, sz)),
-                    margin, deadline)
-    keep = label != BLOCKED
+           deadline, nudge: float) -> int:
+    """Split ``parents`` (mixed leaves) in eight and label the octants; then merge the mixed
+    octants of a parent back along each axis on which its octants' labels do not change,
+    when they change on another (:func:`_children`); keep the children not blocked, with
+    their edges. Returns how many children were kept."""
+    lo, sz, label, parent = _children(cells, parents, obstacles, boxes, margin, deadline,
+                                      nudge)
+    keep = (label != BLOCKED) & (label != NEAR)
     if not keep.all():
         cells.walls.append((cells.floats(lo[~keep]),
-                            cells.floats(cells.upper(lo[~keep], sz[~keep]))))
+                            cells.floats(cells.upper(lo[~keep], sz[~keep])), label[~keep]))
     lo, sz, parent, label = lo[keep], sz[keep], parent[keep], label[keep]
     weight = np.ones(len(sz))
     mixed = label == MIXED
@@ -236,15 +284,60 @@ def _split(cspace, cells: _Cells, G, parents: np.ndarray, obstacles, boxes, marg
     return len(new)
 
 
+def _coarsen(vox: np.ndarray):
+    """Mixed voxels merged into boxes: ``(lo, extent, owner)`` in voxels, ``owner`` the box
+    of each voxel (in the order of ``vox``).
+
+    Two boxes merge along an axis when they are the two halves of an aligned box twice as
+    long there (the same on the other axes); repeated on each axis until none merges. The
+    boxes are mixed (a mixed label is never a proof), and :func:`_children` splits them only
+    where a route needs it: a wall where two C-obstacles touch is walled column by column,
+    and a column is as long as the voxels along it allow, not one voxel."""
+    lo = vox.astype(np.int64)
+    ext = np.ones_like(lo)
+    owner = np.arange(len(lo))
+
+    def keys(lo, ext):
+        return ((((lo[:, 0] << 9 | lo[:, 1]) << 9 | lo[:, 2]) << 9 | ext[:, 0]) << 9
+                | ext[:, 1]) << 9 | ext[:, 2]
+
+    merged = True
+    while merged and len(lo):
+        merged = False
+        for a in range(3):
+            k = keys(lo, ext)
+            order = np.argsort(k)
+            low = np.nonzero(lo[:, a] % (2 * ext[:, a]) == 0)[0]
+            mate = lo[low].copy()
+            mate[:, a] += ext[low, a]
+            want = keys(mate, ext[low])
+            at = np.minimum(np.searchsorted(k, want, sorter=order), len(k) - 1)
+            hit = k[order[at]] == want
+            if not hit.any():
+                continue
+            merged = True
+            low, high = low[hit], order[at[hit]]
+            ext[low, a] *= 2
+            gone = np.zeros(len(lo), dtype=bool)
+            gone[high] = True
+            target = np.arange(len(lo))
+            target[high] = low
+            renum = np.cumsum(~gone) - 1
+            owner = renum[target[owner]]
+            lo, ext = lo[~gone], ext[~gone]
+    return lo, ext, owner
+
+
 def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes,
-                 margin: float, deadline: float, at0, at1):
+                 margin: float, deadline: float, at0, at1, nudge: float = 0.0):
     """Refine along routes until one is free, the goal is out of reach, or time is up.
 
     ``g``, ``ids``, ``lab``, ``L_lo``, ``L_sz`` and ``size``: the octree's last level as
     :func:`.decide` painted it (voxels of ``size`` finest cells; ``ids`` the leaf of each,
     ``lab`` its label); ``at0``, ``at1``: the voxels holding start and goal.
 
-    Returns ``(answer, reason, path, (wall_lo, wall_hi))``: ``'path'`` with a proved polyline,
+    Returns ``(answer, reason, path, (wall_lo, wall_hi, wall_labels))``: ``'path'`` with a
+    proved polyline,
     ``'no path'``, or ``'unknown'`` (out of time, or every route passes a cell that cannot be
     split), and the cells the splits proved blocked (:meth:`_Cells.wall`).
     """
@@ -256,15 +349,15 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
     passable = _components(lab != BLOCKED)
     mine = ({int(passable[tuple(v)]) for v in at0} | {int(passable[tuple(v)]) for v in at1}) - {0}
     mixed = (lab == MIXED) & np.isin(passable, list(mine))
-    vox = np.argwhere(mixed)
-    cells = _Cells(g, size, fcomp, vox, nF)
+    vox, extent, owner = _coarsen(np.argwhere(mixed))
+    cells = _Cells(g, size, fcomp, vox, nF, extent)
     try:
         cells.weight[nF:] = _weights(cspace, cells.flo[nF:], cells.fhi[nF:], deadline)
     except _OutOfTime:
         return ("unknown", f"out of time weighing {len(vox)} cells to refine", None,
                 cells.wall())
     node_of = np.where(fcomp > 0, fcomp.astype(np.int64) - 1, -1)
-    node_of[mixed] = nF + np.arange(len(vox))
+    node_of[mixed] = nF + owner
     _initial(cells, node_of)
     split = 0
     while _time.perf_counter() < deadline:
@@ -288,15 +381,18 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
             if path is None:
                 return ("unknown", "a route through free cells failed its exact proof", None,
                         cells.wall())
-            below = int(np.log2(cells.S // cells.sz[route[route >= nF]].min(initial=cells.S)))
+            cut = cells.flat().astype(bool)
+            finest = cells.sz[route[route >= nF]][:, cut].min(initial=cells.S)
+            below = int(np.log2(cells.S // max(int(finest), 1)))
             return ("path", f"a route through free cells after {split} cells refined along "
                     f"routes, down to {below} levels below the octree", path, cells.wall())
-        todo = todo[cells.sz[todo] > 1][:BATCH]
+        todo = todo[(cells.sz[todo] > 1).any(axis=1)][:BATCH]
         if not len(todo):
             return ("unknown", f"every route passes a cell {EXTRA} levels below the octree's "
                     "finest that is neither free nor blocked", None, cells.wall())
         try:
-            split += _split(cspace, cells, G, todo, obstacles, boxes, margin, deadline)
+            split += _split(cspace, cells, G, todo, obstacles, boxes, margin, deadline,
+                            nudge)
         except _OutOfTime:
             break
     return ("unknown", f"out of time refining routes ({split} cells)", None, cells.wall())

@@ -25,7 +25,8 @@ planning bounds:
     bounds per axis); a mixed cell at that depth stays passable.
 
 **"no path"**: the union ``P`` of the closed cells not blocked holds every free translation in
-the bounds, so a path would lie in one connected component of ``P``. Closed cells touching at a
+the bounds (every translation with a clearance above ``Decision.clearance``, when the refinement
+below blocked cells near a piece: see there), so a path would lie in one connected component of ``P``. Closed cells touching at a
 face, an edge or a corner are connected (26-connectivity on the finest grid; cell corners are
 float64 functions of integer indices, the same for neighbours, strictly increasing, so touching
 is decided on the integers). Start and goal in different components of ``P``: no path. The
@@ -40,11 +41,17 @@ its "no path" is reported as "unknown".
 
 **Below the finest level**: undecided there, :func:`.corridor.refine_route` splits the mixed
 cells along the cheapest route between start and goal, again and again (a gap narrower than a
-cell; a wall the octree's cells could not fill). Its "path" and "no path" mean the same.
+cell; a wall the octree's cells could not fill), into slabs and bars where the labels change
+across one axis only. Its "path" means the same. Its cells may also be blocked ``near`` a piece:
+a cell whose copy moved by at most ``nudge`` lies inside one convex piece (exact test on the
+moved corners; :func:`.cells._nudged`). That is how C-obstacles that only touch (along a face,
+an edge, at a vertex; a slot exactly the robot's width) are walled, which no cell inside one
+piece can do. ``nudge`` is half the largest ``error_bound``, at least four of the refinement's
+finest sides; a proof that used such cells holds for clearances above ``error_bound + nudge``,
+and ``Decision.clearance`` says so.
 
-**"unknown"**: neither within the time given (C-obstacles that only touch; a gap so narrow
-for its length that the cells along it do not fit the budget). The planners then run as
-without the decision.
+**"unknown"**: neither within the time given (a wall too large to fill with the cells the
+budget allows). The planners then run as without the decision.
 
 This is a certified cell decomposition (as in Zhang, Kim and Manocha, "Path non-existence
 computation using C-obstacle query", 2008), with the cells' labels decided exactly; the
@@ -59,9 +66,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidArgumentError
-from .cells import (BLOCKED, FREE, MIXED, _CORNERS, _components, _free_leaf_graph, _Grid,
+from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _components, _free_leaf_graph, _Grid,
                     _labels, _OutOfTime, _polyline, _setup, _shift)
-from .corridor import refine_route
+from .corridor import EXTRA, refine_route
 
 #: Answers of :func:`decide`.
 ANSWERS = ("no path", "path", "unknown")
@@ -80,22 +87,23 @@ class Decision:
         With ``'path'``: start to goal, every segment proved free (``segment_free``).
     clearance : float
         With ``'no path'``: the statement holds for paths whose clearance exceeds this
-        (the largest ``error_bound`` of the C-obstacles), scene units.
+        (the largest ``error_bound`` of the C-obstacles, plus the refinement's ``nudge``
+        when its wall has cells near a piece), scene units.
     depth : int
         The finest level reached (cells ``2**-depth`` of the bounds per axis).
     bounds : (2, 3) float64
     cells_lo, cells_hi : (k, 3) float64
         The leaf cells (closed boxes, scene frame), and ``labels`` (k,) int8 of theirs: the
         octree's finest level reached, then the cells the refinement below it proved
-        blocked.
+        blocked (``BLOCKED`` inside a piece, ``NEAR`` within the nudge of one).
     start_component : (k,) bool
         The passable leaves connected to the start (with ``'no path'``: the region the
         robot cannot leave).
     wall : (k,) bool
         The blocked leaves touching the start's component: with ``'no path'``, the wall
-        that proves it (each inside one convex piece of a C-obstacle); a proof found by the
-        refinement adds every cell it proved blocked (a superset of the wall's refined
-        part).
+        that proves it (each inside one convex piece of a C-obstacle, or near one); a proof
+        found by the refinement adds every cell it proved blocked (a superset of the wall's
+        refined part).
     time : float
         Wall seconds.
     reason : str
@@ -117,7 +125,8 @@ class Decision:
 
     def __repr__(self) -> str:
         n = {k: int(np.count_nonzero(self.labels == v))
-             for k, v in (("blocked", BLOCKED), ("mixed", MIXED), ("free", FREE))}
+             for k, v in (("blocked", BLOCKED), ("near", NEAR), ("mixed", MIXED),
+                          ("free", FREE))}
         return (f"Decision(answer={self.answer!r}, depth={self.depth}, cells={n}, "
                 f"time={self.time:.3f})")
 
@@ -198,6 +207,13 @@ def _endpoints(cspace, b, start, goal, check=True):
 MAX_DEPTH = 8
 
 
+def _nudge(b: np.ndarray, depth: int, clearance: float) -> float:
+    """How near a piece a refined cell may be to count as blocked (:func:`.cells._nudged`):
+    half the C-obstacles' ``error_bound``, and at least four of the refinement's finest
+    sides (its cells must get thinner than half of it), scene units."""
+    return max(clearance / 2, 4.0 * float((b[1] - b[0]).max()) / 2.0 ** (depth + EXTRA))
+
+
 def _depth(depth) -> int:
     if isinstance(depth, bool) or not isinstance(depth, (int, np.integer)) or not (
             1 <= int(depth) <= MAX_DEPTH):
@@ -248,7 +264,9 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     answer, reason, reached, path = "unknown", "", first - 1, None
     L = (np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0, np.int8))
     comp_start = wall = None
-    refined = (np.zeros((0, 3)), np.zeros((0, 3)))  # cells the refinement proved blocked
+    # cells the refinement proved blocked, and their labels
+    refined = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int8))
+    nudge = _nudge(b, depth, clearance)
     try:
         for level, size, L_lo, L_sz, L_lab, more in _octree(obstacles, boxes, margin, g, depth,
                                                             deadline):
@@ -264,7 +282,9 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
                 ids, lab = _paint(g, size, *L)
                 answer, reason, path, refined = refine_route(
                     cspace, g, q0, q1, ids, lab, L[0], L[1], size, obstacles, boxes, margin,
-                    deadline, g.cells_at(q0, size), g.cells_at(q1, size))
+                    deadline, g.cells_at(q0, size), g.cells_at(q1, size), nudge)
+                if answer == "no path" and (refined[2] == NEAR).any():
+                    clearance += nudge  # the wall holds cells within the nudge of a piece
     except _OutOfTime:
         reason, comp_start = f"out of time at level {reached + 1}", None
     if answer == "no path" and getattr(cspace, "robot_hull", False):
@@ -279,7 +299,7 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     return Decision(answer=answer, path=path, clearance=clearance, depth=reached, bounds=b,
                     cells_lo=np.vstack([g.floats(L_lo), refined[0]]),
                     cells_hi=np.vstack([g.floats(L_lo + L_sz), refined[1]]),
-                    labels=np.concatenate([L_lab, np.full(k, BLOCKED, np.int8)]),
+                    labels=np.concatenate([L_lab, refined[2]]),
                     start_component=np.concatenate([comp_start, np.zeros(k, bool)]),
                     wall=np.concatenate([wall, np.full(k, answer == "no path")]),
                     time=_time.perf_counter() - t0, reason=reason)
