@@ -392,6 +392,11 @@ def decide_scenes(tmp: Path) -> list:
                              dict(slot=0.401, offset=far), "path"),
                             ("cage at (250, 150, -300), slot = robot + 1e-5",
                              dict(slot=0.40001, offset=far), "path"),
+                            ("cage at (250, 150, -300), slot = robot + 6e-7 (10 grid steps)",
+                             dict(slot=0.4000006, offset=far), "path"),
+                            ("cage at (250, 150, -300), slot = robot (C-obstacles touch), "
+                             "cells off the slot", dict(slot=0.4, offset=far, shift=0.0137),
+                             "no path"),
                             ("cage at (250, 150, -300), slot = robot - 0.02, cells off the slot",
                              dict(slot=0.38, offset=far, shift=0.0137), "no path")):
         path = tmp / f"cage{len(out)}.toml"
@@ -405,6 +410,8 @@ def decide_scenes(tmp: Path) -> list:
             text = "\n".join(lines)
         path.write_text(text)
         out.append((name, load(path), truth))
+    out.append(("two C-obstacles touching along an edge, between start and goal",
+                touching_edge(tmp), "no path"))
     for path in sorted((ROOT / "scenes").glob("*.toml")):
         out.append((path.stem + (" (no turns)" if path.stem == "piano" else ""), load(path),
                     "no path" if path.stem in ("piano", "cage") else "path"))
@@ -415,6 +422,18 @@ def decide_scenes(tmp: Path) -> list:
                     load(SHARED / "parasol_open_ppl_env" / "bug_trap1.0" / "bug-trap.env"),
                     "no path (long decision)"))
     return out
+
+
+def touching_edge(tmp: Path):
+    """tests/test_corridor.py's edge: a wall whose two C-obstacles meet only along a line,
+    the free pockets on either side of it each open to one of start and goal."""
+    from test_corridor import _c_boxes_scene
+
+    E, t, w = 3.0, 0.5, 0.6
+    c_boxes = [((-t, -E, -E), (t, 0, 0)), ((-t, 0, 0), (t, E, E)),
+               ((t, 0, -E), (t + w, E, 0)), ((-t - w, -E, 0), (-t, 0, E))]
+    return _c_boxes_scene(tmp, "edge", c_boxes, (-1.5, 0.5, -0.5), (1.5, -0.5, 0.5),
+                          (250.0, 150.0, -300.0), 3.0)[0]
 
 
 def decide_section() -> list[str]:
@@ -437,10 +456,10 @@ def decide_section() -> list[str]:
              "scenes, FCL's has a path (the planners find one), and the bug trap has none "
              "at its start orientation (proved with a longer budget: \"Long decisions\" "
              "below).", "",
-             "| scene | truth | octree alone | decide | decide s | auto answers | auto mean s | "
-             "RRTConnect (exact) solved | PRM (exact) solved | RRTConnect (FCL) solved | "
-             "FCL wrong |",
-             "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| scene | truth | octree alone | decide | decide s | clearance | auto answers | "
+             "auto mean s | RRTConnect (exact) solved | PRM (exact) solved | "
+             "RRTConnect (FCL) solved | FCL wrong |",
+             "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     with tempfile.TemporaryDirectory() as tmp:
         for name, scene, truth in decide_scenes(Path(tmp)):
             cs = cspace.CSpace.from_scene(scene)
@@ -466,18 +485,22 @@ def decide_section() -> list[str]:
                 wrong += int(bool(exact) and not valid)
             n = len(AUTO_SEEDS)
             said = ", ".join(f"{a} ×{answers.count(a)}" for a in dict.fromkeys(answers))
+            stated = f"{d.clearance:.2g}" if d.answer == "no path" else "-"
             lines.append(f"| {name} | {truth} | {alone.answer} | {d.answer} | {d.time:.2f} | "
-                         f"{said} | "
+                         f"{stated} | {said} | "
                          f"{np.mean(secs):.2f} | {rrt}/{n} | {prm}/{n} | {fcl}/{n} | {wrong} |")
             print(lines[-1], flush=True)
     lines += ["", "*octree alone*: `decide(..., refine=False)`, the octree to 1/128 of the "
               "bounds per axis; *decide*: then, if undecided, refining cells along the cheapest "
               "route (`cspace.planning.corridor`), down to 2^-20 of a finest cell, in the same "
-              "budget. Limits: a route through a gap is a chain of cells no wider than the gap, "
-              "so the cells grow with the gap's length over its width (the slot wider by 1e-5, "
-              "across a wall 0.5 thick, is beyond 10 s), and a wall is proved only where cells "
-              "fit inside single convex pieces (C-obstacles that only touch stay 'unknown'); "
-              "then the samplers go on. With turns (the previous section), `auto` decides over "
+              "budget: slabs across a slot and bars along an edge where the cells' labels change "
+              "across one axis only, so a route through a gap needs cells in proportion to its "
+              "length, not to its length over its width. A wall is proved by cells inside one "
+              "convex piece of a C-obstacle, or near one (a copy moved by at most the *nudge*, "
+              "half the largest `error_bound` and at least four of the finest sides, lies in "
+              "it): that is how C-obstacles that only touch are walled, and a proof that used "
+              "such cells holds for clearances above `error_bound` plus the nudge: the "
+              "*clearance* column. Unknown within the budget, the samplers go on. With turns (the previous section), `auto` decides over "
               "8 orientation slices and the turns between them (`decide_turning`, the octree "
               "alone) before planning them: a proof that holds over those slices, not over "
               "every rotation.", ""]

@@ -259,8 +259,11 @@ def test_a_hull_proves_nothing_about_the_robot(tmp_path):
 
 def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
     """Blocked cells of open walls (triangle-pair C-obstacles) are found by a float filter
-    over the pieces' half-spaces; it must agree with the exact test of every corner."""
-    from cspace.planning.cells import _CORNERS, _inside_a_pair
+    over the pieces' half-spaces (compiled, and its numpy reference); both must agree with
+    the exact test of every corner. Free cells (every piece near the cell off it by one of
+    its slabs, compiled): as the numpy reference, and no point of them collides."""
+    from cspace.planning.cells import (_CORNERS, _inside_a_pair, _inside_a_pair_reference,
+                                       _pairs_apart_reference)
 
     scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, offset=(250.0, 150.0, -300.0))
     rng = np.random.default_rng(0)
@@ -278,7 +281,17 @@ def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
         for r, i, j in cand.tolist():
             exact[r] |= all(impl._in_piece(i, j, x) for x in C[r].tolist())
         np.testing.assert_array_equal(fast, exact)
+        np.testing.assert_array_equal(_inside_a_pair_reference(impl, lo, hi, C), exact)
         assert exact.any() and not exact.all()
+        # cells around the C-obstacle's box too, where some are apart from it
+        lo = B[0] - 0.3 + rng.random((80, 3)) * (B[1] - B[0] + 0.6)
+        hi = lo + rng.random((80, 3)) * np.array([0.02, 0.2, 0.6])[rng.permutation(3)]
+        apart = impl._set.boxes_apart(impl._grid_units(lo), impl._grid_units(hi)) == 1
+        np.testing.assert_array_equal(apart, _pairs_apart_reference(impl, lo, hi))
+        assert apart.any() and not apart.all()
+        C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])
+        pts = (lo[:, None] + rng.random((80, 20, 3)) * (hi - lo)[:, None])[apart]
+        assert not co.contains(np.vstack([pts.reshape(-1, 3), C[apart].reshape(-1, 3)])).any()
 
 
 def _hollow(tmp_path, start, goal, offset=(250.0, 150.0, -300.0)):

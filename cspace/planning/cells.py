@@ -4,7 +4,10 @@ polyline through a chain of touching cells.
 A closed box (a cell) is ``blocked`` when it lies inside one convex piece of one C-obstacle
 (exact), ``free`` when every C-obstacle near it is kept off it (float, with the margins stated
 at :func:`_kept_off`: never part of a proof, and every path through free cells is re-proved
-by ``segment_free``), else ``mixed``. :mod:`.decide` labels an octree of such cells;
+by ``segment_free``), else ``mixed``; below the octree, ``near`` when a copy of it moved by
+at most a stated distance lies inside one convex piece (exact, :func:`_nudged`). Triangle-pair
+C-obstacles get both of their tests compiled (``PairSet.boxes_inside``, ``boxes_apart``; numpy
+references kept here). :mod:`.decide` labels an octree of such cells;
 :mod:`.corridor` refines cells along one route below the octree's finest level. What each
 label means, and why it is certain: :mod:`.decide`'s docstring.
 """
@@ -95,6 +98,20 @@ def _piece_boxes(impl, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.nda
 
 
 def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
+    """:func:`_inside_one_piece` for a triangle-pair C-obstacle, compiled
+    (``PairSet.boxes_inside``: the node pairs of the engine's two trees whose k-DOP sum holds
+    the cell, then each piece's slabs at the cell's centre and corners, with the engine's
+    float filter); the pieces the filter cannot settle get the exact test (Python integers).
+    Reference: :func:`_inside_a_pair_reference`, the same answer."""
+    status, todo = impl._set.boxes_inside(impl._grid_units(lo), impl._grid_units(hi))
+    out = status == 1
+    for r, i, j in todo.tolist():
+        if not out[r] and all(impl._in_piece(i, j, x) for x in C[r].tolist()):
+            out[r] = True
+    return out
+
+
+def _inside_a_pair_reference(impl, lo, hi, C) -> np.ndarray:
     """:func:`_inside_one_piece` for a triangle-pair C-obstacle: the pieces whose k-DOPs meet
     a cell (the engine's tree) and whose boxes hold it, then each piece's slabs at the eight
     corners, in floats with the engine's own filter (:func:`~cspace.cobstacle.pairs.
@@ -147,6 +164,28 @@ def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
     return out
 
 
+def _pairs_apart_reference(impl, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Reference of ``PairSet.boxes_apart`` (numpy): every piece whose k-DOP meets the cell
+    has a slab with the cell's eight corners certainly beyond one of its sides (the engine's
+    float filter, :func:`~cspace.cobstacle.pairs._slab_columns`)."""
+    out = np.ones(len(lo), dtype=bool)
+    X_lo, X_hi = impl._grid_units(lo), impl._grid_units(hi)
+    cand = impl._set.candidates(X_lo, X_hi)
+    if not len(cand):
+        return out
+    gf = np.asarray(impl.g, dtype=np.float64)
+    A, absA = _slab_columns(impl.S[cand[:, 1]], impl.T[cand[:, 2]], bool(gf.any()), gf)
+    Q = np.ones((len(cand), 8, 4))
+    Q[:, :, :3] = np.where(_CORNERS[None].astype(bool), X_hi[cand[:, 0]][:, None, :],
+                           X_lo[cand[:, 0]][:, None, :])
+    with np.errstate(over="ignore", under="ignore", invalid="ignore"):
+        val = np.matmul(Q, A)
+        err = _FILTER * np.matmul(np.abs(Q), absA) + _TINY
+    apart = (val > err).all(axis=1).any(axis=1)
+    out[cand[~apart, 0]] = False
+    return out
+
+
 def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
     """(m,) bool: ``co`` certainly misses the closed box (see the ``free`` label)."""
     kind = co.kind
@@ -168,6 +207,9 @@ def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float) -> np.ndarray:
             if len(rows):
                 out[rows] = _kept_off(part, lo[rows], hi[rows], margin)
         return out
+    if kind == "pairs":  # each piece near the cell kept off it by one of its slabs
+        impl = co._impl
+        return impl._set.boxes_apart(impl._grid_units(lo), impl._grid_units(hi)) == 1
     # the distance only where the centre is outside: a centre inside is never kept off, and
     # a non-convex C-obstacle's depth inside (its signed distance there) is the costly part
     centre, out = (lo + hi) / 2, np.zeros(len(lo), dtype=bool)

@@ -15,7 +15,9 @@ planning bounds:
 ``free``
     Every C-obstacle whose box meets the cell is kept off it: a convex piece by one of its
     facet planes (the cell's support value beyond the plane by more than ``2**-30`` of the
-    magnitudes), any other kind by a clearance of the cell's centre above its half-diagonal
+    magnitudes), a triangle-pair C-obstacle by a slab of each piece whose k-DOP meets the cell
+    (the eight corners beyond it, by the engine's float filter; compiled), any other kind by a
+    clearance of the cell's centre above its half-diagonal
     plus ``2**-20`` of the scene's size (:meth:`CSpaceObstacle.signed_distance`, accurate to
     a few ulps). Float, with those margins: this label only stops refinement and routes the
     path below; it never enters a proof, and every segment of a path through free cells is

@@ -14,7 +14,9 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
 - ``meshquery`` — :mod:`cspace.mesh.query` (references in :mod:`cspace.mesh.query_reference`);
 - ``pairquery`` — :mod:`cspace.cobstacle.pairs` (triangle pairs found by two box trees; reference
   :mod:`cspace.cobstacle.pairs_reference`, every pair enumerated, tested in
-  ``tests/test_pair_engine.py``);
+  ``tests/test_pair_engine.py``) and :mod:`cspace.planning.cells` (a cell inside one piece, a
+  cell apart from every piece; references ``cells._inside_a_pair_reference`` and
+  ``cells._pairs_apart_reference``, tested in ``tests/test_decide.py``);
 - ``planar`` — :mod:`cspace.minkowski.plane_arrangement` (each plane's arrangement core),
   :mod:`cspace.minkowski.triangulation`;
 - ``trim`` — :mod:`cspace.mesh.self_intersection` (undecided pairs, triangle boxes),

@@ -516,17 +516,26 @@ cdef class PairSet:
     def contains(self, const double[:, ::1] Q):
         """Per query row (grid units, scene frame): status 0 free, 1 inside, 2 undecided,
         and the undecided pairs ``(row, i, j)`` of the rows with status 2."""
-        cdef Py_ssize_t r, nq = Q.shape[0]
+        return self._rows(Q, Q, 0)
+
+    cdef tuple _rows(self, const double[:, ::1] lo, const double[:, ::1] hi, int mode):
+        """Per box row: :meth:`_traverse`'s status (mode 0 or 5) and the undecided pairs
+        ``(row, i, j)`` of the rows with status 2."""
+        cdef Py_ssize_t r, nq = lo.shape[0]
+        cdef double qlo[13]
+        cdef double qhi[13]
         status = np.zeros(nq, dtype=np.int8)
         cdef signed char[::1] st = status
         out = []
         cdef list found
-        cdef double lo[13]
-        cdef double hi[13]
         for r in range(nq):
             found = []
-            self._dop(&Q[r, 0], &Q[r, 0], lo, hi)
-            st[r] = self._traverse(lo, hi, &Q[r, 0], &Q[r, 0], False, found, 0)
+            self._dop(&lo[r, 0], &hi[r, 0], qlo, qhi)
+            if mode == 5:  # the query's ends swapped: a node pair's k-DOP sum [s - r]
+                # "meets" [qhi, qlo] exactly when it holds [qlo, qhi]
+                st[r] = self._traverse(qhi, qlo, &lo[r, 0], &hi[r, 0], False, found, 5)
+            else:
+                st[r] = self._traverse(qlo, qhi, &lo[r, 0], &hi[r, 0], False, found, mode)
             if st[r] == 2:
                 out += [(r, i, j) for i, j in found]
         return status, np.array(out, dtype=np.int64).reshape(-1, 3)
@@ -636,6 +645,93 @@ cdef class PairSet:
             top = self._split(a, b, a_stack, b_stack, top)
         return best ** 0.5
 
+    cdef int _box(self, Py_ssize_t i, Py_ssize_t j, const double* lo, const double* hi,
+                  bint apart) noexcept nogil:
+        """The closed box [lo, hi] against the piece of (i, j), by the piece's slabs (each
+        side's value and bound as :func:`_face_sides` and :func:`_sides`, the supports
+        computed once per slab).
+
+        ``apart`` False: 0 when the box is certainly not inside (its centre or a corner
+        certainly beyond a side), 1 when certainly inside (its eight corners certainly
+        inside every slab: the piece is convex), 2 undecided. ``apart`` True: 1 when the
+        eight corners are certainly beyond one side of one slab (box and piece apart), else
+        0."""
+        cdef double P[27]
+        cdef double val[2]
+        cdef double err[2]
+        cdef int64_t N[3 * 38]
+        cdef double nf[3]
+        cdef double slo, shi, sperm, tlo, thi, tperm, box, x, ax, up, dn, eu, ed
+        cdef int n, k, c, p, first = 1 if apart else 0
+        cdef bint unsure = False, beyond, all0, all1
+        for c in range(3):  # the centre (rounded: still in the box), then the corners
+            P[c] = (lo[c] + hi[c]) * 0.5
+        for p in range(8):
+            P[3 + 3 * p] = hi[0] if p & 4 else lo[0]
+            P[4 + 3 * p] = hi[1] if p & 2 else lo[1]
+            P[5 + 3 * p] = hi[2] if p & 1 else lo[2]
+        n = _normals(&self.S[i, 0], &self.T[j, 0], self.grown, N)
+        for k in range(-2, n):  # the two triangles' own slabs first
+            if k >= 0:
+                if N[3 * k] == 0 and N[3 * k + 1] == 0 and N[3 * k + 2] == 0:
+                    continue
+                for c in range(3):
+                    nf[c] = <double>N[3 * k + c]
+                _support(nf, &self.Sf[i, 0], &slo, &shi, &sperm)
+                _support(nf, &self.Tf[j, 0], &tlo, &thi, &tperm)
+                box = (fabs(nf[0]) * self.g[0] + fabs(nf[1]) * self.g[1]
+                       + fabs(nf[2]) * self.g[2])
+                up, dn = -(shi + thi + box), slo + tlo - box
+                eu, ed = fabs(up) + sperm + tperm + box, fabs(dn) + sperm + tperm + box
+            beyond, all0, all1 = False, True, True
+            for p in range(first, 9):
+                if k == -2:
+                    _face_sides(&self.nsf[3 * i], &self.Sf[i, 0], &self.Tf[j, 0], self.g,
+                                &P[3 * p], val, err)
+                elif k == -1:
+                    _face_sides(&self.ntf[3 * j], &self.Tf[j, 0], &self.Sf[i, 0], self.g,
+                                &P[3 * p], val, err)
+                else:  # as _sides, at this point
+                    x = nf[0] * P[3 * p] + nf[1] * P[3 * p + 1] + nf[2] * P[3 * p + 2]
+                    ax = (fabs(nf[0]) * fabs(P[3 * p]) + fabs(nf[1]) * fabs(P[3 * p + 1])
+                          + fabs(nf[2]) * fabs(P[3 * p + 2]))
+                    val[0], err[0] = x + up, _FILTER * (ax + eu) + _TINY
+                    val[1], err[1] = -x + dn, _FILTER * (ax + ed) + _TINY
+                all0 = all0 and val[0] > err[0]
+                all1 = all1 and val[1] > err[1]
+                beyond = beyond or val[0] > err[0] or val[1] > err[1]
+                if p and not (val[0] < -err[0] and val[1] < -err[1]):
+                    unsure = True
+            if apart:
+                if all0 or all1:
+                    return 1
+            elif beyond:
+                return 0
+        if apart:
+            return 0
+        return 2 if unsure else 1
+
+    def boxes_inside(self, const double[:, ::1] lo, const double[:, ::1] hi):
+        """Per query box ``[lo[row], hi[row]]`` (grid units): status 1 when it lies certainly
+        inside one piece, 2 when no piece certainly holds it but some may (the undecided
+        pairs ``(row, i, j)`` returned, for the exact test), 0 when none does (a box inside a
+        piece lies inside the piece's k-DOP: node pairs whose k-DOP sum does not hold it are
+        skipped)."""
+        return self._rows(lo, hi, 5)
+
+    def boxes_apart(self, const double[:, ::1] lo, const double[:, ::1] hi):
+        """Per query box (grid units): 1 when every piece whose k-DOP meets it is certainly
+        apart from it (:meth:`_box`): the box misses the union; else 0."""
+        cdef Py_ssize_t r
+        cdef double qlo[13]
+        cdef double qhi[13]
+        out = np.zeros(lo.shape[0], dtype=np.int8)
+        cdef signed char[::1] o = out
+        for r in range(lo.shape[0]):
+            self._dop(&lo[r, 0], &hi[r, 0], qlo, qhi)
+            o[r] = 1 - self._traverse(qlo, qhi, &lo[r, 0], &hi[r, 0], False, None, 4)
+        return out
+
     def candidates(self, const double[:, ::1] lo, const double[:, ::1] hi):
         """Every pair ``(row, i, j)`` whose piece k-DOP meets the query box ``lo[row], hi[row]``
         (flat pairs of a closed operand left out); no slab is evaluated."""
@@ -672,7 +768,11 @@ cdef class PairSet:
                        const double* q1, bint segment, list found, int mode) except -1:
         """Both trees together over the query box. mode 0: stop at the first pair certainly
         hit (1), else 2 with the undecided pairs in ``found``, else 0. mode 1: collect every
-        candidate pair in ``found``. mode 2: collect every pair not certainly missed."""
+        candidate pair in ``found``. mode 2: collect every pair not certainly missed. mode 4
+        (``q0``, ``q1`` a box's corners): 1 at the first candidate pair not certainly apart
+        from the box (:meth:`_box`), else 0. mode 5 (``q0``, ``q1`` a box's corners, ``qlo``
+        and ``qhi`` swapped by the caller: node pairs that hold the box): as mode 0, with
+        :meth:`_box`'s inside test for the point's."""
         cdef int a_stack[512]
         cdef int b_stack[512]
         cdef int top = 0, status = 0, res, a, b
@@ -698,10 +798,14 @@ cdef class PairSet:
                             continue
                         if self._flat_skipped(i, j):
                             continue
+                        if mode == 4 and not self._box(i, j, q0, q1, True):
+                            return 1
                         if mode == 1:
                             found.append((i, j))
                             continue
-                        res = self._segment(i, j, q0, q1) if segment else self._point(i, j, q0)
+                        res = (self._box(i, j, q0, q1, False) if mode == 5 else
+                               self._segment(i, j, q0, q1) if segment else
+                               self._point(i, j, q0))
                         if mode == 2:
                             if res != 0:
                                 found.append((i, j))
