@@ -79,6 +79,7 @@ class _Cells:
         self.ea = [np.zeros(0, np.int64)]  # [unique edges, then new ones to add]
         self.eb = [np.zeros(0, np.int64)]
         self.walls = []  # (lo, hi, label) of the children proved blocked, per split
+        self._holding = {}  # the nodes holding a point (holding)
 
     def wall(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every cell a split proved blocked (closed boxes, scene frame, and their labels:
@@ -160,11 +161,17 @@ class _Cells:
 
     def holding(self, q: np.ndarray, at: np.ndarray) -> list:
         """Nodes whose closed cell holds ``q``: free components of the voxels ``at`` (those
-        of the painted grid holding it) and the live leaves whose float box holds it."""
+        of the painted grid holding it) and the live leaves whose float box holds it. Kept
+        while they all live: a new leaf holds ``q`` only if its parent, split, did."""
+        key = (q.tobytes(), at.tobytes())
+        known = self._holding.get(key)
+        if known is not None and self.alive[known].all():
+            return known
         comps = {int(self.fcomp[tuple(v)]) - 1 for v in at} - {-1}
         leaf = self.alive & (self.flo <= q).all(axis=1) & (q <= self.fhi).all(axis=1)
         leaf[: self.nF] = False
-        return sorted(comps | set(np.nonzero(leaf)[0].tolist()))
+        self._holding[key] = sorted(comps | set(np.nonzero(leaf)[0].tolist()))
+        return self._holding[key]
 
 
 def _weights(cspace, lo: np.ndarray, hi: np.ndarray, deadline: float) -> np.ndarray:
