@@ -398,7 +398,10 @@ def decide_scenes(tmp: Path) -> list:
                              "cells off the slot", dict(slot=0.4, offset=far, shift=0.0137),
                              "no path"),
                             ("cage at (250, 150, -300), slot = robot - 0.02, cells off the slot",
-                             dict(slot=0.38, offset=far, shift=0.0137), "no path")):
+                             dict(slot=0.38, offset=far, shift=0.0137), "no path"),
+                            ("cage at (250, 150, -300) turned (17, -31, 52) degrees, slot = "
+                             "robot - 1e-3", dict(slot=0.399, offset=far, turn=(17.0, -31.0, 52.0)),
+                             "no path")):
         path = tmp / f"cage{len(out)}.toml"
         shift = kw.pop("shift", 0.0)
         text = cage_toml(tmp=tmp, **kw)
@@ -500,7 +503,10 @@ def decide_section() -> list[str]:
               "half the largest `error_bound` and at least four of the finest sides, lies in "
               "it): that is how C-obstacles that only touch are walled, and a proof that used "
               "such cells holds for clearances above `error_bound` plus the nudge: the "
-              "*clearance* column. Unknown within the budget, the samplers go on. With turns (the previous section), `auto` decides over "
+              "*clearance* column. Cells are boxes along the axes: a slanted gap or wall (the "
+              "turned cage) needs cells in proportion to its area over the square of its "
+              "width, and stays unknown (the exact union would not). Unknown within the "
+              "budget, the samplers go on. With turns (the previous section), `auto` decides over "
               "8 orientation slices and the turns between them (`decide_turning`, the octree "
               "alone) before planning them: a proof that holds over those slices, not over "
               "every rotation.", ""]

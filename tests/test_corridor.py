@@ -89,6 +89,18 @@ def test_a_slot_a_few_grid_steps_wider_than_the_robot_is_found(tmp_path, wider, 
     assert _fcl_clean(scene, cs, d.path)
 
 
+@pytest.mark.parametrize("slot", [ROBOT, ROBOT + 1e-5])
+def test_a_turned_slot_at_the_robots_width_never_gets_a_wrong_answer(tmp_path, slot):
+    """The cage turned generically, far off: the slot's walls are slanted, so slabs and bars
+    along the axes do not fit it, and within a small budget the answer is 'unknown'; whatever
+    it is, never 'path' through the closed slot, never 'no path' through the open one."""
+    scene, cs = _cage(tmp_path, slot=slot, offset=FAR, turn=(17.0, -31.0, 52.0))
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=2)
+    assert d.answer != ("path" if slot == ROBOT else "no path"), d.reason
+    if d.answer == "path":
+        assert verify_path(cs, d.path, scene.bounds)["valid"]
+
+
 def test_fine_cells_tile_the_octree_cells():
     """The fine corners are the octree's at a voxel's corners and increase with the integers
     (so touching on integers is touching in floats), far from the origin too."""

@@ -4,11 +4,11 @@ When :func:`.decide`'s octree ends with start and goal in one component of passa
 not joined by free ones (a gap narrower than its finest cell), :func:`refine_route` goes on
 below that level, but only where a route needs it:
 
-1. The graph: one node per component of the octree's free cells, one per box of passable mixed
-   cells of the start's component (aligned pairs merged, :func:`_coarsen`); an edge where two closed cells touch (a face, an edge or a
-   corner), decided on integers (cells are boxes of a grid ``2**EXTRA`` times finer than the
-   octree's finest, with float corners monotone in the integers, so touching boxes touch in
-   floats too).
+1. The graph: one node per component of the octree's free cells, one per box of passable mixed cells
+   of the start's component (aligned pairs merged, :func:`_coarsen`); an edge where two closed cells
+   touch (a face, an edge or a corner), decided on integers (cells are boxes of a grid ``2**EXTRA``
+   times finer than the octree's finest, with float corners monotone in the integers, so touching
+   boxes touch in floats too).
 2. The cheapest route from the cells holding the start to those holding the goal (a mixed
    cell costs 1, a free one nothing). If every cell on it is free, the route is a path:
    the cells' centres and contacts, shortcut, every segment proved by ``segment_free``.

@@ -26,14 +26,15 @@ planning bounds:
     Neither: split in eight, down to ``depth`` (the finest cells are ``2**-depth`` of the
     bounds per axis); a mixed cell at that depth stays passable.
 
-**"no path"**: the union ``P`` of the closed cells not blocked holds every free translation in
-the bounds (every translation with a clearance above ``Decision.clearance``, when the refinement
-below blocked cells near a piece: see there), so a path would lie in one connected component of ``P``. Closed cells touching at a
-face, an edge or a corner are connected (26-connectivity on the finest grid; cell corners are
-float64 functions of integer indices, the same for neighbours, strictly increasing, so touching
-is decided on the integers). Start and goal in different components of ``P``: no path. The
-C-obstacles are grown outward within their ``error_bound`` (principle 2), so the statement is
-"no path with a clearance above ``error_bound``"; it is never made where such a path exists.
+**"no path"**: the union ``P`` of the closed cells not blocked holds every free translation in the
+bounds (every translation with a clearance above ``Decision.clearance``, when the refinement below
+blocked cells near a piece: see there), so a path would lie in one connected component of ``P``.
+Closed cells touching at a face, an edge or a corner are connected (26-connectivity on the finest
+grid; cell corners are float64 functions of integer indices, the same for neighbours, strictly
+increasing, so touching is decided on the integers). Start and goal in different components of
+``P``: no path. The C-obstacles are grown outward within their ``error_bound`` (principle 2), so the
+statement is "no path with a clearance above ``Decision.clearance``" (``error_bound``, plus the
+refinement's nudge when its wall used it); it is never made where such a path exists.
 
 **"path"**: start and goal joined through free cells (a polyline through the cells' centres and
 the middles of their contacts, shortcut), every segment proved by ``segment_free``.
