@@ -436,7 +436,7 @@ def test_a_real_pair_scene_keeps_the_budget(shared_data):
 @pytest.mark.slow
 def test_the_bug_trap_is_proved_closed_at_its_start_orientation(shared_data):
     """The Parasol bug trap, translations only at the stick bug's start orientation: 'no
-    path', proved in about 25 s (the octree, then some 30 000 cells refined along routes)
+    path', proved in about 20 s (the octree, then some 30 000 cells refined along routes)
     by ``plan(planner='auto', turns=False)``.
     The proof's wall, octree and refined cells alike, is checked by FCL on the raw meshes
     (which share nothing with the cells): every sampled cell collides, or lies within the

@@ -303,6 +303,9 @@ def _coarsen(vox: np.ndarray):
     lo = vox.astype(np.int64)
     ext = np.ones_like(lo)
     owner = np.arange(len(lo))
+    # a box's key packs six 9-bit fields: the painted grid has at most 2**MAX_DEPTH = 256
+    # voxels per axis, so corners and extents stay below 512
+    assert not len(lo) or int(lo.max()) < 256
 
     def keys(lo, ext):
         return ((((lo[:, 0] << 9 | lo[:, 1]) << 9 | lo[:, 2]) << 9 | ext[:, 0]) << 9
