@@ -223,3 +223,23 @@ def test_a_path_never_slips_between_c_obstacles_touching_at_a_vertex(tmp_path, m
     assert d.answer == "path", d.reason
     assert verify_path(cs, d.path, scene.bounds)["valid"]
     assert _fcl_clean(scene, cs, d.path)
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), FAR])
+@pytest.mark.parametrize("gap", [0.0, 1e-5, -1e-3])
+def test_a_seam_in_flat_bounds_is_decided(tmp_path, offset, gap):
+    """Bounds flat in z (a planar problem, as OMPL.app's 2D ones): the refinement's cells do
+    not split the flat axis. A wall in two halves whose C-obstacles meet (gap 0), overlap
+    (-1e-3) or leave a gap of 1e-5 at y = 0.3: 'no path' for the first two, a proved path
+    through the gap for the last, wherever the scene sits."""
+    E, t = 3.0, 0.5
+    c_boxes = [((-t, -E, -E), (t, 0.3, E)), ((-t, 0.3 + gap, -E), (t, E, E))]
+    scene, cs = _c_boxes_scene(tmp_path, "seam", c_boxes, (-1.5, 0.2, 0.0), (1.5, 0.4, 0.0),
+                               offset, 1.0)
+    b = np.asarray(scene.bounds).copy()
+    b[:, 2] = scene.start[2]
+    d = decide(cs, scene.start, scene.goal, bounds=b, time=30)
+    assert d.answer == ("path" if gap > 0 else "no path"), d.reason
+    if d.answer == "path":
+        assert verify_path(cs, d.path, b)["valid"]
+        assert (d.path[:, 2] == scene.start[2]).all()
