@@ -15,7 +15,6 @@ label means, and why it is certain: :mod:`.decide`'s docstring.
 from __future__ import annotations
 
 import time as _time
-import weakref
 
 import numpy as np
 
@@ -77,26 +76,6 @@ def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return np.zeros(m, dtype=bool)
 
 
-# Each pair engine's triangles' boxes (grid units): obstacle side lo, hi; robot side lo, hi.
-_TRIANGLE_BOXES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
-# Pairs whose slabs are built at once ((pairs, 4, 2K) floats, K <= 38), and (cell, pair) rows
-# evaluated at once ((rows, 8, 2K) floats).
-_PAIR_BLOCK, _ROW_BLOCK = 4096, 8192
-
-
-def _piece_boxes(impl, i: np.ndarray, j: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The boxes (grid units, float64) of the pieces ``S[i] ⊕ T[j] ⊕ [-g, g]``."""
-    if impl not in _TRIANGLE_BOXES:
-        S, T = np.asarray(impl.S, np.int64), np.asarray(impl.T, np.int64)
-        _TRIANGLE_BOXES[impl] = (S.min(axis=1), S.max(axis=1), T.min(axis=1), T.max(axis=1))
-    s_lo, s_hi, t_lo, t_hi = _TRIANGLE_BOXES[impl]
-    g = np.asarray(impl.g, np.int64)
-    # exact below 2**53 (a grid's integers, origin included, stay there); were one to round,
-    # a pair would only be dropped: a cell not labelled blocked proves nothing wrong
-    return ((s_lo[i] + t_lo[j] - g).astype(np.float64),
-            (s_hi[i] + t_hi[j] + g).astype(np.float64))
-
-
 def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
     """:func:`_inside_one_piece` for a triangle-pair C-obstacle, compiled
     (``PairSet.boxes_inside``: the node pairs of the engine's two trees whose k-DOP sum holds
@@ -111,68 +90,13 @@ def _inside_a_pair(impl, lo, hi, C) -> np.ndarray:
     return out
 
 
-def _inside_a_pair_reference(impl, lo, hi, C) -> np.ndarray:
-    """:func:`_inside_one_piece` for a triangle-pair C-obstacle: the pieces whose k-DOPs meet
-    a cell (the engine's tree) and whose boxes hold it, then each piece's slabs at the eight
-    corners, in floats with the engine's own filter (:func:`~cspace.cobstacle.pairs.
-    _slab_columns`: the rounding of normals, supports and products bounded) and exactly
-    (Python integers) for the corners it cannot tell."""
-    out = np.zeros(len(lo), dtype=bool)
+def _pair_corner_values(impl, lo: np.ndarray, hi: np.ndarray):
+    """The references' float filter: every pair whose piece k-DOP meets a cell
+    (``cand``: rows ``(cell, i, j)``) and each slab side's value and bound at the cell's eight
+    corners (``val, err``: (c, 8, 2K), ``a . [corner, 1] <= 0`` inside; the engine's filter,
+    :func:`~cspace.cobstacle.pairs._slab_columns`: normals, supports and products bounded)."""
     X_lo, X_hi = impl._grid_units(lo), impl._grid_units(hi)  # exact: powers of two
     cand = impl._set.candidates(X_lo, X_hi)
-    if len(cand):
-        # A cell inside a piece lies inside the piece's box: this drops only pairs that
-        # cannot hold it, and at coarse levels nearly all of them, before any slab is built.
-        p_lo, p_hi = _piece_boxes(impl, cand[:, 1], cand[:, 2])
-        r = cand[:, 0]
-        cand = cand[((p_lo <= X_lo[r]) & (X_hi[r] <= p_hi)).all(axis=1)]
-    gf = np.asarray(impl.g, dtype=np.float64)
-    Q = np.ones((len(lo), 8, 4))
-    Q[:, :, :3] = impl._grid_units(C.reshape(-1, 3)).reshape(-1, 8, 3)
-    Qc = np.ones((len(lo), 1, 4))
-    Qc[:, 0, :3] = impl._grid_units((lo + hi) / 2)  # rounded, still between lo and hi
-    # each pair's slabs once per call (a pair meets about four cells of a level), the rows
-    # grouped by pair so that a block of pairs is a run of rows
-    nT = len(impl.T)
-    upair, inv = np.unique(cand[:, 1] * nT + cand[:, 2], return_inverse=True)
-    order = np.argsort(inv, kind="stable")
-    cand, inv = cand[order], inv.reshape(-1)[order]
-    for b in range(0, len(upair), _PAIR_BLOCK):
-        ui, uj = np.divmod(upair[b:b + _PAIR_BLOCK], nT)
-        A, absA = _slab_columns(impl.S[ui], impl.T[uj], bool(gf.any()), gf)
-        r0, r1 = np.searchsorted(inv, [b, b + _PAIR_BLOCK]).tolist()
-        for s in range(r0, r1, _ROW_BLOCK):
-            r, i, j = cand[s:min(s + _ROW_BLOCK, r1)].T
-            k = inv[s:min(s + _ROW_BLOCK, r1)] - b
-            live = ~out[r]  # cells an earlier pair holds need no other
-            r, i, j, k = r[live], i[live], j[live], k[live]
-            # a cell inside a piece has its centre inside: the corners only where the centre
-            # is not certainly outside a slab (one point, not eight, for most pairs)
-            with np.errstate(over="ignore", under="ignore", invalid="ignore"):
-                Ak, Bk = A[k], absA[k]
-                val = np.matmul(Qc[r], Ak)
-                live = ~(val > _FILTER * np.matmul(np.abs(Qc[r]), Bk) + _TINY).any(axis=(1, 2))
-                r, i, j, Ak, Bk = r[live], i[live], j[live], Ak[live], Bk[live]
-                val = np.matmul(Q[r], Ak)  # (c, 8, 2K): a . [corner, 1] <= 0 in a slab
-                err = _FILTER * np.matmul(np.abs(Q[r]), Bk) + _TINY
-            inside = (val < -err).all(axis=(1, 2))
-            unsure = ~inside & ~(val > err).any(axis=(1, 2))
-            for q in np.nonzero(unsure & ~out[r])[0].tolist():
-                inside[q] = all(impl._in_piece(int(i[q]), int(j[q]), x)
-                                for x in C[r[q]].tolist())
-            out[r[inside]] = True
-    return out
-
-
-def _pairs_apart_reference(impl, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """Reference of ``PairSet.boxes_apart`` (numpy): every piece whose k-DOP meets the cell
-    has a slab with the cell's eight corners certainly beyond one of its sides (the engine's
-    float filter, :func:`~cspace.cobstacle.pairs._slab_columns`)."""
-    out = np.ones(len(lo), dtype=bool)
-    X_lo, X_hi = impl._grid_units(lo), impl._grid_units(hi)
-    cand = impl._set.candidates(X_lo, X_hi)
-    if not len(cand):
-        return out
     gf = np.asarray(impl.g, dtype=np.float64)
     A, absA = _slab_columns(impl.S[cand[:, 1]], impl.T[cand[:, 2]], bool(gf.any()), gf)
     Q = np.ones((len(cand), 8, 4))
@@ -181,6 +105,29 @@ def _pairs_apart_reference(impl, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
         val = np.matmul(Q, A)
         err = _FILTER * np.matmul(np.abs(Q), absA) + _TINY
+    return cand, val, err
+
+
+def _inside_a_pair_reference(impl, lo, hi, C) -> np.ndarray:
+    """Reference of :func:`_inside_a_pair` (numpy, every candidate pair at once): a pair
+    whose slabs hold the eight corners by the float filter, or, where the filter cannot
+    tell, by the exact test (Python integers)."""
+    out = np.zeros(len(lo), dtype=bool)
+    cand, val, err = _pair_corner_values(impl, lo, hi)
+    inside = (val < -err).all(axis=(1, 2))
+    out[cand[inside, 0]] = True
+    unsure = ~inside & ~(val > err).any(axis=(1, 2))
+    for r, i, j in cand[unsure].tolist():
+        if not out[r] and all(impl._in_piece(i, j, x) for x in C[r].tolist()):
+            out[r] = True
+    return out
+
+
+def _pairs_apart_reference(impl, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """Reference of ``PairSet.boxes_apart`` (numpy): every piece whose k-DOP meets the cell
+    has a slab with the cell's eight corners certainly beyond one of its sides."""
+    out = np.ones(len(lo), dtype=bool)
+    cand, val, err = _pair_corner_values(impl, lo, hi)
     apart = (val > err).all(axis=1).any(axis=1)
     out[cand[~apart, 0]] = False
     return out

@@ -519,7 +519,7 @@ cdef class PairSet:
         return self._rows(Q, Q, 0)
 
     cdef tuple _rows(self, const double[:, ::1] lo, const double[:, ::1] hi, int mode):
-        """Per box row: :meth:`_traverse`'s status (mode 0 or 5) and the undecided pairs
+        """Per box row: :meth:`_traverse`'s status (mode 0, 4 or 5) and the undecided pairs
         ``(row, i, j)`` of the rows with status 2."""
         cdef Py_ssize_t r, nq = lo.shape[0]
         cdef double qlo[13]
@@ -722,15 +722,8 @@ cdef class PairSet:
     def boxes_apart(self, const double[:, ::1] lo, const double[:, ::1] hi):
         """Per query box (grid units): 1 when every piece whose k-DOP meets it is certainly
         apart from it (:meth:`_box`): the box misses the union; else 0."""
-        cdef Py_ssize_t r
-        cdef double qlo[13]
-        cdef double qhi[13]
-        out = np.zeros(lo.shape[0], dtype=np.int8)
-        cdef signed char[::1] o = out
-        for r in range(lo.shape[0]):
-            self._dop(&lo[r, 0], &hi[r, 0], qlo, qhi)
-            o[r] = 1 - self._traverse(qlo, qhi, &lo[r, 0], &hi[r, 0], False, None, 4)
-        return out
+        status, _ = self._rows(lo, hi, 4)
+        return 1 - status
 
     def candidates(self, const double[:, ::1] lo, const double[:, ::1] hi):
         """Every pair ``(row, i, j)`` whose piece k-DOP meets the query box ``lo[row], hi[row]``
