@@ -89,16 +89,74 @@ def test_a_slot_a_few_grid_steps_wider_than_the_robot_is_found(tmp_path, wider, 
     assert _fcl_clean(scene, cs, d.path)
 
 
-@pytest.mark.parametrize("slot", [ROBOT, ROBOT + 1e-5])
-def test_a_turned_slot_at_the_robots_width_never_gets_a_wrong_answer(tmp_path, slot):
-    """The cage turned generically, far off: the slot's walls are slanted, so slabs and bars
-    along the axes do not fit it, and within a small budget the answer is 'unknown'; whatever
-    it is, never 'path' through the closed slot, never 'no path' through the open one."""
-    scene, cs = _cage(tmp_path, slot=slot, offset=FAR, turn=(17.0, -31.0, 52.0))
-    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=2)
-    assert d.answer != ("path" if slot == ROBOT else "no path"), d.reason
-    if d.answer == "path":
-        assert verify_path(cs, d.path, scene.bounds)["valid"]
+TURN = (17.0, -31.0, 52.0)
+
+
+@pytest.mark.parametrize("slot", [ROBOT, ROBOT - 1e-3, ROBOT + 1e-5])
+def test_a_turned_slot_is_decided_in_the_frame_of_its_faces(tmp_path, slot):
+    """The cage turned generically, far off, its bounds moved by a non-dyadic step: the
+    slot's walls are slanted to the scene's axes, so the cells are cut along the
+    C-obstacles' faces (``frame='auto'``). Closed (the robot's width, or narrower): 'no
+    path', its wall colliding by FCL on the raw meshes or within the stated clearance;
+    1e-5 wider: a path clean by FCL. The cells' frame is the cage's, not the scene's."""
+    scene, cs = _cage(tmp_path, slot=slot, offset=FAR, turn=TURN)
+    b = np.asarray(scene.bounds) + np.array([0.0137, 0.0, 0.0])
+    d = decide(cs, scene.start, scene.goal, bounds=b, time=30)  # ~1 s; the budget only caps
+    assert not np.allclose(d.frame, np.eye(3))
+    if slot > ROBOT:
+        assert d.answer == "path", d.reason
+        assert verify_path(cs, d.path, b)["valid"] and _fcl_clean(scene, cs, d.path)
+        return
+    assert d.answer == "no path", d.reason
+    eb = max(co.error_bound for co in cs.obstacles)
+    assert eb < d.clearance < 1e-6
+    _check_wall_with_fcl(scene, d, n_cells=40)
+    walls = d.to_trimesh("blocked")  # in the scene: the cells turned by the frame
+    assert len(walls.faces) == 12 * int(d.wall.sum())
+    V = np.asarray(walls.vertices).reshape(-1, 8, 3)  # no wall cell lies outside the bounds
+    assert ((V.min(axis=1) <= b[1]) & (V.max(axis=1) >= b[0])).all()
+
+
+def test_a_turned_slot_in_the_scenes_axes_never_gets_a_wrong_answer(tmp_path):
+    """``frame=None`` (the scene's axes) on the turned closed slot: cells along the axes do
+    not fit its slanted walls, so within a small budget the answer may be 'unknown'; it is
+    never 'path'."""
+    scene, cs = _cage(tmp_path, slot=ROBOT, offset=FAR, turn=TURN)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=1, frame=None)
+    assert d.answer != "path", d.reason
+    np.testing.assert_array_equal(d.frame, np.eye(3))
+
+
+@pytest.mark.parametrize("slot", [0.2, ROBOT + 0.1])
+def test_any_frame_gives_a_sound_answer(tmp_path, slot):
+    """A frame that fits nothing (a random turn) on the cage in the scene's axes, far off:
+    the cells cross every wall at a slant and the bounds' faces too (cells wholly outside
+    them are blocked, the rest labelled as usual): the closed slot 'no path', the open one a
+    path clean by FCL."""
+    from scipy.spatial.transform import Rotation
+
+    M = Rotation.from_euler("xyz", (29.0, -47.0, 71.0), degrees=True).as_matrix()
+    scene, cs = _cage(tmp_path, slot=slot, offset=FAR)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30, frame=M)
+    np.testing.assert_array_equal(d.frame, M)
+    if slot < ROBOT:
+        assert d.answer == "no path", d.reason
+        _check_wall_with_fcl(scene, d, n_cells=30)
+    else:
+        assert d.answer == "path", d.reason
+        assert verify_path(cs, d.path, scene.bounds)["valid"] and _fcl_clean(scene, cs, d.path)
+
+
+def test_a_frame_is_checked(tmp_path):
+    """A frame that is not orthonormal, not (3, 3), or with flat bounds: a named error."""
+    scene, cs = _cage(tmp_path, slot=0.2)
+    for bad in (2 * np.eye(3), np.eye(2), "scene"):
+        with pytest.raises(cspace.InvalidArgumentError):
+            decide(cs, scene.start, scene.goal, bounds=scene.bounds, frame=bad)
+    flat = np.asarray(scene.bounds, dtype=float).copy()
+    flat[:, 2] = 0.0
+    with pytest.raises(cspace.InvalidArgumentError):
+        decide(cs, scene.start, scene.goal, bounds=flat, frame=np.eye(3)[[1, 0, 2]])
 
 
 def test_fine_cells_tile_the_octree_cells():

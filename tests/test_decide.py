@@ -95,6 +95,7 @@ def _check_wall_with_fcl(scene, d, n_cells=60, seed=0):
         corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
                             for z in (lo[2], hi[2])])
         pts = np.vstack([corners, (lo + hi) / 2, lo + rng.random((8, 3)) * (hi - lo)])
+        pts = pts @ d.frame.T  # the cells' frame: turned to the C-obstacles' faces, or not
         hit = oracle.collides(pts)
         if not hit.all():
             assert (oracle.distance(pts[~hit]) <= d.clearance + 1e-9).all(), (lo, hi)

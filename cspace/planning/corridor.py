@@ -168,21 +168,24 @@ class _Cells:
         if known is not None and self.alive[known].all():
             return known
         comps = {int(self.fcomp[tuple(v)]) - 1 for v in at} - {-1}
-        leaf = self.alive & (self.flo <= q).all(axis=1) & (q <= self.fhi).all(axis=1)
+        x, pad = self.g.local(q), self.g.pad  # in a turned frame: every leaf near it
+        leaf = self.alive & (self.flo <= x + pad).all(axis=1) & (x - pad <= self.fhi).all(axis=1)
         leaf[: self.nF] = False
         self._holding[key] = sorted(comps | set(np.nonzero(leaf)[0].tolist()))
         return self._holding[key]
 
 
-def _weights(cspace, lo: np.ndarray, hi: np.ndarray, deadline: float) -> np.ndarray:
+def _weights(cspace, lo: np.ndarray, hi: np.ndarray, deadline: float, frame=None) -> np.ndarray:
     """The cost of mixed cells: :data:`CENTRE_IN_COLLISION` where the centre collides, else 1
     (the exact test steers the routes; it decides nothing). The clock is read every
-    :data:`BATCH` cells (a pair C-obstacle's ``contains`` takes ~10 us a point)."""
+    :data:`BATCH` cells (a pair C-obstacle's ``contains`` takes ~10 us a point). With a turned
+    ``frame`` the cells are its boxes."""
     out = np.ones(len(lo))
     for s in range(0, len(lo), BATCH):
         if s and _time.perf_counter() > deadline:
             raise _OutOfTime
-        inside = cspace.contains((lo[s:s + BATCH] + hi[s:s + BATCH]) / 2)
+        centre = (lo[s:s + BATCH] + hi[s:s + BATCH]) / 2
+        inside = cspace.contains(centre if frame is None else frame.world(centre))
         out[s:s + BATCH][inside] = CENTRE_IN_COLLISION
     return out
 
@@ -225,7 +228,7 @@ def _children(cells: _Cells, parents: np.ndarray, obstacles, boxes, margin, dead
     lab = np.full(valid.shape, -1, np.int8)
     lab[pi, oi] = _labels(obstacles, boxes, cells.floats(olo[pi, oi]),
                           cells.floats(cells.upper(olo[pi, oi], osz[pi, oi])), margin, deadline,
-                          nudge)
+                          nudge, cells.g.frame)
     same = np.stack([(lab[:, _LOW[a]] == lab[:, _LOW[a] + _BIT[a]]).all(axis=1)
                      for a in range(3)], axis=1)
     merge = can & same & (can & ~same).any(axis=1)[:, None]  # (p, 3)
@@ -253,7 +256,8 @@ def _split(cspace, cells: _Cells, G, parents: np.ndarray, obstacles, boxes, marg
     weight = np.ones(len(sz))
     mixed = label == MIXED
     weight[mixed] = _weights(cspace, cells.floats(lo[mixed]),
-                             cells.floats(cells.upper(lo[mixed], sz[mixed])), deadline)
+                             cells.floats(cells.upper(lo[mixed], sz[mixed])), deadline,
+                             cells.g.frame)
     new = cells.add(lo, sz, label, weight)
     cells.alive[parents] = False
     # candidates of each child: its parent's neighbours (leaves), its siblings, and the
@@ -362,7 +366,7 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
     vox, extent, owner = _coarsen(np.argwhere(mixed))
     cells = _Cells(g, size, fcomp, vox, nF, extent)
     try:
-        cells.weight[nF:] = _weights(cspace, cells.flo[nF:], cells.fhi[nF:], deadline)
+        cells.weight[nF:] = _weights(cspace, cells.flo[nF:], cells.fhi[nF:], deadline, g.frame)
     except _OutOfTime:
         return ("unknown", f"out of time weighing {len(vox)} cells to refine", None,
                 cells.wall())
@@ -447,4 +451,4 @@ def _route_path(cspace, cells: _Cells, g, q0, q1, ids, lab, L_lo, L_sz, size, ro
             boxes_lo.append(lo_d[leaf])
             boxes_hi.append(hi_d[leaf])
     lo, hi = np.array(boxes_lo), np.array(boxes_hi)
-    return _polyline(cspace, q0, q1, lo, hi, list(range(len(lo))))
+    return _polyline(cspace, q0, q1, lo, hi, list(range(len(lo))), g.frame)

@@ -14,7 +14,7 @@ planning bounds:
     few ulps: the margin is what makes it certain).
 ``free``
     Every C-obstacle whose box meets the cell is kept off it: a convex piece by one of its
-    facet planes (the cell's support value beyond the plane by more than ``2**-30`` of the
+    facet planes (the cell's support value beyond the plane by more than ``2**-42`` of the
     magnitudes), a triangle-pair C-obstacle by a slab of each piece whose k-DOP meets the cell
     (the eight corners beyond it, by the engine's float filter; compiled), any other kind by a
     clearance of the cell's centre above its half-diagonal
@@ -53,6 +53,14 @@ piece can do. ``nudge`` is half the largest ``error_bound``, at least four of th
 finest sides; a proof that used such cells holds for clearances above ``error_bound + nudge``,
 and ``Decision.clearance`` says so.
 
+**The cells' frame**: the cells are boxes along the scene's axes, or, where more of the
+C-obstacles' facet normals lie along a turned frame's axes (a turned cage, a slanted slot),
+boxes of that frame (``frame='auto'``; :class:`.cells._Frame`): cells along a slanted wall or
+gap then fill it as the scene's axes fill an aligned one. The labels are the same exact tests
+on the cells' corners turned into the scene; the corners' rounding (``2**-48`` of the
+coordinates) is added to ``Decision.clearance``, and cells wholly outside the bounds (the
+frame's box is larger than theirs) are blocked: no motion leaves the bounds.
+
 **"unknown"**: neither within the time given (a wall too large to fill with the cells the
 budget allows). The planners then run as without the decision.
 
@@ -69,8 +77,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import InvalidArgumentError
-from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _components, _free_leaf_graph, _Grid,
-                    _labels, _OutOfTime, _polyline, _setup, _shift)
+from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _choose_frame, _components, _Frame,
+                    _free_leaf_graph, _Grid, _labels, _OutOfTime, _polyline, _setup, _shift)
 from .corridor import EXTRA, refine_route
 
 #: Answers of :func:`decide`.
@@ -95,16 +103,21 @@ class Decision:
     depth : int
         The finest level reached (cells ``2**-depth`` of the bounds per axis).
     bounds : (2, 3) float64
+    frame : (3, 3) float64
+        The cells' frame: a cell's point ``x`` is the scene point ``frame @ x`` (the
+        identity, or a frame turned to the C-obstacles' faces: :func:`decide`'s ``frame``).
     cells_lo, cells_hi : (k, 3) float64
-        The leaf cells (closed boxes, scene frame), and ``labels`` (k,) int8 of theirs: the
+        The leaf cells (closed boxes in ``frame``), and ``labels`` (k,) int8 of theirs: the
         octree's finest level reached, then the cells the refinement below it proved
-        blocked (``BLOCKED`` inside a piece, ``NEAR`` within the nudge of one).
+        blocked (``BLOCKED`` inside a piece, or, in a turned frame, wholly outside the
+        bounds; ``NEAR`` within the nudge of one).
     start_component : (k,) bool
         The passable leaves connected to the start (with ``'no path'``: the region the
         robot cannot leave).
     wall : (k,) bool
         The blocked leaves touching the start's component: with ``'no path'``, the wall
-        that proves it (each inside one convex piece of a C-obstacle, or near one); a proof
+        that proves it (each inside one convex piece of a C-obstacle, or near one; the cells
+        outside the bounds that close it in a turned frame are not listed); a proof
         found by the refinement adds every cell it proved blocked (a superset of the wall's
         refined part).
     time : float
@@ -118,6 +131,7 @@ class Decision:
     clearance: float
     depth: int
     bounds: np.ndarray
+    frame: np.ndarray
     cells_lo: np.ndarray
     cells_hi: np.ndarray
     labels: np.ndarray
@@ -148,6 +162,7 @@ class Decision:
         unit = trimesh.creation.box(bounds=[[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]])
         lo, hi = self.cells_lo[keep], self.cells_hi[keep]
         V = lo[:, None, :] + np.asarray(unit.vertices)[None] * (hi - lo)[:, None, :]
+        V = V @ self.frame.T
         F = np.asarray(unit.faces)[None] + 8 * np.arange(len(lo))[:, None, None]
         return trimesh.Trimesh(V.reshape(-1, 3), F.reshape(-1, 3), process=False)
 
@@ -163,7 +178,8 @@ def _octree(obstacles, boxes, margin: float, g: _Grid, depth: int, deadline: flo
                     -1).reshape(-1, 3) * size
     leaves_lo, leaves_size, leaves_label = [], [], []
     for level in range(first, depth + 1):
-        label = _labels(obstacles, boxes, g.floats(todo), g.floats(todo + size), margin, deadline)
+        label = _labels(obstacles, boxes, g.floats(todo), g.floats(todo + size), margin, deadline,
+                        frame=g.frame)
         split = (label == MIXED) & (level < depth)
         keep = ~split
         leaves_lo.append(todo[keep])
@@ -226,7 +242,7 @@ def _depth(depth) -> int:
 
 
 def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float = 2.0,
-           refine: bool = True, progress=None) -> Decision:
+           refine: bool = True, frame="auto", progress=None) -> Decision:
     """Decide whether the robot can translate from ``start`` to ``goal``, by certified cells.
 
     Parameters
@@ -247,6 +263,14 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
         When the octree ends undecided, go on below ``depth`` along routes between start
         and goal (:func:`cspace.planning.corridor.refine_route`), up to
         ``2**-(depth + 20)`` of the bounds: gaps finer than the octree's cells.
+    frame : 'auto', None or (3, 3) float64
+        The axes the cells are cut along (columns, orthonormal). ``'auto'``: turned to the
+        C-obstacles' faces where more of their facet normals lie along its axes than along
+        the scene's (a turned box, a turned slot: cells along them fill a wall or a gap that
+        the scene's axes would need ever finer cells for); None: the scene's axes. Only
+        where cells are cut depends on it: the labels stay exact, and a proof in a turned
+        frame holds for clearances above ``error_bound`` plus ``2**-48`` of the coordinates
+        (the turned corners' rounding, :class:`cspace.planning.cells._Frame`).
     progress : callable, optional
         ``progress(fraction, message)`` after each level.
 
@@ -261,15 +285,16 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     depth = _depth(depth)
     b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
     q0, q1 = _endpoints(cspace, b, start, goal)
-    g = _Grid(b, depth)
     obstacles, boxes, clearance, margin = _setup(cspace, b)
+    F = _frame(frame, obstacles, b)
+    g = _Grid(b, depth) if F is None else _Grid(F.domain, depth, F)
     first = min(FIRST_LEVEL, depth)
     answer, reason, reached, path = "unknown", "", first - 1, None
     L = (np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0, np.int8))
     comp_start = wall = None
     # cells the refinement proved blocked, and their labels
     refined = (np.zeros((0, 3)), np.zeros((0, 3)), np.zeros(0, np.int8))
-    nudge = _nudge(b, depth, clearance)
+    nudge = _nudge(g.b, depth, clearance)  # the grid's box: a turned frame's is larger
     try:
         for level, size, L_lo, L_sz, L_lab, more in _octree(obstacles, boxes, margin, g, depth,
                                                             deadline):
@@ -299,13 +324,36 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     if comp_start is None or len(comp_start) != len(L_lo):  # out of time: none
         comp_start = wall = np.zeros(len(L_lo), dtype=bool)
     k = len(refined[0])  # the refined wall after the octree's leaves
+    lo = np.vstack([g.floats(L_lo), refined[0]])
+    hi = np.vstack([g.floats(L_lo + L_sz), refined[1]])
+    wall = np.concatenate([wall, np.full(k, answer == "no path")])
+    if F is not None:  # cells outside the bounds close the wall; they are not C-obstacles'
+        wall &= ~F.outside(F.corners(lo, hi))
+        if answer == "no path":
+            clearance += F.rho
     return Decision(answer=answer, path=path, clearance=clearance, depth=reached, bounds=b,
-                    cells_lo=np.vstack([g.floats(L_lo), refined[0]]),
-                    cells_hi=np.vstack([g.floats(L_lo + L_sz), refined[1]]),
+                    frame=np.eye(3) if F is None else F.M, cells_lo=lo, cells_hi=hi,
                     labels=np.concatenate([L_lab, refined[2]]),
                     start_component=np.concatenate([comp_start, np.zeros(k, bool)]),
-                    wall=np.concatenate([wall, np.full(k, answer == "no path")]),
-                    time=_time.perf_counter() - t0, reason=reason)
+                    wall=wall, time=_time.perf_counter() - t0, reason=reason)
+
+
+def _frame(frame, obstacles, b: np.ndarray) -> _Frame | None:
+    """:func:`decide`'s ``frame`` argument as a :class:`_Frame` (None: the scene's axes)."""
+    if isinstance(frame, str):
+        if frame != "auto":
+            raise InvalidArgumentError(f"frame must be 'auto', None or a (3, 3) array, got "
+                                       f"{frame!r}")
+        M = _choose_frame(obstacles, b)
+    elif frame is None:
+        return None
+    else:
+        M = np.asarray(frame, dtype=np.float64)
+        if M.shape != (3, 3) or not np.isfinite(M).all():
+            raise InvalidArgumentError(f"frame must be a (3, 3) array, got shape {M.shape}")
+        if not (b[1] > b[0]).all():
+            raise InvalidArgumentError("a turned frame needs bounds with a width on every axis")
+    return None if M is None else _Frame(M, b)
 
 
 def _decide_level(cspace, g: _Grid, q0, q1, L_lo, L_sz, L_lab, size, level):
@@ -355,7 +403,7 @@ def _free_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, at0, at1):
     while chain[-1] != s0[0]:
         chain.append(int(pred[chain[-1]]))
     chain.reverse()
-    return _polyline(cspace, q0, q1, g.floats(L_lo), g.floats(L_lo + L_sz), chain)
+    return _polyline(cspace, q0, q1, g.floats(L_lo), g.floats(L_lo + L_sz), chain, g.frame)
 
 
 # --------------------------------------------------------------------------------------------
