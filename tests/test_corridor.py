@@ -195,37 +195,55 @@ def test_the_shipped_narrow_gaps_are_decided():
         assert _fcl_clean(scene, cs, d.path)
 
 
-def _c_boxes_scene(tmp_path, name, c_boxes, start, goal, offset, scale):
+def _place(p, offset=(0.0, 0.0, 0.0), scale=1.0, turn=None) -> np.ndarray:
+    """Points of the unit scene turned (roll, pitch, yaw in degrees), scaled and moved."""
+    from scipy.spatial.transform import Rotation
+
+    p = np.asarray(p, dtype=np.float64)
+    if turn is not None:
+        p = p @ Rotation.from_euler("xyz", turn, degrees=True).as_matrix().T
+    return p * scale + np.asarray(offset, dtype=np.float64)
+
+
+def _c_boxes_scene(tmp_path, name, c_boxes, start, goal, offset, scale, turn=None, half=2.0):
     """Obstacle boxes whose C-obstacles (against the ROBOT cube) are the boxes ``c_boxes``
-    ((lo, hi) pairs): each shrunk by the robot's half-width; then moved and scaled."""
-    h, off = ROBOT / 2, np.asarray(offset, dtype=np.float64)
+    ((lo, hi) pairs): each shrunk by the robot's half-width; then turned (the robot too),
+    moved and scaled; the bounds (``half`` wide each side) stay axis-aligned."""
+    h, n = ROBOT / 2, -half
 
-    def at(p):
-        return repr([float(x) for x in np.asarray(p, dtype=np.float64) * scale + off])
+    def at(p, turned=True):
+        return repr(_place(p, offset, scale, turn if turned else None).tolist())
 
-    lines = [f'name = "{name}"', "[robot]", f"box = {[ROBOT * scale] * 3}", "[planning]",
-             f"bounds = [{at((-2, -2, -2))}, {at((2, 2, 2))}]", f"start = {at(start)}",
-             f"goal = {at(goal)}"]
+    turned = [] if turn is None else [f"orientation = {[float(a) for a in turn]}"]
+    lines = [f'name = "{name}"', "[robot]", f"box = {[ROBOT * scale] * 3}", *turned,
+             "[planning]", f"bounds = [{at((n, n, n), False)}, {at((half, half, half), False)}]",
+             f"start = {at(start)}", f"goal = {at(goal)}"]
     for lo, hi in c_boxes:
         lo, hi = np.asarray(lo, float) + h, np.asarray(hi, float) - h
         lines += ["[[obstacles]]", f"box = {[float(x) * scale for x in hi - lo]}",
-                  f"position = {at((lo + hi) / 2)}"]
+                  f"position = {at((lo + hi) / 2)}", *turned]
     path = tmp_path / f"{name}.toml"
     path.write_text("\n".join(lines) + "\n")
     scene = cspace.load_scene(path)
     return scene, cspace.model_scene(scene).cspace()
 
 
-@pytest.mark.parametrize("move", [dict(offset=(0, 0, 0), scale=1.0),
-                                  dict(offset=FAR, scale=3.0)])
+MOVES = [dict(offset=(0, 0, 0), scale=1.0), dict(offset=FAR, scale=3.0),
+         dict(offset=FAR, scale=3.0, turn=TURN)]
+
+
+@pytest.mark.parametrize("move", MOVES[:2] + [pytest.param(MOVES[2], marks=pytest.mark.slow)])
 def test_c_obstacles_touching_along_an_edge_are_walled_where_they_meet(tmp_path, move):
     """A wall (x in [-0.5, 0.5], beyond the bounds in y and z) whose C-obstacles fill the
     quadrants y, z <= 0 and y, z >= 0; the pocket y >= 0, z <= 0 opens to the start's side
     only, the pocket y <= 0, z >= 0 to the goal's only (caps). The two pockets meet only along
     the line y = z = 0, where the two C-obstacles touch: touching is a collision, so there is
     no path. No cell inside one C-obstacle covers the line; cells near one do (bars along it):
-    'no path', for clearances above the stated one, and the wall checked by FCL."""
-    E, t, w = 3.0, 0.5, 0.6
+    'no path', for clearances above the stated one, and the wall checked by FCL. Turned,
+    the walls (4 from the middle) still cross the axis-aligned bounds (3.5 to a corner); the
+    C-obstacles' faces are up to 4e-7 rad off the frame (each snapped to its grid), so the bar
+    along the edge takes about 12 000 cells and 8 s: slow."""
+    E, t, w = 4.0, 0.5, 0.6
     c_boxes = [((-t, -E, -E), (t, 0, 0)), ((-t, 0, 0), (t, E, E)),
                ((t, 0, -E), (t + w, E, 0)), ((-t - w, -E, 0), (-t, 0, E))]
     scene, cs = _c_boxes_scene(tmp_path, "edge", c_boxes, (-1.5, 0.5, -0.5), (1.5, -0.5, 0.5),
@@ -233,11 +251,10 @@ def test_c_obstacles_touching_along_an_edge_are_walled_where_they_meet(tmp_path,
     assert not cs.contains(scene.start) and not cs.contains(scene.goal)
     # the pockets are free (1e-4 from the line too: above the C-obstacles' error_bound, the
     # outward growth) and the line between them, where the C-obstacles touch, is not
-    mid = (np.asarray(scene.bounds)[0] + np.asarray(scene.bounds)[1]) / 2
-    pockets = mid + move["scale"] * np.array([[0, 0.5, -0.5], [0, -0.5, 0.5],
-                                              [0, 1e-4, -1e-4], [0, -1e-4, 1e-4]])
+    pockets = _place([[0, 0.5, -0.5], [0, -0.5, 0.5], [0, 1e-4, -1e-4], [0, -1e-4, 1e-4]],
+                     **move)
     assert not cs.contains(pockets).any()
-    line = mid + np.outer(np.linspace(-0.4, 0.4, 9), [move["scale"], 0, 0])
+    line = _place(np.outer(np.linspace(-0.4, 0.4, 9), [1.0, 0, 0]), **move)
     assert cs.contains(line).all()
     assert not cs.segment_free(pockets[2], pockets[3])
     d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30.0)
@@ -247,26 +264,23 @@ def test_c_obstacles_touching_along_an_edge_are_walled_where_they_meet(tmp_path,
     _check_wall_with_fcl(scene, d, n_cells=40)
 
 
-@pytest.mark.parametrize("move", [dict(offset=(0, 0, 0), scale=1.0),
-                                  dict(offset=FAR, scale=3.0)])
+@pytest.mark.parametrize("move", MOVES)
 def test_c_obstacles_touching_along_a_face_are_walled_where_they_meet(tmp_path, move):
     """A wall across the bounds in two halves whose C-obstacles meet at y = 0.3 (the
     obstacles a robot's width apart: a gap exactly the robot's width), start on one side, goal
     on the other: 'no path', walled along the seam."""
-    E, t = 3.0, 0.5
+    E, t = 4.0, 0.5
     c_boxes = [((-t, -E, -E), (t, 0.3, E)), ((-t, 0.3, -E), (t, E, E))]
     scene, cs = _c_boxes_scene(tmp_path, "seam", c_boxes, (-1.5, 0.2, 0.1), (1.5, 0.4, -0.3),
                                **move)
-    mid = (np.asarray(scene.bounds)[0] + np.asarray(scene.bounds)[1]) / 2
-    seam = mid + move["scale"] * np.array([[0, 0.3, z] for z in np.linspace(-1.5, 1.5, 7)])
+    seam = _place([[0, 0.3, z] for z in np.linspace(-1.5, 1.5, 7)], **move)
     assert cs.contains(seam).all()
     d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30.0)
     assert d.answer == "no path", d.reason
     _check_wall_with_fcl(scene, d, n_cells=40)
 
 
-@pytest.mark.parametrize("move", [dict(offset=(0, 0, 0), scale=1.0),
-                                  dict(offset=FAR, scale=3.0)])
+@pytest.mark.parametrize("move", MOVES)
 def test_a_path_never_slips_between_c_obstacles_touching_at_a_vertex(tmp_path, move):
     """Two C-obstacle boxes touching at one point, the straight line from start to goal
     through it; around them the bounds are free. The answer must be a path (around) whose
@@ -274,8 +288,8 @@ def test_a_path_never_slips_between_c_obstacles_touching_at_a_vertex(tmp_path, m
     the vertex (a point of both C-obstacles)."""
     c_boxes = [((-1.0, -1.0, -1.0), (0.0, 0.0, 0.0)), ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))]
     scene, cs = _c_boxes_scene(tmp_path, "vertex", c_boxes, (-1.5, 1.5, 1.5),
-                               (1.5, -1.5, -1.5), **move)
-    vertex = (np.asarray(scene.bounds)[0] + np.asarray(scene.bounds)[1]) / 2
+                               (1.5, -1.5, -1.5), half=3.0 if "turn" in move else 2.0, **move)
+    vertex = _place([0.0, 0.0, 0.0], **move)
     assert cs.contains(vertex) and not cs.segment_free(scene.start, scene.goal)
     d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30.0)
     assert d.answer == "path", d.reason

@@ -395,16 +395,19 @@ def _facet_normals(co) -> np.ndarray:
 #: Most frames tried by :func:`_choose_frame` (one per frequent normal), and most normals
 #: it weighs them by.
 _FRAME_CANDIDATES, _FRAME_NORMALS = 8, 20000
-#: A normal counts as along an axis of a frame within this (the choice is a heuristic: it
-#: decides which cells are cut, never a label).
-_ALIGNED = 1e-9
+#: A normal counts as along an axis of a frame when its cosine to it is within this of 1
+#: (an angle of 4e-5), and two normals as square when their cosine is below ``_SQUARE`` (the
+#: normals are grouped rounded to 1e-9). The choice is a heuristic: it decides which cells
+#: are cut, never a label.
+_ALIGNED, _SQUARE = 1e-9, 1e-6
 
 
 def _choose_frame(obstacles, bounds: np.ndarray) -> np.ndarray | None:
     """A frame (3, 3 orthonormal) in which more of the C-obstacles' facet normals lie along
     an axis than in the scene's own, or None (the scene's axes: no turned frame, also when
-    the bounds are flat on an axis). Built from a frequent normal and the most frequent one
-    square to it. Only where the cells are cut depends on it; their labels stay exact."""
+    the bounds are flat on an axis). Each candidate pairs one of the most frequent normals
+    with one of the most frequent normals square to it; the best scored wins. Only where the
+    cells are cut depends on it; their labels stay exact."""
     b = np.asarray(bounds, dtype=np.float64)
     if not (b[1] > b[0]).all():
         return None
@@ -417,21 +420,20 @@ def _choose_frame(obstacles, bounds: np.ndarray) -> np.ndarray | None:
     def score(M):
         return int(np.count_nonzero(np.abs(N @ M).max(axis=1) >= 1 - _ALIGNED))
 
-    D, count = np.unique(np.round(N, 9), axis=0, return_counts=True)
+    _, first, count = np.unique(np.round(N, 9), axis=0, return_index=True, return_counts=True)
+    D = N[first]  # a normal of each group, as it is (the rounding only groups them)
     order = np.argsort(-count, kind="stable")[:_FRAME_CANDIDATES]
     best, best_score = None, score(np.eye(3))
     for i in order:
         n1 = D[i] / np.linalg.norm(D[i])
-        square = np.abs(D @ n1) < _ALIGNED
-        if not square.any():
-            continue
-        j = np.nonzero(square)[0][np.argmax(count[square])]
-        n2 = D[j] - (D[j] @ n1) * n1
-        n2 /= np.linalg.norm(n2)
-        M = np.stack([n1, n2, np.cross(n1, n2)], axis=1)
-        sc = score(M)
-        if sc > best_score:
-            best, best_score = M, sc
+        square = np.nonzero(np.abs(D @ n1) < _SQUARE)[0]
+        for j in square[np.argsort(-count[square], kind="stable")][:_FRAME_CANDIDATES]:
+            n2 = D[j] - (D[j] @ n1) * n1
+            n2 /= np.linalg.norm(n2)
+            M = np.stack([n1, n2, np.cross(n1, n2)], axis=1)
+            sc = score(M)
+            if sc > best_score:
+                best, best_score = M, sc
     return best
 
 
