@@ -235,6 +235,26 @@ def test_turns_between_slices_do_not_open_the_cage(tmp_path):
     assert "none over 8 orientation slices" in p.stdout
 
 
+def test_turns_between_slices_do_not_open_a_turned_tight_cage(tmp_path):
+    """The cage turned generically, far off, its slot 1e-3 narrower than the cube: every
+    orientation's cells are cut along the cage's faces (one frame for all, so the slices'
+    cells coincide), and over 8 slices and the turns between them there is no path, as for
+    the cage in the scene's axes."""
+    from cspace.planning.decide import decide_turning
+    from cspace.planning.plan import default_slices
+    from cspace.planning.turning import TurningCSpace
+
+    path = tmp_path / "cage.toml"
+    path.write_text(cage_toml(slot=ROBOT - 1e-3, offset=(250.0, 150.0, -300.0),
+                              turn=(17.0, -31.0, 52.0)))
+    scene = cspace.load_scene(path)
+    tcs = TurningCSpace(scene, default_slices(scene, 8))
+    td = decide_turning(tcs, scene.start, scene.goal, time=30.0)  # ~1 s; the budget caps
+    assert td.answer == "no path" and len(td.components) == 8 and td.links > 0, td.reason
+    eb = max(co.error_bound for k in range(8) for co in tcs.slice(k).obstacles)
+    assert eb <= td.clearance < 1e-6
+
+
 def test_turns_that_open_a_passage_are_not_ruled_out():
     """The piano passes the doorway only turned: at its start orientation there is no path,
     over slices the decision must not say so (and the turning planner then finds the way)."""

@@ -434,7 +434,8 @@ class TurningDecision:
                 f"components={sum(self.components)}, links={self.links}, time={self.time:.3f})")
 
 
-def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0) -> TurningDecision:
+def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
+                   frame="auto") -> TurningDecision:
     """Decide over orientations: can the robot go from ``start`` (at orientation 0) to
     ``goal`` (at ``tcs.slices.goal``) by translations at the orientations of ``tcs`` and turns
     in place between neighbouring ones?
@@ -455,6 +456,10 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0) -> T
     depth : int, default 6
     time : float, default 10.0
         Past it: ``'unknown'``.
+    frame : 'auto', None or (3, 3) float64
+        As :func:`decide`'s, one for every orientation (so their cells coincide): ``'auto'``
+        turns it to the start orientation's C-obstacles (the obstacles' faces are in every
+        orientation's).
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -465,13 +470,16 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0) -> T
     b = np.asarray(tcs.bounds, dtype=np.float64).reshape(2, 3)
     slices = tcs.slices
     n = len(slices)
-    g = _Grid(b, depth)
+    g = F = None
     labels, counts, clearance = [], [], 0.0
     try:
         for k in range(n):
             cs = tcs.slice(k)
             obstacles, boxes, bound, margin = _setup(cs, b)
             clearance = max(clearance, bound)
+            if g is None:  # the cells of every orientation: the start's frame
+                F = _frame(frame, obstacles, b)
+                g = _Grid(b, depth) if F is None else _Grid(F.domain, depth, F)
             for _, _size, L_lo, L_sz, L_lab, _more in _octree(obstacles, boxes, margin, g, depth,
                                                               deadline):
                 pass
@@ -516,6 +524,7 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0) -> T
     elif c0 and c1 and not (c0 & c1):
         answer, reason = "no path", (f"start and goal in different components over {n} "
                                      "orientations joined by turns between neighbours")
+        clearance += 0.0 if F is None else F.rho  # the turned corners' rounding
     else:
         answer, reason = "unknown", f"start and goal may be joined at depth {depth}"
     return TurningDecision(answer, reason, clearance, depth, counts, links,
