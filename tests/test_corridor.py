@@ -315,3 +315,36 @@ def test_a_seam_in_flat_bounds_is_decided(tmp_path, offset, gap):
     if d.answer == "path":
         assert verify_path(cs, d.path, b)["valid"]
         assert (d.path[:, 2] == scene.start[2]).all()
+
+
+def test_a_turned_frames_rounding_is_within_its_bound():
+    """The turned corners (floats) against the exact ones (rationals of the same float
+    frame and box): within ``rho`` per coordinate, far from the origin; and a cell called
+    outside the bounds is, exactly (every exact corner beyond the same face)."""
+    from fractions import Fraction
+
+    from scipy.spatial.transform import Rotation
+
+    from cspace.planning.cells import _Frame
+
+    rng = np.random.default_rng(7)
+    b = np.array([[244.0, 144.0, -306.0], [256.0, 156.0, -294.0]])
+    M = Rotation.from_euler("xyz", (29.0, -47.0, 71.0), degrees=True).as_matrix()
+    F = _Frame(M, b)
+    lo = F.domain[0] + rng.random((300, 3)) * (F.domain[1] - F.domain[0])
+    hi = lo + rng.random((300, 3)) * 0.5
+    W = F.corners(lo, hi)
+    out = F.outside(W)
+    assert out.any() and not out.all()
+    Mq = [[Fraction(x) for x in row] for row in M.tolist()]
+    for r in range(len(lo)):
+        exact = [[sum(Mq[i][j] * Fraction(float(x[j])) for j in range(3)) for i in range(3)]
+                 for x in np.where(np.array([[i, j, k] for i in (0, 1) for j in (0, 1)
+                                             for k in (0, 1)], bool), hi[r], lo[r])]
+        err = max(abs(Fraction(float(W[r, c, i])) - exact[c][i]) for c in range(8)
+                  for i in range(3))
+        assert err <= Fraction(F.rho)
+        if out[r]:
+            assert any(all(p[i] < Fraction(float(b[0, i])) for p in exact)
+                       or all(p[i] > Fraction(float(b[1, i])) for p in exact)
+                       for i in range(3))
