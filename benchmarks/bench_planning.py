@@ -401,7 +401,13 @@ def decide_scenes(tmp: Path) -> list:
                              dict(slot=0.38, offset=far, shift=0.0137), "no path"),
                             ("cage at (250, 150, -300) turned (17, -31, 52) degrees, slot = "
                              "robot - 1e-3", dict(slot=0.399, offset=far, turn=(17.0, -31.0, 52.0)),
-                             "no path")):
+                             "no path"),
+                            ("the turned cage, slot = robot (C-obstacles touch), cells off the "
+                             "slot", dict(slot=0.4, offset=far, turn=(17.0, -31.0, 52.0),
+                                          shift=0.0137), "no path"),
+                            ("the turned cage, slot = robot + 1e-5, cells off the slot",
+                             dict(slot=0.40001, offset=far, turn=(17.0, -31.0, 52.0),
+                                  shift=0.0137), "path")):
         path = tmp / f"cage{len(out)}.toml"
         shift = kw.pop("shift", 0.0)
         text = cage_toml(tmp=tmp, **kw)
@@ -503,9 +509,13 @@ def decide_section() -> list[str]:
               "half the largest `error_bound` and at least four of the finest sides, lies in "
               "it): that is how C-obstacles that only touch are walled, and a proof that used "
               "such cells holds for clearances above `error_bound` plus the nudge: the "
-              "*clearance* column. Cells are boxes along the axes: a slanted gap or wall (the "
-              "turned cage) needs cells in proportion to its area over the square of its "
-              "width, and stays unknown (the exact union would not). Unknown within the "
+              "*clearance* column. Cells are boxes along the axes, or along a frame turned to "
+              "the C-obstacles' faces when more of their facet normals lie along it "
+              "(`frame='auto'`; the turned cage): the labels are the same exact tests on the "
+              "corners turned into the scene, and the clearance adds their rounding, 2^-48 of "
+              "the coordinates. A scene whose gaps or walls are slanted to one another (no "
+              "frame fits them all) still needs cells in proportion to a slanted gap's area "
+              "over the square of its width. Unknown within the "
               "budget, the samplers go on. With turns (the previous section), `auto` decides over "
               "8 orientation slices and the turns between them (`decide_turning`, the octree "
               "alone) before planning them: a proof that holds over those slices, not over "
