@@ -162,16 +162,6 @@ def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float,
         val = c @ A[:3] + A[3] - h @ absA
         tol = _PLANE_MARGIN * (np.abs(c) @ np.abs(A[:3]) + h @ absA + np.abs(A[3]))
         return (val > tol).any(axis=1)
-    if frame is not None and kind in ("pairs", "mesh"):
-        if kind == "pairs":  # apart from the box's bounding box in the scene: weaker, sound
-            lo, hi = frame.aabb(lo, hi)
-            return _kept_off(co, lo, hi, margin)
-        centre, out = frame.world((lo + hi) / 2), np.zeros(len(lo), dtype=bool)
-        rows = np.nonzero(~np.asarray(co.contains(centre), dtype=bool))[0]
-        if len(rows):
-            half = np.linalg.norm(hi[rows] - lo[rows], axis=1) / 2
-            out[rows] = co.signed_distance(centre[rows]) > half + margin
-        return out
     if kind in ("union", "surface"):  # every part (a surface's convex pieces) near the cell
         members = ([(np.asarray(p.bounds, dtype=np.float64), p) for p in co.parts]
                    if kind == "union" else
@@ -185,11 +175,14 @@ def _kept_off(co, lo: np.ndarray, hi: np.ndarray, margin: float,
                 out[rows] = _kept_off(part, lo[rows], hi[rows], margin, frame)
         return out
     if kind == "pairs":  # each piece near the cell kept off it by one of its slabs
-        impl = co._impl
-        return impl._set.boxes_apart(impl._grid_units(lo), impl._grid_units(hi)) == 1
+        impl = co._impl  # (a turned cell: its bounding box in the scene; weaker, sound)
+        wlo, whi = (lo, hi) if frame is None else frame.aabb(lo, hi)
+        return impl._set.boxes_apart(impl._grid_units(wlo), impl._grid_units(whi)) == 1
     # the distance only where the centre is outside: a centre inside is never kept off, and
     # a non-convex C-obstacle's depth inside (its signed distance there) is the costly part
     centre, out = (lo + hi) / 2, np.zeros(len(lo), dtype=bool)
+    if frame is not None:  # a turned cell: its centre in the scene (its half-diagonal is)
+        centre = frame.world(centre)
     rows = np.nonzero(~np.asarray(co.contains(centre), dtype=bool))[0]
     if len(rows):
         half = np.linalg.norm(hi[rows] - lo[rows], axis=1) / 2
@@ -331,7 +324,7 @@ class _Frame:
 
     :attr:`domain`: the frame box that holds the scene ``bounds`` turned into the frame
     (their corners' frame coordinates, computed as ``M^T c``, grown by ``2**-40`` of their
-    magnitude, far above the ``~2**-50`` by which ``M^T`` differs from ``M^-1``).
+    magnitude, far above the at most ``~2**-45`` by which ``M^T`` differs from ``M^-1``).
     """
 
     def __init__(self, M: np.ndarray, bounds: np.ndarray):
