@@ -43,6 +43,12 @@ class _OutOfTime(Exception):
     pass
 
 
+def _box_corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(m, 8, 3): the corners of the boxes ``[lo[r], hi[r]]``, in :data:`_CORNERS` order
+    (one box: ``lo, hi`` of shape (3,) give (8, 3))."""
+    return np.where(_CORNERS.astype(bool), hi[..., None, :], lo[..., None, :])
+
+
 # --------------------------------------------------------------------------------------------
 # the blocked label: inside one convex piece of one C-obstacle
 
@@ -60,7 +66,7 @@ def _inside_one_piece(co, lo: np.ndarray, hi: np.ndarray, C: np.ndarray | None =
     ``'mesh'`` or pair test on it is weaker, never wrong)."""
     m = len(lo)
     if C is None:
-        C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])  # (m, 8, 3)
+        C = _box_corners(lo, hi)
     kind = co.kind
     if kind == "convex":
         return co.contains(C.reshape(-1, 3)).reshape(m, 8).all(axis=1)
@@ -113,8 +119,7 @@ def _pair_corner_values(impl, lo: np.ndarray, hi: np.ndarray):
     gf = np.asarray(impl.g, dtype=np.float64)
     A, absA = _slab_columns(impl.S[cand[:, 1]], impl.T[cand[:, 2]], bool(gf.any()), gf)
     Q = np.ones((len(cand), 8, 4))
-    Q[:, :, :3] = np.where(_CORNERS[None].astype(bool), X_hi[cand[:, 0]][:, None, :],
-                           X_lo[cand[:, 0]][:, None, :])
+    Q[:, :, :3] = _box_corners(X_lo[cand[:, 0]], X_hi[cand[:, 0]])
     with np.errstate(over="ignore", under="ignore", invalid="ignore"):
         val = np.matmul(Q, A)
         err = _FILTER * np.matmul(np.abs(Q), absA) + _TINY
@@ -332,7 +337,7 @@ class _Frame:
         self.bounds = np.asarray(bounds, dtype=np.float64).reshape(2, 3)
         if not np.abs(self.M.T @ self.M - np.eye(3)).max() <= 2.0 ** -45:
             raise InvalidArgumentError("a frame must be orthonormal (to within 2**-45)")
-        F = self.local(np.where(_CORNERS.astype(bool), self.bounds[1], self.bounds[0]))
+        F = self.local(_box_corners(self.bounds[0], self.bounds[1]))
         pad = 2.0 ** -40 * float(np.abs(F).max() + 1.0)
         #: where a point given in the scene may be in the frame (point location's margin)
         self.pad = pad
@@ -349,7 +354,7 @@ class _Frame:
 
     def corners(self, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """(m, 8, 3): the frame boxes' corners in the scene."""
-        return self.world(np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :]))
+        return self.world(_box_corners(lo, hi))
 
     def aabb(self, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The frame boxes' bounding boxes in the scene, grown by :attr:`rho`."""
@@ -365,7 +370,8 @@ class _Frame:
             axis=1)
 
     def clip(self, P: np.ndarray) -> np.ndarray:
-        """Scene points moved into the bounds (waypoints of a path: a move of ``rho``)."""
+        """Scene points moved into the bounds: a path's waypoints (a free cell may cross the
+        bounds' faces; every segment is re-proved after)."""
         return np.clip(P, self.bounds[0], self.bounds[1])
 
 
@@ -437,9 +443,11 @@ def _choose_frame(obstacles, bounds: np.ndarray) -> np.ndarray | None:
 class _Grid:
     """The finest grid over the bounds: ``N[a]`` cells on axis ``a`` (1 on a flat axis), cell
     corner ``i`` at ``x[a][i]`` (float64, strictly increasing, the bounds' ends exact). With a
-    turned ``frame``, over its :attr:`_Frame.domain` (``b`` is then that box, in the frame)."""
+    turned ``frame``, over its :attr:`_Frame.domain` instead (``b`` is then that box, in the
+    frame)."""
 
     def __init__(self, b: np.ndarray, depth: int, frame: _Frame | None = None):
+        b = b if frame is None else frame.domain
         self.b = b
         self.frame = frame
         self.pad = 0.0 if frame is None else frame.pad

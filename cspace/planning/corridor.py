@@ -82,7 +82,7 @@ class _Cells:
         self._holding = {}  # the nodes holding a point (holding)
 
     def wall(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Every cell a split proved blocked (closed boxes, scene frame, and their labels:
+        """Every cell a split proved blocked (closed boxes in the grid's frame, and labels:
         ``BLOCKED`` inside a piece, ``NEAR`` within the nudge of one): with 'no path', the
         refined part of the wall (a superset of what touches the start's region)."""
         if not self.walls:

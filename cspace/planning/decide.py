@@ -287,7 +287,7 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     q0, q1 = _endpoints(cspace, b, start, goal)
     obstacles, boxes, clearance, margin = _setup(cspace, b)
     F = _frame(frame, obstacles, b)
-    g = _Grid(b, depth) if F is None else _Grid(F.domain, depth, F)
+    g = _Grid(b, depth, F)
     first = min(FIRST_LEVEL, depth)
     answer, reason, reached, path = "unknown", "", first - 1, None
     L = (np.zeros((0, 3), np.int64), np.zeros((0, 3), np.int64), np.zeros(0, np.int8))
@@ -479,7 +479,7 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
             clearance = max(clearance, bound)
             if g is None:  # the cells of every orientation: the start's frame
                 F = _frame(frame, obstacles, b)
-                g = _Grid(b, depth) if F is None else _Grid(F.domain, depth, F)
+                g = _Grid(b, depth, F)
             for _, _size, L_lo, L_sz, L_lab, _more in _octree(obstacles, boxes, margin, g, depth,
                                                               deadline):
                 pass
