@@ -283,7 +283,7 @@ def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
     over the pieces' half-spaces (compiled, and its numpy reference); both must agree with
     the exact test of every corner. Free cells (every piece near the cell off it by one of
     its slabs, compiled): as the numpy reference, and no point of them collides."""
-    from cspace.planning.cells import (_box_corners, _inside_a_pair, _inside_a_pair_reference,
+    from cspace.planning.cells import (_CORNERS, _inside_a_pair, _inside_a_pair_reference,
                                        _pairs_apart_reference)
 
     scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, offset=(250.0, 150.0, -300.0))
@@ -295,7 +295,7 @@ def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
         B = np.asarray(co.bounds)
         lo = B[0] + rng.random((80, 3)) * (B[1] - B[0])
         hi = lo + rng.random((80, 3)) * np.array([0.02, 0.2, 0.6])[rng.permutation(3)]
-        C = _box_corners(lo, hi)
+        C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])
         fast = _inside_a_pair(impl, lo, hi, C)
         cand = impl._set.candidates(impl._grid_units(lo), impl._grid_units(hi))
         exact = np.zeros(len(lo), dtype=bool)
@@ -310,7 +310,7 @@ def test_the_pair_filter_agrees_with_the_exact_piece_test(tmp_path):
         apart = impl._set.boxes_apart(impl._grid_units(lo), impl._grid_units(hi)) == 1
         np.testing.assert_array_equal(apart, _pairs_apart_reference(impl, lo, hi))
         assert apart.any() and not apart.all()
-        C = _box_corners(lo, hi)
+        C = np.where(_CORNERS[None].astype(bool), hi[:, None, :], lo[:, None, :])
         pts = (lo[:, None] + rng.random((80, 20, 3)) * (hi - lo)[:, None])[apart]
         assert not co.contains(np.vstack([pts.reshape(-1, 3), C[apart].reshape(-1, 3)])).any()
 
