@@ -234,6 +234,107 @@ def test_arrangement_core_is_identical_near_ties():
     _same_core([((0, 0, 1), (7, 3, 1)), ((0, 3, 1), (7, 0, 1)), ((14, 6, 2), (21, 9, 3))])
 
 
+def _plane_jobs(v, f, b):
+    from cspace.geometry.exact import Grid
+    from cspace.mesh.closed import ClosedMesh
+    from cspace.minkowski.arrangements import _PlaneJobs
+    from cspace.minkowski.intersections import _cuts
+    from cspace.minkowski.planes import _plane_groups
+    from cspace.minkowski.superset import minkowski_superset
+
+    grid = Grid.for_points(v, b)
+    S = minkowski_superset(ClosedMesh.from_arrays(v, f, grid=grid), b)
+    planes = _plane_groups(S)
+    return _PlaneJobs(S.ints, planes, _cuts(S.ints, planes))
+
+
+def _count_one_facet_calls(monkeypatch) -> dict:
+    """Make the arrangements stage call the one-facet kernel through a counter: ``calls``
+    and ``declined`` (returned None)."""
+    from cspace.minkowski import arrangements
+
+    count = {"calls": 0, "declined": 0}
+    real = compiled_planar.one_facet_plane
+
+    def counted(*args):
+        out = real(*args)
+        count["calls"] += 1
+        count["declined"] += out is None
+        return out
+
+    class Spy:
+        def __getattr__(self, attr):
+            return getattr(compiled_planar, attr)
+
+    spy = Spy()
+    spy.one_facet_plane = counted
+    monkeypatch.setattr(arrangements, "_planar", spy)
+    return count
+
+
+def _same_planes(jobs) -> None:
+    """Every plane arranged with the compiled steps and with their Python references."""
+    from cspace.minkowski import arrangements
+
+    todo = [p for p in range(len(jobs.members)) if not jobs.trivial(p)]
+    assert [jobs.arrange(p) for p in todo] == [jobs.arrange(p, compiled=False) for p in todo]
+    for p in todo:
+        cut3 = jobs.cuts.segments[p]
+        assert (compiled_planar.projected_segments(cut3, jobs.axis[p])
+                == arrangements._projected_segments(cut3, jobs.axis[p]))
+
+
+def test_plane_arrangements_are_identical_on_minkowski_sums(monkeypatch):
+    """Every plane of three sums, arranged with the compiled steps (the cuts' projection, a
+    one-facet plane's faces) and with their Python references: the same sub-facets, lifted
+    points and vertex order."""
+    from zoo import icosphere_points
+
+    count = _count_one_facet_calls(monkeypatch)
+    ico = icosphere_points(1, radius=0.3)
+    for v, f in (star(), torus(sections=12, ring=8), (random_rotation(l_shape()[0], seed=4),
+                                                         l_shape()[1])):
+        _same_planes(_plane_jobs(v, f, ico))
+    assert count["calls"] > 300
+
+
+def test_plane_arrangements_are_identical_where_the_kernel_declines(monkeypatch, shared_data):
+    """The one-facet kernel declines planes whose cuts end inside the facet or close a loop
+    in it; those take the Python path. The small sums hold none; Parasol's bug trap
+    against a box holds a few: every plane still matches the reference."""
+    from zoo import scaled_robots
+
+    from cspace.mesh.closed import ClosedMesh
+
+    count = _count_one_facet_calls(monkeypatch)
+    trap = ClosedMesh.load(shared_data / "parasol_open_ppl_env/bug_trap1.0/trap.obj")
+    box = scaled_robots(float(np.ptp(trap.vertices, axis=0).max()))["box"]
+    _same_planes(_plane_jobs(trap.vertices, trap.faces, box))
+    assert count["calls"] > 1000 and count["declined"] >= 1
+
+
+def test_one_facet_kernel_declines_loops_and_dangling_cuts():
+    """A triangle (its edges labelled as pinned facet edges) with a cut across it is read by
+    the kernel; with a closed loop of cuts inside it (two components), or a cut ending
+    inside it (a bridge), the kernel returns None and the Python path decides."""
+    tri = [((0, 0, 1), (12, 0, 1)), ((12, 0, 1), (0, 12, 1)), ((0, 12, 1), (0, 0, 1))]
+    labels = [(0, 0), (0, 1), (0, 2)]
+    lift = lambda h: (h[0], h[1], 0, h[2])  # noqa: E731 - the plane z = 0
+    across = [((0, 3, 1), (9, 3, 1))]
+    lifted, faces = compiled_planar.one_facet_faces(tri + across, labels + [(-1, 0)], 2, 7, {},
+                                                    lift)
+    assert sorted(len(r[0]) for _, r, _, _, _ in faces) == [3, 4]
+    assert all(c == 2 and src == 7 and pt is None for c, _, _, src, pt in faces)
+    assert [t is not None for _, r, t, _, _ in faces] == [len(r[0]) == 3 for _, r, _, _, _ in faces]
+    assert all(len(p) == 4 for p in lifted)
+    loop = [((2, 2, 1), (4, 2, 1)), ((4, 2, 1), (2, 4, 1)), ((2, 4, 1), (2, 2, 1))]
+    dangling = [((0, 3, 1), (3, 3, 1))]
+    for cuts in (loop, dangling):
+        segs = tri + cuts
+        assert compiled_planar.one_facet_faces(segs, labels + [(-1, k) for k in range(len(cuts))],
+                                               2, 7, {}, lift) is None
+
+
 @pytest.mark.parametrize("big", [2**30, 2**52, 2**62, 2**200])
 def test_area_signs_of_slivers_are_the_references(big):
     """Triangles of area 1/2 (and 0) with corners near ``big``: the float sum of the cycle

@@ -389,6 +389,16 @@ def test_lone_triangle_sub_facets_get_their_centroid():
         assert [3 * x for x in (X, Y, Z)] == [W * (A[k] + B[k] + C[k]) for k in range(3)]
 
 
+def _python_planes(monkeypatch) -> None:
+    """Arrange every plane on the Python path (the one the patched helpers serve; the
+    compiled one-facet kernel reads faces without them)."""
+    from functools import partialmethod
+
+    from cspace.minkowski.arrangements import _PlaneJobs
+
+    monkeypatch.setattr(_PlaneJobs, "arrange", partialmethod(_PlaneJobs.arrange, compiled=False))
+
+
 def test_plain_sub_facets_get_the_point_their_arrangement_would_give(monkeypatch):
     """Cut sub-facets with a plain interior carry no point; the one made when the membership
     test asks (the centroid of the first triangle, lifted) is the arrangement's own strict
@@ -406,6 +416,7 @@ def test_plain_sub_facets_get_the_point_their_arrangement_would_give(monkeypatch
     cuts = _cuts(S.ints, planes)
     lazy, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
     monkeypatch.setattr(T, "plain_interior", lambda arr, f: False)
+    _python_planes(monkeypatch)
     eager, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
     assert lazy.face_tris == eager.face_tris
     made = [f for f in range(len(lazy.face_plane))
@@ -432,6 +443,7 @@ def test_triangles_made_when_asked_are_the_arrangements_own(monkeypatch):
     cuts = _cuts(S.ints, planes)
     lazy, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
     monkeypatch.setattr(T, "known_triangles", face_triangles)
+    _python_planes(monkeypatch)
     eager, _ = T._complex(S.ints, planes, cuts, lambda *a: None)
     assert all(t is not None for t in eager.face_tris)
     waiting = [f for f, t in enumerate(lazy.face_tris) if t is None]

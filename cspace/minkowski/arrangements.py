@@ -19,6 +19,7 @@ from ..errors import ExactnessError
 from ..workers import can_fork, forked_map
 from .coverage import Coverage, polygon_coverage, pushed_inside, sampled_coverage
 from ..geometry.homogeneous import _hnorm, project_homogeneous
+from ..geometry._kernels import load
 from .intersections import _Cuts
 from .plane_arrangement import Arrangement2D
 from .planes import _Planes
@@ -57,6 +58,9 @@ class _Complex:
     face_point: list
 
 
+_planar = load("planar")
+
+
 def _lift(H, key, ax: int) -> tuple:
     """Canonical homogeneous 3D point of the projected point ``H = (x, y, w)`` of plane ``key``."""
     x, y, w = H
@@ -71,6 +75,13 @@ def _lift(H, key, ax: int) -> tuple:
         P, W = [-c for c in P], -W
     g = gcd(P[0], P[1], P[2], W)
     return (P[0] // g, P[1] // g, P[2] // g, W // g)
+
+
+def _projected_segments(segs3: list, ax: int) -> list:
+    """Segments of homogeneous 3D points projected along axis ``ax`` to canonical homogeneous
+    2D points (reference of ``_kernels.planar.projected_segments``)."""
+    return [(_hnorm(*project_homogeneous(x, ax)), _hnorm(*project_homogeneous(y, ax)))
+            for x, y in segs3]
 
 
 def _pinned_edges(planes: _Planes) -> np.ndarray:
@@ -123,17 +134,31 @@ class _PlaneJobs:
         n = len(self.members[p]) + len(self.cuts.segments[p])
         return n + n * n // 64
 
-    def arrange(self, p: int):
+    def arrange(self, p: int, compiled: bool = True):
         """Sub-facets of arrangement plane ``p``: ``(lifted, faces)`` with ``lifted[v]`` the
         canonical 3D point of local vertex ``v`` and, per face of non-zero support,
         ``(coverage, boundary cycles, triangles or None, source facet, inner point or None)``
-        in local vertex ids (cycles: the outer one, then the holes, as vertex lists)."""
+        in local vertex ids (cycles: the outer one, then the holes, as vertex lists).
+        ``compiled=False`` runs the pure-Python reference of the compiled steps (identical
+        outputs, ``tests/test_kernels.py``)."""
         ax = self.axis[p]
         a, b = (ax + 1) % 3, (ax + 2) % 3
         tl = self.members[p]
-        polys = [[(c[a], c[b], 1) for c in self.corners[t]] for t in tl]
+        key = self.planes.keys[p]
+        one = self._one_facet(tl)
+        if one:
+            # One convex facet whose whole boundary is in the arrangement: every bounded face
+            # lies in it (nothing is drawn outside), so each is covered once, by the facet.
+            c = self.weight[tl[0]] * self.sign[tl[0]] * self.sigma[p]
+            if compiled:  # most planes: set up, arranged and read in one compiled call
+                done = _planar.one_facet_plane(self.corners, tl, self.pinned, self.cuts.segments[p],
+                                               ax, c, self.facet[tl[0]],
+                                               lambda h: _lift(h, key, ax))
+                if done is not None:
+                    return done
+        polys = [[(q[a], q[b], 1) for q in self.corners[t]] for t in tl]
         cut3 = self.cuts.segments[p]
-        segs = [(_hnorm(*project_homogeneous(x, ax)), _hnorm(*project_homogeneous(y, ax))) for x, y in cut3]
+        segs = _planar.projected_segments(cut3, ax) if compiled else _projected_segments(cut3, ax)
         # The net coverage changes only where another plane's sheet meets this one
         # (closedness of the superset): along the cuts and the edges shared by label with
         # other planes' triangles. Where the net coverage is 0, the sheets of one orientation
@@ -145,12 +170,13 @@ class _PlaneJobs:
         pin = [(i, j) for i, t in enumerate(tl) for j in range(3) if pinned[3 * t + j] or sg[i] == minority]
         seg2 = [(polys[i][j], polys[i][(j + 1) % 3]) for i, j in pin] + segs
         lab2 = pin + [(-1, k) for k in range(len(segs))]
-        one = self._one_facet(tl)
+        # the 3D points of the inputs are known; only crossings made in the plane are lifted
+        known = {(q[a], q[b], 1): (q[0], q[1], q[2], 1) for t in tl for q in self.corners[t]}
+        for (x, y), (px, py) in zip(cut3, segs):
+            known[px] = x
+            known[py] = y
         if one:
-            # One convex facet whose whole boundary is in the arrangement: every bounded face
-            # lies in it (nothing is drawn outside), so each is covered once, by the facet.
             arr = Arrangement2D(seg2, lab2, canonical=True)
-            c = self.weight[tl[0]] * self.sign[tl[0]] * self.sigma[p]
             cov = Coverage(arr, [c] * len(arr.faces), [abs(c)] * len(arr.faces))
         else:
             weights = [self.weight[t] for t in tl]
@@ -159,12 +185,6 @@ class _PlaneJobs:
             except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
                 cov = polygon_coverage(polys, weights, segs)
             arr = cov.arrangement
-        key = self.planes.keys[p]
-        # the 3D points of the inputs are known; only crossings made in the plane are lifted
-        known = {(c[a], c[b], 1): (c[0], c[1], c[2], 1) for t in tl for c in self.corners[t]}
-        for (x, y), (px, py) in zip(cut3, segs):
-            known[px] = x
-            known[py] = y
         lifted = [known.get(h) or _lift(h, key, ax) for h in arr._H]
         origin = arr.half_edge_origin
         faces = []

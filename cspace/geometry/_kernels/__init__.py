@@ -18,7 +18,9 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
   cell apart from every piece; references ``cells._inside_a_pair_reference`` and
   ``cells._pairs_apart_reference``, tested in ``tests/test_decide.py``);
 - ``planar`` — :mod:`cspace.minkowski.plane_arrangement` (each plane's arrangement core),
-  :mod:`cspace.minkowski.triangulation`;
+  :mod:`cspace.minkowski.triangulation`, :mod:`cspace.minkowski.arrangements` (the cuts
+  projected into a plane, a one-facet plane's sub-facets; reference
+  ``_PlaneJobs.arrange(p, compiled=False)``);
 - ``trim`` — :mod:`cspace.mesh.self_intersection` (undecided pairs, triangle boxes),
   :mod:`cspace.minkowski.output` (float rounding) and :mod:`cspace.minkowski.rounding` (moved points).
 

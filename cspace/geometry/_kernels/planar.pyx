@@ -1,6 +1,8 @@
 # cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
 """Compiled kernel of :mod:`cspace.minkowski.plane_arrangement`: the exact combinatorics of a segment arrangement
-(:func:`arrangement_core`), built once per arrangement plane of every Minkowski sum.
+(:func:`arrangement_core`), built once per arrangement plane of every Minkowski sum; and of
+:mod:`cspace.minkowski.arrangements`, the steps around it on most planes
+(:func:`projected_segments`, :func:`one_facet_faces`).
 
 It returns exactly what the pure-Python reference ``cspace.minkowski.plane_arrangement._arrangement_core`` returns
 (``tests/test_kernels.py``). Every decision is the same exact sign, reached by the first of:
@@ -870,3 +872,92 @@ def clip_general(list Ps, list ids):
         return tris
     finally:
         free(poly)
+
+
+def projected_segments(list segs3, int ax):
+    """``cspace.minkowski.arrangements._projected_segments`` (identical outputs): each
+    segment of homogeneous 3D points ``(X, Y, Z, W)`` projected along axis ``ax`` to the
+    canonical homogeneous triples ``(X_a, X_b, W)`` (``W > 0``, primitive), ``a, b`` the
+    axes after ``ax`` in cyclic order."""
+    cdef int a = (ax + 1) % 3, b = (ax + 2) % 3
+    cdef list out = []
+    cdef tuple x, y
+    for x, y in segs3:
+        out.append((_hnorm((x[a], x[b], x[3])), _hnorm((y[a], y[b], y[3]))))
+    return out
+
+
+def one_facet_faces(list segs, list labels, c, int src, dict known, lift):
+    """The sub-facets of a plane covered by one convex superset facet whose whole boundary is
+    among ``segs`` (``cspace.minkowski.arrangements._PlaneJobs.arrange``'s one-facet case;
+    that Python path is the reference and gives identical outputs): ``(lifted, faces)``, or
+    None where the arrangement is not one component free of isolated vertices and bridges
+    (a closed loop of cuts inside the facet, a dangling cut): the Python path then runs.
+
+    Every bounded face lies in the facet, so each is one sub-facet of coverage ``c`` whose
+    boundary is its one outer cycle (with one component every other cycle bounds the
+    unbounded face); ``lifted[v]`` is ``known[H[v]]`` or ``lift(H[v])``."""
+    cdef Py_ssize_t k, h, nh, ncyc, roots = 0
+    (H, _vl, E, _el, origin, isolated, _nxt, cycles, cyc_of, signs,
+     comp) = arrangement_core(segs, labels)
+    if isolated:
+        return None
+    for k in range(len(comp)):
+        if <Py_ssize_t> comp[k] == k:
+            roots += 1
+    if roots != 1:
+        return None
+    ncyc = len(cycles)
+    # A bridge (dangling cut, tree) has one face on both sides. With one component the
+    # non-positive cycles all bound the unbounded face, and each positive cycle is its own
+    # bounded face: a bounded face holds a bridge exactly when a half-edge and its twin lie
+    # in the same positive cycle.
+    nh = len(cyc_of)
+    for h in range(0, nh, 2):
+        k = cyc_of[h]
+        if k == <Py_ssize_t> cyc_of[h + 1] and signs[k] > 0:
+            return None
+    lifted = []
+    for p in H:
+        q = known.get(p)
+        lifted.append(q if q is not None else lift(p))
+    faces = []
+    if c:
+        for k in range(ncyc):
+            if signs[k] > 0:
+                ring = [origin[h] for h in cycles[k]]
+                faces.append((c, [ring], [tuple(ring)] if len(ring) == 3 else None, src, None))
+    return lifted, faces
+
+
+def one_facet_plane(list corners, list tl, list pinned, list cut3, int ax, c, int src, lift):
+    """A one-facet plane from its inputs (``_PlaneJobs.arrange``'s data: the corners of
+    triangles ``tl``, the pinned flags by ``3 t + j``, the cuts ``cut3`` as homogeneous 3D
+    points, the projection axis ``ax``): the pinned facet edges and the projected cuts are
+    arranged and read by :func:`one_facet_faces` (None where it declines). The Python
+    reference is the same path in ``arrange(p, compiled=False)``; with one facet no edge is
+    of the minority orientation, so exactly the pinned edges join the cuts."""
+    cdef int a = (ax + 1) % 3, b = (ax + 2) % 3
+    cdef Py_ssize_t i, j, t, k
+    cdef list segs = [], labels = [], poly
+    cdef dict known = {}
+    for i in range(len(tl)):
+        t = tl[i]
+        poly = []
+        for q in corners[t]:
+            h = (q[a], q[b], 1)
+            poly.append(h)
+            known[h] = (q[0], q[1], q[2], 1)
+        for j in range(3):
+            if pinned[3 * t + j]:
+                segs.append((poly[j], poly[(j + 1) % 3]))
+                labels.append((i, j))
+    proj = projected_segments(cut3, ax)
+    for k in range(len(proj)):
+        x, y = cut3[k]
+        px, py = proj[k]
+        known[px] = x
+        known[py] = y
+        segs.append(proj[k])
+        labels.append((-1, k))
+    return one_facet_faces(segs, labels, c, src, known, lift)
