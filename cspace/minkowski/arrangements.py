@@ -130,9 +130,13 @@ class _PlaneJobs:
         return not self.cuts.segments[p] and (len(tl) == 1 or len({self.facet[t] for t in tl}) == 1)
 
     def cost(self, p: int) -> int:
-        """Rough work of plane ``p``'s arrangement (its inputs; quadratic beyond a few tens)."""
-        n = len(self.members[p]) + len(self.cuts.segments[p])
-        return n + n * n // 64
+        """Rough work of plane ``p``'s arrangement (its inputs; quadratic beyond a few tens),
+        a quarter of it for the triangles of one facet (mostly one compiled call:
+        :meth:`arrange`; measured on star ⊕ ico320, about 2 us a unit against 8)."""
+        tl = self.members[p]
+        n = len(tl) + len(self.cuts.segments[p])
+        f = self.facet[tl[0]]
+        return (n + n * n // 64) // (4 if all(self.facet[t] == f for t in tl) else 1)
 
     def arrange(self, p: int, compiled: bool = True):
         """Sub-facets of arrangement plane ``p``: ``(lifted, faces)`` with ``lifted[v]`` the
@@ -254,13 +258,13 @@ class _PlaneJobs:
         raise ExactnessError(f"face {f} of plane {p} is covered by no superset triangle")  # pragma: no cover
 
 
-# Below this much estimated work (sum of _PlaneJobs.cost, about 10 us a unit with the
-# compiled kernels) the arrangements run in this process: forking and collecting results
-# (some 15-20 ms, and copy-on-write faults adding about a tenth to the work) would cost
-# more than they save. Measured, 2 processes against 1: 3000-7600 units (bunny-128 ⊕
-# ico320, alphaobstacle ⊕ ico320, Centaur-1000 ⊕ box) 0.9-1.0x; 8000-11000 (yoda-658 ⊕
-# box, star ⊕ ico320) 1.15-1.3x.
-_PARALLEL_FROM = 8000
+# Below this much estimated work (sum of _PlaneJobs.cost) the arrangements run in this
+# process: forking and collecting results (some 15-20 ms, copy-on-write faults, the results
+# pickled back) would cost more than they save. Measured with the one-facet kernel, the
+# arrangement stage in 2 processes against 1: star ⊕ ico320 (4546 units) 0.95x,
+# Centaur-1000 ⊕ ico320 (5342) 0.91x, flange-part-1042 ⊕ box (14872: one plane holds most
+# of it) 0.84x; flange-990 ⊕ ico320 (15482) 1.16x, trap ⊕ ico320 (60255) 1.18x.
+_PARALLEL_FROM = 15000
 
 
 def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tuple[dict, int]:
