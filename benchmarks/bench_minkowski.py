@@ -4,9 +4,11 @@ manifold3d's ``Manifold.minkowski_sum`` on the same snapped operands, one run ea
 Cases (issue #4's suite): torus (2304 triangles) ⊕ icosphere (320 facets), torus ⊕ box,
 star ⊕ icosphere, comb ⊕ box, and the closed meshes of ``../shared/data`` ⊕ {box, 20-facet
 hull, 320-facet icosphere} (robots scaled to 8% of the mesh), plus one case whose superset has
-about 40k triangles for the peak-memory line. New cases, not tuned on (issue #30): real CAD
-parts of other families, the Parasol flange obstacle (990 triangles, genus 5) and the three
-closed parts of its robot (940, 1042 and 3324 triangles, genus 1 each), ⊕ the same three.
+about 40k triangles for the peak-memory line. New cases, not tuned on (issue #30): real
+meshes of other families, the Parasol flange obstacle (990 triangles, genus 5) and the three
+closed parts of its robot (940, 1042 and 3324 triangles, genus 1 each), and four of CGAL's
+data meshes kept in ``benchmarks/data/held_out`` (a snowflake plate with 12 holes, genus 12; a
+gear; a tube; a machined block), ⊕ the same three.
 
 Every timed call runs in a fresh subprocess (``--child``): *cold*, the first call there (no
 cache of any kind warmed; nothing is compiled at run time), and *warm*, the call after one
@@ -51,13 +53,19 @@ STAGES = ["superset", "planes", "intersections", "arrangements", "traversal", "m
           "rounding_check"]
 
 
-# New meshes (issue #30: other families, not tuned on): a file of ../shared/data and, for a
+# New meshes (issue #30: other families, not tuned on): a file of ../shared/data or of
+# benchmarks/data/held_out (CGAL's data meshes, licences in its SOURCES.md) and, for a
 # multi-part file, the closed part with that many triangles (None: the whole file).
-FLANGE = "parasol_open_ppl_env/flange_1.0"
-NEW_MESHES = {"flange-990": (f"{FLANGE}/obstacle.g", None),
-              "flange-part-940": (f"{FLANGE}/robot.g", 940),
-              "flange-part-1042": (f"{FLANGE}/robot.g", 1042),
-              "flange-part-3324": (f"{FLANGE}/robot.g", 3324)}
+FLANGE = SHARED / "parasol_open_ppl_env/flange_1.0"
+HELD_OUT = ROOT / "benchmarks" / "data" / "held_out"
+NEW_MESHES = {"flange-990": (FLANGE / "obstacle.g", None),
+              "flange-part-940": (FLANGE / "robot.g", 940),
+              "flange-part-1042": (FLANGE / "robot.g", 1042),
+              "flange-part-3324": (FLANGE / "robot.g", 3324),
+              "snowflake-1286": (HELD_OUT / "snowflake_50mm.off", None),
+              "pinion-1300": (HELD_OUT / "pinion.off", None),
+              "pipe-320": (HELD_OUT / "pipe.off", None),
+              "oblong-840": (HELD_OUT / "oblong.off", None)}
 
 
 def _is_new(name: str) -> bool:
@@ -70,8 +78,8 @@ def _new_mesh(name: str) -> tuple[np.ndarray, np.ndarray]:
 
     from cspace.mesh.files import read_mesh_file
 
-    rel, part = NEW_MESHES[name]
-    m = read_mesh_file(SHARED / rel)
+    path, part = NEW_MESHES[name]
+    m = read_mesh_file(path)
     if part is None:
         return np.asarray(m.vertices), np.asarray(m.faces)
     whole = trimesh.Trimesh(np.asarray(m.vertices), np.asarray(m.faces), process=True)
@@ -86,8 +94,8 @@ def case_names(quick: bool) -> list[str]:
     for mesh in zoo.SHARED_CLOSED_MESHES:
         if (SHARED / zoo.SHARED_CLOSED_MESHES[mesh]).exists():
             names += [f"{mesh} ⊕ {r}" for r in ("box", "hull20", "ico320")]
-    for mesh, (rel, _) in NEW_MESHES.items():
-        if (SHARED / rel).exists():
+    for mesh, (path, _) in NEW_MESHES.items():
+        if path.exists():
             names += [f"{mesh} ⊕ {r}" for r in ("box", "hull20", "ico320")]
     return names + ["torus(25600) ⊕ ico320"]
 
@@ -304,7 +312,7 @@ def report(rows: list[tuple[dict, dict, dict, dict]], load0, load1, quick: bool)
         both_c, both_w = cold + new_cold, warm + new_warm
         met30 = all(r and _geomean(r) >= 8 and min(r) >= 2 for r in (both_c, both_w))
         lines += [
-            f"The {len(new_cold)} new cases alone (real CAD parts of other families, not tuned on: "
+            f"The {len(new_cold)} new cases alone (real meshes of other families, not tuned on: "
             f"{', '.join(NEW_MESHES)}): cold **{_geomean(new_cold):.2f}** (slowest "
             f"{min(new_cold):.2f}), warm **{_geomean(new_warm):.2f}** (slowest {min(new_warm):.2f}). "
             f"The suite and the new cases, {len(both_c)} cases: cold **{_geomean(both_c):.2f}** "
