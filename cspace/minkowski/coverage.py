@@ -190,6 +190,24 @@ def pushed_inside(poly, turn: int, X: int, Y: int, W: int) -> bool:
     return all(_pushed_side(poly[k], poly[(k + 1) % n], X, Y, W) == turn for k in range(n))
 
 
+def _rational_sum(terms: list) -> tuple[int, int]:
+    """``sum(num / den for den, num in terms)`` as ``(num, den)``, ``den > 0``, summed in pairs
+    (a balanced tree): a running sum's denominator grows with every term, and adding the
+    next term to it costs in proportion, so summing a plane's faces one by one took time
+    quadratic in the bits (seconds on a plane of a few thousand faces)."""
+    terms = [(n, d) for d, n in terms if n]
+    while len(terms) > 1:
+        nxt = []
+        for k in range(0, len(terms) - 1, 2):
+            (a, b), (c, d) = terms[k], terms[k + 1]
+            g = gcd(b, d)
+            nxt.append((a * (d // g) + c * (b // g), b // g * d))
+        if len(terms) % 2:
+            nxt.append(terms[-1])
+        terms = nxt
+    return terms[0] if terms else (0, 1)
+
+
 def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: bool = False) -> Coverage:
     """Net and unsigned coverage of the faces of the arrangement of ``segments`` by convex
     oriented polygons, read at one point per face.
@@ -234,7 +252,7 @@ def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: boo
     box = np.array(boxes, dtype=np.float64).reshape(-1, 4) if len(polys) > _FEW_POLYGONS else None
     nf = len(arr.faces)
     coverage, support = [0] * nf, [0] * nf
-    num, den = 0, 1  # twice the integral of the coverage: num / den
+    terms: dict = {}  # twice the integral of the coverage: sum of num / den, by den
     for f, face in enumerate(arr.faces):
         X, Y, w = inner_point(arr, f)
         xf, yf = X / w, Y / w
@@ -250,10 +268,10 @@ def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: boo
                 c += weights[i] * turn[i]
                 s += abs(weights[i])
         coverage[f], support[f] = c, s
-        if c:  # integral += c * face.area, as twice the areas over a growing denominator
+        if c:  # integral += c * face.area, as twice the areas
             n, d = arr._face_area2(face)
-            g = gcd(den, d)
-            num, den = num * (d // g) + c * n * (den // g), den * (d // g)
+            terms[d] = terms.get(d, 0) + c * n
+    num, den = _rational_sum(list(terms.items()))
     if num != area2 * den:
         raise ValueError("the coverage is not constant on the faces: the segments miss a place "
                          "where it changes")
