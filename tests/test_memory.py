@@ -170,3 +170,44 @@ def test_the_command_line_exits_4_and_writes_nothing(tmp_path, capsys):
                  "--time", "0.1"]) == 4
     with pytest.raises(SystemExit):  # a bad size is bad input (argparse: exit 2)
         main(["build", str(tmp_path / "s.toml"), "--memory", "lots"])
+
+
+def test_an_exact_sum_is_stopped_past_its_budget():
+    """An exact sum's memory is known only as it is built: the build is watched and stopped
+    with a MemoryBudgetError (saying how much it grew, by which stage, and the budget) once
+    it has grown past the budget. Run in a fresh process, so that the growth is the build's
+    and not memory another test freed."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = (
+        "import sys; sys.path.insert(0, 'tests')\n"
+        "from zoo import icosphere_points, star\n"
+        "import cspace\n"
+        "try:\n"
+        "    cspace.minkowski_sum(star(), icosphere_points(2, radius=0.3), memory='4M', workers=1)\n"
+        "except cspace.MemoryBudgetError as e:\n"
+        "    print('stopped', e.needed > e.budget == 4 * 2**20, e)\n"
+        "else:\n"
+        "    print('built')\n"
+        "S = cspace.minkowski_sum(star(), icosphere_points(1, radius=0.3), memory='1G')\n"
+        "print('then built', type(S).__name__)\n")
+    root = Path(__file__).resolve().parents[1]
+    out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    first, second = out.stdout.splitlines()
+    assert first.startswith("stopped True minkowski_sum: grew by "), first
+    assert "stage" in first and "over the memory budget of 4.2 MB (memory= / --memory)" in first
+    assert second == "then built SumPolyhedron"  # a budget that fits: built as ever
+
+
+def test_resident_memory_is_read():
+    from cspace.memory import MemoryGuard, resident_memory
+
+    assert resident_memory() > 10 * 2**20  # this interpreter with numpy loaded
+    guard = MemoryGuard("a test", memory="1G")
+    guard.check("first")  # nothing grew by a gigabyte
+    with pytest.raises(InvalidArgumentError, match="memory"):
+        MemoryGuard("a test", memory="lots")

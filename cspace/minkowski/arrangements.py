@@ -267,37 +267,49 @@ class _PlaneJobs:
 _PARALLEL_FROM = 15000
 
 
-def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report) -> tuple[dict, int]:
+def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report,
+                      check=None) -> tuple[dict, int]:
     """``{plane: jobs.arrange(plane)}`` for the planes ``todo``, in this process and
     ``workers - 1`` forked ones when there is enough work (results do not depend on the
-    number of workers), and the number of processes used."""
+    number of workers), and the number of processes used. ``check(stage, detail)`` (a
+    :class:`cspace.memory.MemoryGuard`'s) is called every 64 planes, in the workers too."""
     n = len(todo)
     total = sum(jobs.cost(p) for p in todo)
     out: dict = {}
+    if check is None:
+        check = lambda stage, detail="": None  # noqa: E731 - nothing watched
+
+    def chunk(ps: list) -> list:
+        check("arrangements")
+        return [(p, jobs.arrange(p)) for p in ps]
+
     if workers > 1 and n >= 16 and total >= _PARALLEL_FROM and can_fork():
         # largest first, then chunks small enough to balance the two ends
         order = sorted(todo, key=jobs.cost, reverse=True)
         size = max(1, min(64, n // (8 * workers)))
         chunks = [order[k: k + size] for k in range(0, n, size)]
-        for _, res in forked_map(lambda ps: [(p, jobs.arrange(p)) for p in ps], chunks, workers):
+        for _, res in forked_map(chunk, chunks, workers):
             out.update(res)
             report("arrangements", len(out) / n)
         return out, workers
     for k, p in enumerate(todo):
         out[p] = jobs.arrange(p)
-        if k % 256 == 0:
-            report("arrangements", k / max(n, 1))
+        if k % 64 == 0:
+            check("arrangements", f" ({k:,} of {n:,} planes)")
+            if k % 256 == 0:
+                report("arrangements", k / max(n, 1))
     return out, 1
 
 
-def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: int = 1) -> tuple[_Complex, int]:
+def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: int = 1,
+             check=None) -> tuple[_Complex, int]:
     vid: dict = {}
     face_plane, face_cov, face_tris, face_rings, face_src, face_point = [], [], [], [], [], []
     ring_u, ring_v, ring_f = [], [], []  # every boundary half-edge: from, to, sub-facet
     jobs = _PlaneJobs(ints, planes, cuts)
     n_planes = len(planes.keys)
     todo = [p for p in range(n_planes) if not jobs.trivial(p)]
-    done, used = _run_arrangements(jobs, todo, workers, report)
+    done, used = _run_arrangements(jobs, todo, workers, report, check)
     members, sign, sigma, corners = jobs.members, jobs.sign, jobs.sigma, jobs.corners
     weight, facet = jobs.weight, jobs.facet
     for p in range(n_planes):

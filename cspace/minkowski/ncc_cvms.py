@@ -88,7 +88,8 @@ def _stage_reporter(progress):
     return report
 
 
-def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 1) -> SumPolyhedron:
+def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 1,
+          guard=None) -> SumPolyhedron:
     stats: dict = {}
     report = _stage_reporter(progress)
     names = list(_STAGES)
@@ -117,14 +118,18 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 
     stats["candidate_pairs"] = cuts.n_pairs
     stats["cut_pairs"] = cuts.n_cut
     stats["intersection_processes"] = cuts.processes
+    check = guard.check if guard is not None else (lambda stage, detail="": None)
+    check("intersections", f" ({cuts.n_cut:,} cutting pairs)")
 
-    cx, stats["arrangement_processes"] = _complex(S.ints, planes, cuts, report, workers)
+    cx, stats["arrangement_processes"] = _complex(S.ints, planes, cuts, report, workers, check)
     t = lap("arrangements", t)
     stats["subfacets"] = len(cx.face_plane)
+    check("arrangements", f" ({len(cx.face_plane):,} sub-facets from {cuts.n_cut:,} cutting pairs)")
 
     shells = _shells(cx, planes)
     t = lap("traversal", t)
     stats["shells"] = int(shells.n)
+    check("traversal", f" ({int(shells.n):,} shells)")
 
     inside, n_tested, anchor = _classify(cx, shells, planes, S, A, B)
     t = lap("membership", t)

@@ -19,6 +19,7 @@ import numpy as np
 
 from ..errors import InvalidMeshError, NonManifoldError, NotConvexError, SelfIntersectionError
 from ..geometry.exact import Grid
+from ..memory import MemoryGuard
 from ..mesh.closed import ClosedMesh, as_mesh
 from ..mesh.convex import ConvexPolytope
 from ..mesh.self_intersection import self_intersections
@@ -115,7 +116,8 @@ def _from_convex(A: ConvexPolytope, B: ConvexPolytope, t0: float) -> SumPolyhedr
     )
 
 
-def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPolyhedron:
+def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
+                  memory=None) -> SumPolyhedron:
     """Exact Minkowski sum ``A ⊕ B`` of a closed polyhedron A and a convex polytope B.
 
     Parameters
@@ -136,6 +138,12 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
         it). Default: ``$CSPACE_WORKERS``, else the CPUs this process may run on; 1 runs
         everything here. Small builds, and calls from a daemonic process or beside other
         threads, stay in this process whatever the value.
+    memory : int or str, optional
+        How much the build may grow this process's resident memory (bytes or a size such
+        as ``"6G"``; default ``$CSPACE_MEMORY``, else half of the memory available:
+        :mod:`cspace.memory`). An exact sum's size is known only as it is built (a folded
+        superset: 1.2 GB for a block of 840 triangles ⊕ a 320-facet sphere), so the build
+        is watched and stopped past the budget (:class:`cspace.memory.MemoryGuard`).
 
     Returns
     -------
@@ -152,8 +160,11 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
         Bad operands (open, non-manifold where it does not split into pieces, NaN, ...), A
         intersecting itself (``SelfIntersectionError``, naming two triangles that cross), or
         B not convex (``NotConvexError``).
+    MemoryBudgetError
+        The build grew past the memory budget; it stopped there and nothing is kept.
     """
     t0 = time.perf_counter()
+    guard = MemoryGuard("minkowski_sum", memory)
     A, B = _loaded(A), _loaded(B)
     # Snap both operands once, on grids of one step (snapping on separate grids and then
     # re-snapping onto a common one would move points twice, beyond the stated bound).
@@ -162,12 +173,12 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None) -> SumPoly
     if Bc is None:
         raise NotConvexError("B must be convex (the robot of a translational C-obstacle)")
     try:
-        return _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0)
+        return _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0, guard)
     except NonManifoldError as exc:  # closed pieces meeting at edges or vertices?
-        return _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, exc)
+        return _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, exc, guard)
 
 
-def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why) -> SumUnion:
+def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard) -> SumUnion:
     """:class:`SumUnion` of A split as scenes split a body; ``why`` stands when A does not
     fall apart (one piece: a surface pinched at a vertex)."""
     from ..mesh.components import split_mesh
@@ -187,7 +198,8 @@ def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why) -> SumUnion:
             if progress is not None:
                 progress((k + f) / len(pieces), f"piece {k + 1} of {len(pieces)}: {stage}")
         try:
-            parts.append(_sum_with(piece, Bc, thick_b, grid, sub, workers, time.perf_counter()))
+            parts.append(_sum_with(piece, Bc, thick_b, grid, sub, workers, time.perf_counter(),
+                                   guard))
         except InvalidMeshError as exc:
             raise type(exc)(f"A: piece {k} of {len(pieces)} (A split at its non-manifold edges "
                             f"and vertices): {exc}") from None
@@ -197,7 +209,7 @@ def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why) -> SumUnion:
     return SumUnion(tuple(parts), tuple(pieces), grid, stats)
 
 
-def _sum_with(A, Bc: ConvexPolytope, thick_b: bool, grid_a, progress, workers, t0):
+def _sum_with(A, Bc: ConvexPolytope, thick_b: bool, grid_a, progress, workers, t0, guard):
     """:func:`minkowski_sum` with B made convex and A's grid decided."""
     Ac, thick_a = _convex_or_thickened(A, "A", grid_a)
     if Ac is not None:
@@ -218,7 +230,7 @@ def _sum_with(A, Bc: ConvexPolytope, thick_b: bool, grid_a, progress, workers, t
     enabled = gc.isenabled()
     gc.disable()
     try:
-        out = _trim(A, Bc, t0, progress, worker_count(workers))
+        out = _trim(A, Bc, t0, progress, worker_count(workers), guard)
         out.stats["thickened_operands"] = int(thick_b)
         out.stats["hull_excess"] = Bc.excess
         return out
