@@ -192,15 +192,33 @@ def test_an_exact_sum_is_stopped_past_its_budget():
         "else:\n"
         "    print('built')\n"
         "S = cspace.minkowski_sum(star(), icosphere_points(1, radius=0.3), memory='1G')\n"
-        "print('then built', type(S).__name__)\n")
+        "print('then built', type(S).__name__)\n"
+        # a scene's solid body: its sum watched against the scene's budget
+        "import numpy as np\n"
+        "from cspace.scene.scene import Body, Scene\n"
+        "from cspace.mesh.convex import ConvexPolytope\n"
+        "V, F = star()\n"
+        "ico = ConvexPolytope.from_points(icosphere_points(2, radius=0.3)).to_trimesh()\n"
+        "o = np.array([250.0, 150.0, -300.0])\n"
+        "scene = Scene('star', None, (Body('star', V + o, F, 'star'),),\n"
+        "              Body('ico', np.asarray(ico.vertices), np.asarray(ico.faces), 'ico'),\n"
+        "              np.zeros(3), np.array([[-3.0, -3, -3], [3, 3, 3]]) + o,\n"
+        "              np.array([-2.9, -2.9, -2.9]) + o, np.array([2.9, 2.9, 2.9]) + o)\n"
+        "try:\n"
+        "    cspace.model_scene(scene, cache=None, memory='4M').cspace()\n"
+        "except cspace.MemoryBudgetError as e:\n"
+        "    print('scene stopped', e)\n"
+        "else:\n"
+        "    print('scene built')\n")
     root = Path(__file__).resolve().parents[1]
     out = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True,
                          timeout=300)
     assert out.returncode == 0, out.stderr
-    first, second = out.stdout.splitlines()
+    first, second, third = out.stdout.splitlines()
     assert first.startswith("stopped True minkowski_sum: grew by "), first
     assert "stage" in first and "over the memory budget of 4.2 MB (memory= / --memory)" in first
     assert second == "then built SumPolyhedron"  # a budget that fits: built as ever
+    assert third.startswith("scene stopped") and "4.2 MB (memory= / --memory)" in third, third
 
 
 def test_resident_memory_is_read():

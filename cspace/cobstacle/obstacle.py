@@ -91,7 +91,7 @@ def _flat_operands(obstacle, robot, c, grid, rgrid, margin: Margin):
             R if R is not None else _FlatOperand(r_pts, rgrid), margin)
 
 
-def grown_mesh_sum(A, B, margin: Margin, progress=None):
+def grown_mesh_sum(A, B, margin: Margin, progress=None, memory=None):
     """``minkowski_sum(A, B ⊕ box)`` with the box of ``margin`` (chosen for the snapping
     deviation alone), and the margin that holds for the float64 surface returned.
 
@@ -105,6 +105,8 @@ def grown_mesh_sum(A, B, margin: Margin, progress=None):
     otherwise (rare: a deviation just below a whole number of steps, or none at all with
     inexact vertices) it is built once more with the box that covers the a-priori rounding
     bound, so that the stored surface holds the true C-obstacle.
+
+    ``memory``: the budget the sum is watched against (:func:`cspace.minkowski_sum`).
 
     Returns ``(SumPolyhedron, Margin)``.
     """
@@ -121,14 +123,14 @@ def grown_mesh_sum(A, B, margin: Margin, progress=None):
     except DegenerateError:  # flat: give it volume
         margin = margin.at_least(1)
         Bg = grown(margin)
-    S = minkowski_sum(A, Bg, progress=progress)
+    S = minkowski_sum(A, Bg, progress=progress, memory=memory)
     m = margin.with_rounding(S.rounding)
     if not margin.conservative or m.holds_true:
         return S, m
     wider = Margin.for_deviation(margin.deviation, margin.grid, rounded=True)
     wider = Margin(tuple(max(a, b) for a, b in zip(wider.steps, margin.steps)),
                    wider.deviation, wider.grid, wider.rounding)
-    S = minkowski_sum(A, grown(wider), progress=progress)
+    S = minkowski_sum(A, grown(wider), progress=progress, memory=memory)
     return S, wider.with_rounding(S.rounding)
 
 

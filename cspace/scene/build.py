@@ -87,12 +87,13 @@ def _from_arrays_of(a: dict, body: BodyModel, robot, c, grid, margin: Margin):
     return co
 
 
-def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None):
+def _build(body: BodyModel, robot, c, grid, margin: Margin, progress, grown=None, memory=None):
     """The C-obstacle of a body and a convex robot part, grown by ``margin`` (the float64
     surface of a solid body by what also covers its rounding), with that margin.
-    ``grown``: ``margin.grow(robot)`` when the caller has it (one hull per robot part)."""
+    ``grown``: ``margin.grow(robot)`` when the caller has it (one hull per robot part);
+    ``memory``: the budget a solid body's exact sum is watched against."""
     if body.kind == "solid":
-        S, m = grown_mesh_sum(body._solid, robot.reflected(c), margin, progress)
+        S, m = grown_mesh_sum(body._solid, robot.reflected(c), margin, progress, memory)
         co = CSpaceObstacle.from_mesh(S.vertices, S.faces, obstacle=body._solid, robot=robot,
                                       reference_point=robot.grid.to_float(robot.grid.snap(c)),
                                       grid=grid, sum=S, name=body.name, margin=m)
@@ -246,6 +247,7 @@ class _Context:
     store: COCache | None
     sums: bool = True    # pair_construction's: NCC-CVMS for a solid body and a convex part
     grown: dict = field(default_factory=dict)  # per robot part: its grown polytope
+    memory: object = None  # the build's budget: each NCC-CVMS sum is watched against it
 
 
 def _grown(memo: dict, margin: Margin, part: RobotPart):

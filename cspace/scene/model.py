@@ -406,7 +406,7 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
     if build:
         todo = [(b, p) for b in bodies if b.kind != "dropped" for p in parts]
         held = _memory_check(scene, todo, memory, sums)
-        ctx = _context(scene, grid, rgrid, margin, store, sums)
+        ctx = _context(scene, grid, rgrid, margin, store, sums, memory)
         if restored:  # their convex C-obstacles, as from their own cache entries
             for b, part in todo:
                 if id(b) in restored:
@@ -440,12 +440,14 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
                       robot_hull=robot_hull, margin=margin, memory=held)
 
 
-def _context(scene, grid: Grid, rgrid: Grid, margin: Margin, store, sums: bool) -> _Context:
+def _context(scene, grid: Grid, rgrid: Grid, margin: Margin, store, sums: bool,
+             memory=None) -> _Context:
     """What every pair of one scene's build shares (:class:`cspace.scene.build._Context`)."""
     c = np.asarray(scene.reference_point, dtype=np.float64)
     c_ints = rgrid.snap(c)
     bounds_g = grid.inner_box(*np.asarray(scene.bounds, dtype=np.float64))
-    return _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store, sums)
+    return _Context(c, c_ints, rgrid.to_float(c_ints), grid, bounds_g, margin, store, sums,
+                    memory=memory)
 
 
 def _flush(store) -> None:
@@ -471,7 +473,7 @@ def _build_one(ctx: _Context, b: BodyModel, part: RobotPart, parts: list, sub=No
         key, arrays = _lookup(ctx, construction, b, part, pair)
         if is_sum(construction) and arrays is None:
             pair.cos = [_build(b, part.operand, ctx.c, ctx.grid, ctx.margin, sub,
-                               _grown(ctx.grown, ctx.margin, part))]
+                               _grown(ctx.grown, ctx.margin, part), ctx.memory)]
             arrays = _to_arrays(pair.cos[0]) if ctx.store is not None else None
         else:
             if arrays is None:
@@ -479,6 +481,9 @@ def _build_one(ctx: _Context, b: BodyModel, part: RobotPart, parts: list, sub=No
                                             ctx.bounds_g, ctx.margin, sub)
             _assemble(ctx, construction, b, part, pair, arrays)
         _store(ctx, key, pair, arrays)
+    except MemoryBudgetError as exc:  # the build stops: no later body would fit either
+        raise MemoryBudgetError(f"body {b.name!r} x robot part {part.name!r}: {exc}",
+                                exc.needed, exc.budget) from None
     except Exception as exc:  # recorded per body; SceneModel.cspace() raises it
         _failed(ctx, b, part, pair, parts, f"{type(exc).__name__}: {exc}")
     pair.seconds = time.perf_counter() - t
@@ -694,7 +699,8 @@ class LazyCSpace(CSpace):
         scene, parts = model.scene, model.robot_parts
         rgrid = parts[0].grid
         self.model = model
-        self._ctx = _context(scene, model.grid, rgrid, model.margin, COCache.of(cache), sums)
+        self._ctx = _context(scene, model.grid, rgrid, model.margin, COCache.of(cache), sums,
+                             memory)
         self._todo = [(b, p) for b in model.bodies if b.kind != "dropped" for p in parts]
         held = _memory_check(scene, self._todo, memory, sums)
         super().__init__((), bounds=scene.bounds, name=scene.name, scene=scene,
