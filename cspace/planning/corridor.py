@@ -12,7 +12,8 @@ below that level, but only where a route needs it:
 2. The cheapest route from the cells holding the start to those holding the goal (a mixed
    cell costs 1, a free one nothing). If every cell on it is free, the route is a path:
    the cells' centres and contacts, shortcut, every segment proved by ``segment_free``.
-3. Otherwise each mixed cell on the route is split in eight and its children labelled
+3. Otherwise each mixed cell on the route, and each mixed cell touching one of them, is
+   split in eight and its children labelled
    (:func:`.cells._labels`); mixed children are merged back along the axes their labels do
    not change on (:func:`_children`: slabs across a slot, bars along an edge); blocked
    children leave the graph, the others join it with the edges of the cells they touch (a
@@ -80,6 +81,9 @@ class _Cells:
         self.eb = [np.zeros(0, np.int64)]
         self.walls = []  # (lo, hi, label) of the children proved blocked, per split
         self._holding = {}  # the nodes holding a point (holding)
+        # each node's cost, made by graph() for the nodes added since: a node's size, label
+        # and weight never change once it is added (the first graph() follows the weights)
+        self._cost = np.zeros(0)
 
     def wall(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Every cell a split proved blocked (closed boxes in the grid's frame, and labels:
@@ -152,12 +156,20 @@ class _Cells:
         keep = self.alive[A] & self.alive[B]
         A, B = A[keep], B[keep]
         self.ea, self.eb = [A], [B]
-        cost = np.where(self.label == FREE, _FREE_COST,
-                        np.where((self.sz > 1).any(axis=1),
-                                 self.weight * (self.side(self.sz) / self.S), STUCK))
-        return coo_matrix((np.concatenate([cost[B], cost[A]]),
-                           (np.concatenate([A, B]), np.concatenate([B, A]))),
-                          shape=(n, n)).tocsr()
+        m = len(self._cost)
+        if m < n:
+            sz, lab, w = self.sz[m:], self.label[m:], self.weight[m:]
+            self._cost = np.concatenate([self._cost, np.where(
+                lab == FREE, _FREE_COST,
+                np.where((sz > 1).any(axis=1), w * (self.side(sz) / self.S), STUCK))])
+        cost = self._cost
+        M = coo_matrix((np.concatenate([cost[B], cost[A]]),
+                        (np.concatenate([A, B]), np.concatenate([B, A]))), shape=(n, n))
+        # Every edge is here once each way (A < B, unique), so there is nothing to sum: the
+        # flag spares tocsr its duplicate pass, which sorts every row (two thirds of the
+        # graph's time on the bug trap). Dijkstra reads the rows in any order.
+        M.has_canonical_format = True
+        return M.tocsr()
 
     def holding(self, q: np.ndarray, at: np.ndarray) -> list:
         """Nodes whose closed cell holds ``q``: free components of the voxels ``at`` (those
@@ -400,6 +412,12 @@ def refine_route(cspace, g, q0, q1, ids, lab, L_lo, L_sz, size, obstacles, boxes
             below = int(np.log2(cells.S // max(int(finest), 1)))
             return ("path", f"a route through free cells after {split} cells refined along "
                     f"routes, down to {below} levels below the octree", path, cells.wall())
+        # with the route's mixed cells, their mixed neighbours: a 'no path' must refine the
+        # whole rim of the start's region anyway, and each round (a new graph and a shortest
+        # path over all of it) costs more than splitting a few more cells
+        nb = np.concatenate([G.indices[G.indptr[k]:G.indptr[k + 1]] for k in todo.tolist()])
+        nb = nb[(nb >= nF) & cells.alive[nb]]
+        todo = np.union1d(todo, nb[cells.label[nb] == MIXED])
         todo = todo[(cells.sz[todo] > 1).any(axis=1)][:BATCH]
         if not len(todo):
             return ("unknown", f"every route passes a cell {EXTRA} levels below the octree's "
