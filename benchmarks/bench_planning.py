@@ -463,8 +463,9 @@ def decide_section() -> list[str]:
              "alone. *truth*: by construction (the cages' slot against the robot's width; "
              "the other shipped scenes have a path, the piano only if it turns); of the real "
              "scenes, FCL's has a path (the planners find one), and the bug trap has none "
-             "at its start orientation (proved with a longer budget: \"Long decisions\" "
-             "below).", "",
+             "at its start orientation (the *decide* column's proof; with a longer budget "
+             "and a minute of RRTConnect trying to refute it: \"Long decisions\" below).",
+             "",
              "| scene | truth | octree alone | decide | decide s | clearance | auto answers | "
              "auto mean s | RRTConnect (exact) solved | PRM (exact) solved | "
              "RRTConnect (FCL) solved | FCL wrong |",
@@ -527,14 +528,16 @@ LONG_TIME, REFUTE_TIME = 300.0, 60.0
 
 
 def long_section() -> list[str]:
-    """The Parasol bug trap at its start orientation, which the 10 s decision leaves
-    unknown, with a long budget; OMPL's RRTConnect on our exact checker and on FCL's gets a
+    """The Parasol bug trap at its start orientation (the real scene whose decision refines
+    the most) with a long budget; OMPL's RRTConnect on our exact checker and on FCL's gets a
     minute to refute a 'no path' by finding a path."""
     from cspace.planning.decide import decide
 
     lines = [f"## Long decisions: a real scene, {LONG_TIME:g} s", "",
-             f"`decide(..., time={LONG_TIME:g})` on a scene the {DECIDE_TIME:g} s decision "
-             "above leaves unknown; then RRTConnect gets "
+             f"`decide(..., time={LONG_TIME:g})` on the real scene whose decision refines "
+             f"the most (the {DECIDE_TIME:g} s decision above decides it too, since issue "
+             "#31's rounds split the mixed cells beside each route; before, it ran out of "
+             "time); then RRTConnect gets "
              f"{REFUTE_TIME:g} s (seed 1) on our exact checker and on an FCL checker with "
              "discrete motions: a path either finds, re-proved by `segment_free`, would refute "
              "a 'no path' (*FCL path valid*: its path re-proved; '-' when none was found).", "",
