@@ -126,8 +126,12 @@ class _PlaneJobs:
     def trivial(self, p: int) -> bool:
         """Uncut triangles of one superset facet (a fan of a convex polygon: they do not
         overlap) are sub-facets as they are; no arrangement needed."""
-        tl = self.members[p]
-        return not self.cuts.segments[p] and (len(tl) == 1 or len({self.facet[t] for t in tl}) == 1)
+        return not self.cuts.segments[p] and self._one_source(self.members[p])
+
+    def _one_source(self, tl: list) -> bool:
+        """The triangles ``tl`` are all of one superset facet."""
+        f = self.facet[tl[0]]
+        return all(self.facet[t] == f for t in tl)
 
     def cost(self, p: int) -> int:
         """Rough work of plane ``p``'s arrangement (its inputs; quadratic beyond a few tens),
@@ -135,8 +139,7 @@ class _PlaneJobs:
         :meth:`arrange`; measured on star ⊕ ico320, about 2 us a unit against 8)."""
         tl = self.members[p]
         n = len(tl) + len(self.cuts.segments[p])
-        f = self.facet[tl[0]]
-        return (n + n * n // 64) // (4 if all(self.facet[t] == f for t in tl) else 1)
+        return (n + n * n // 64) // (4 if self._one_source(tl) else 1)
 
     def arrange(self, p: int, compiled: bool = True):
         """Sub-facets of arrangement plane ``p``: ``(lifted, faces)`` with ``lifted[v]`` the
@@ -211,8 +214,7 @@ class _PlaneJobs:
         """The triangles ``tl`` of a plane are the fan of one superset facet (one weight,
         one orientation) and every edge of the fan's boundary is pinned (so in the
         arrangement): the edges used once in the fan, by their vertex labels."""
-        facet = self.facet[tl[0]]
-        if any(self.facet[t] != facet for t in tl):
+        if not self._one_source(tl):
             return False
         once: dict = {}
         for t in tl:

@@ -29,6 +29,7 @@ import numpy as np
 
 from ..mesh.closed import ClosedMesh
 from ..mesh.convex import ConvexPolytope
+from ..memory import MemoryGuard
 from .arrangements import _complex
 from .intersections import _cuts
 from .membership import _classify
@@ -88,8 +89,8 @@ def _stage_reporter(progress):
     return report
 
 
-def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 1,
-          guard=None) -> SumPolyhedron:
+def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int,
+          guard: MemoryGuard) -> SumPolyhedron:
     stats: dict = {}
     report = _stage_reporter(progress)
     names = list(_STAGES)
@@ -118,7 +119,7 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int = 
     stats["candidate_pairs"] = cuts.n_pairs
     stats["cut_pairs"] = cuts.n_cut
     stats["intersection_processes"] = cuts.processes
-    check = guard.check if guard is not None else (lambda stage, detail="": None)
+    check = guard.check
     check("intersections", f" ({cuts.n_cut:,} cutting pairs)")
 
     cx, stats["arrangement_processes"] = _complex(S.ints, planes, cuts, report, workers, check)

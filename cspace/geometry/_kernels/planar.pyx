@@ -2,7 +2,8 @@
 """Compiled kernel of :mod:`cspace.minkowski.plane_arrangement`: the exact combinatorics of a segment arrangement
 (:func:`arrangement_core`), built once per arrangement plane of every Minkowski sum; and of
 :mod:`cspace.minkowski.arrangements`, the steps around it on most planes
-(:func:`projected_segments`, :func:`one_facet_faces`).
+(:func:`projected_segments`, :func:`one_facet_plane` reading its faces with
+:func:`one_facet_faces`).
 
 It returns exactly what the pure-Python reference ``cspace.minkowski.plane_arrangement._arrangement_core`` returns
 (``tests/test_kernels.py``). Every decision is the same exact sign, reached by the first of:
@@ -898,7 +899,7 @@ def one_facet_faces(list segs, list labels, c, int src, dict known, lift):
     boundary is its one outer cycle (with one component every other cycle bounds the
     unbounded face); ``lifted[v]`` is ``known[H[v]]`` or ``lift(H[v])``."""
     cdef Py_ssize_t k, h, nh, ncyc, roots = 0
-    (H, _vl, E, _el, origin, isolated, _nxt, cycles, cyc_of, signs,
+    (H, _vl, _E, _el, origin, isolated, _nxt, cycles, cyc_of, signs,
      comp) = arrangement_core(segs, labels)
     if isolated:
         return None
