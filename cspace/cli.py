@@ -333,17 +333,17 @@ def _plan(args: argparse.Namespace) -> int:
              cache=None if args.no_cache else (args.cache_dir or True),
              robot_hull=args.robot_hull, memory=args.memory, turns=not args.no_turns)
     for t in r.tried or ():
-        cells = "decision by certified cells" + (f" over {t['slices']} orientation slices and "
-                                                 "the turns between them" if t["slices"] else "")
+        cells = (f"decision by certified cells over {t['slices']} orientation slices and the "
+                 "turns between them" if t["slices"] else "decision (exact free space, cells)")
         how = (cells if t["planner"] == "decide" else
                f"{t['planner']} with {t['slices']} orientation slices (turns in place)"
                if t["slices"] else f"{t['planner']} ({t['sampler']} sampler)")
         said = t.get("answer") or ("solved" if t["solved"] else "no path")
         print(f"  auto: {how}: {said} in {t['seconds']:.2f} s of {t['time']:.2f} s")
-    d = r.decision
-    if d is not None and d.answer == "no path":
-        print(f"  no path at the start's orientation, proved: {d.reason} (a wall of "
-              f"{int(d.wall.sum())} cells inside the C-obstacles or near them; for "
+    if (d := r.decision) is not None and d.answer == "no path":
+        wall = ("the separating surface is the certificate" if d.separation is not None else
+                f"a wall of {int(d.wall.sum())} cells inside the C-obstacles or near them")
+        print(f"  no path at the start's orientation, proved: {d.reason} ({wall}; for "
               f"clearances above {d.clearance:.3g})")
     turned = [t for t in r.tried or () if t["planner"] == "decide" and t["slices"]]
     if (d is not None and d.answer == "no path" and not r.solved and r.slices is None

@@ -30,6 +30,7 @@ __all__ = [
     "SelfIntersectionError",
     "MissingDependencyError",
     "MemoryBudgetError",
+    "UnsupportedError",
 ]
 
 
@@ -136,3 +137,9 @@ class MemoryBudgetError(CspaceError, MemoryError):
     def __init__(self, message: str, needed: int = 0, budget: int = 0):
         super().__init__(message)
         self.needed, self.budget = int(needed), int(budget)
+
+
+class UnsupportedError(CspaceError, NotImplementedError):
+    """The input is valid but this operation does not take it (the message says what it
+    takes instead): e.g. :func:`cspace.planning.free_space.free_space` on C-obstacles that
+    are not made of convex pieces."""

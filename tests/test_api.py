@@ -15,7 +15,7 @@ PUBLIC = {
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError", "BuildError",
     "OutputError", "MeshFileError", "MeshFileNotFoundError", "OperandTypeError",
     "InvalidQueryError", "InvalidArgumentError", "ArgumentTypeError", "SelfIntersectionError",
-    "MissingDependencyError", "MemoryBudgetError",
+    "MissingDependencyError", "MemoryBudgetError", "UnsupportedError",
 }
 
 

@@ -6,6 +6,7 @@ cells sit; and a wall the octree could not prove is proved by refining."""
 from __future__ import annotations
 
 import dataclasses
+import functools
 import sys
 
 import numpy as np
@@ -19,7 +20,9 @@ sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
 from test_decide import ROBOT, _cage, _check_wall_with_fcl  # noqa: E402
 
 decide_module = sys.modules["cspace.planning.decide"]
-decide = decide_module.decide
+# These tests are of the cells and their refinement: the exact free space, which decides
+# most of these scenes first, is tested in test_free_space.py.
+decide = functools.partial(decide_module.decide, exact=False)
 BLOCKED, NEAR = decide_module.BLOCKED, decide_module.NEAR
 FAR = (250.0, 150.0, -300.0)
 
@@ -297,6 +300,18 @@ def test_a_path_never_slips_between_c_obstacles_touching_at_a_vertex(tmp_path, m
     assert _fcl_clean(scene, cs, d.path)
 
 
+def _flat_seam(tmp_path, offset, gap):
+    """A wall in two halves meeting at y = 0.3 (``gap`` between their C-obstacles), moved by
+    ``offset``, in bounds flat in z: ``(scene, cspace, bounds)``."""
+    E, t = 3.0, 0.5
+    c_boxes = [((-t, -E, -E), (t, 0.3, E)), ((-t, 0.3 + gap, -E), (t, E, E))]
+    scene, cs = _c_boxes_scene(tmp_path, "seam", c_boxes, (-1.5, 0.2, 0.0), (1.5, 0.4, 0.0),
+                               offset, 1.0)
+    b = np.asarray(scene.bounds).copy()
+    b[:, 2] = scene.start[2]
+    return scene, cs, b
+
+
 @pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), FAR])
 @pytest.mark.parametrize("gap", [0.0, 1e-5, -1e-3])
 def test_a_seam_in_flat_bounds_is_decided(tmp_path, offset, gap):
@@ -304,12 +319,7 @@ def test_a_seam_in_flat_bounds_is_decided(tmp_path, offset, gap):
     not split the flat axis. A wall in two halves whose C-obstacles meet (gap 0), overlap
     (-1e-3) or leave a gap of 1e-5 at y = 0.3: 'no path' for the first two, a proved path
     through the gap for the last, wherever the scene sits."""
-    E, t = 3.0, 0.5
-    c_boxes = [((-t, -E, -E), (t, 0.3, E)), ((-t, 0.3 + gap, -E), (t, E, E))]
-    scene, cs = _c_boxes_scene(tmp_path, "seam", c_boxes, (-1.5, 0.2, 0.0), (1.5, 0.4, 0.0),
-                               offset, 1.0)
-    b = np.asarray(scene.bounds).copy()
-    b[:, 2] = scene.start[2]
+    scene, cs, b = _flat_seam(tmp_path, offset, gap)
     d = decide(cs, scene.start, scene.goal, bounds=b, time=30)
     assert d.answer == ("path" if gap > 0 else "no path"), d.reason
     if d.answer == "path":

@@ -51,16 +51,25 @@ def _winding(cx: _Complex, sh: _Shells, anchor: int) -> np.ndarray:
     """Winding number of the superset on each shell's cell, propagated from the unbounded
     cell (0) across sub-facets: it is larger by the coverage on the side a sub-facet's
     normal points away from."""
+    w = [None] * sh.n
+    w[int(sh.of[anchor])] = 0
+    _propagate(cx, sh, w)
+    # Shells of complex components not connected to the outer one (A with several surface
+    # components, e.g. an inner cavity) get no winding number here: marked unknown.
+    return np.array([_UNKNOWN if v is None else v for v in w], dtype=np.int64)
+
+
+def _propagate(cx: _Complex, sh: _Shells, w: list) -> None:
+    """Fill in ``w`` (winding number per shell, None where unknown) from the shells known,
+    across sub-facets: ``w(minus side) = w(plus side) + coverage``. Raises ExactnessError
+    where two routes disagree."""
     nf = len(cx.face_plane)
     plus, minus = sh.of[2 * np.arange(nf) + 1], sh.of[2 * np.arange(nf)]
     adj: list = [[] for _ in range(sh.n)]
     for a, b, c in zip(plus.tolist(), minus.tolist(), cx.face_cov.tolist()):
         adj[a].append((b, c))
         adj[b].append((a, -c))
-    w = [None] * sh.n
-    root = int(sh.of[anchor])
-    w[root] = 0
-    queue = deque([root])
+    queue = deque(s for s in range(sh.n) if w[s] is not None)
     while queue:
         x = queue.popleft()
         for y, c in adj[x]:
@@ -69,9 +78,6 @@ def _winding(cx: _Complex, sh: _Shells, anchor: int) -> np.ndarray:
                 queue.append(y)
             elif w[y] != w[x] + c:
                 raise ExactnessError("inconsistent winding numbers across the sub-facet complex")
-    # Shells of complex components not connected to the outer one (A with several surface
-    # components, e.g. an inner cavity) get no winding number here: marked unknown.
-    return np.array([_UNKNOWN if v is None else v for v in w], dtype=np.int64)
 
 
 _UNKNOWN = np.iinfo(np.int64).min

@@ -65,8 +65,14 @@ frame's box is larger than theirs) are blocked: no motion leaves the bounds.
 budget allows). The planners then run as without the decision.
 
 This is a certified cell decomposition (as in Zhang, Kim and Manocha, "Path non-existence
-computation using C-obstacle query", 2008), with the cells' labels decided exactly; the
-exact union of the C-obstacles (issue #31) would remove the limits.
+computation using C-obstacle query", 2008), with the cells' labels decided exactly.
+
+**First, exactly**: where every C-obstacle meeting the bounds is made of convex pieces,
+:func:`decide` first makes the exact free space (:func:`cspace.planning.free_space.free_space`:
+the pieces grown onto one grid, their union's arrangement and its cells). Start and goal in
+different components answer "no path" at once, with the closed surface that separates them
+(``Decision.separation``; clearance: its ``error_bound``). In one component, the cells above
+look for the path; triangle-pair and non-convex mesh C-obstacles are decided by the cells alone.
 """
 
 from __future__ import annotations
@@ -76,10 +82,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidArgumentError
+from ..errors import InvalidArgumentError, UnsupportedError
 from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _choose_frame, _components, _Frame,
                     _free_leaf_graph, _Grid, _labels, _OutOfTime, _polyline, _setup, _shift)
 from .corridor import EXTRA, refine_route
+from .free_space import FreeSpace, Separation, free_space
 
 #: Answers of :func:`decide`.
 ANSWERS = ("no path", "path", "unknown")
@@ -124,6 +131,13 @@ class Decision:
         Wall seconds.
     reason : str
         Why the answer is what it is, one line.
+    free_space : FreeSpace or None
+        The exact free space, when the C-obstacles are made of convex pieces
+        (:func:`cspace.planning.free_space.free_space`).
+    separation : Separation or None
+        With ``'no path'`` from the exact free space: the closed surface of the grown
+        C-obstacles' union around the start's component that proves it (the cells are then
+        empty).
     """
 
     answer: str
@@ -139,6 +153,8 @@ class Decision:
     wall: np.ndarray
     time: float
     reason: str
+    free_space: FreeSpace | None = None
+    separation: Separation | None = None
 
     def __repr__(self) -> str:
         n = {k: int(np.count_nonzero(self.labels == v))
@@ -153,6 +169,8 @@ class Decision:
         it (the wall that proves it)."""
         import trimesh
 
+        if self.separation is not None and which in ("start", "blocked"):
+            return self.separation.to_trimesh()  # the start component's boundary: the wall
         if which == "start":
             keep = self.start_component
         elif which == "blocked":
@@ -242,7 +260,7 @@ def _depth(depth) -> int:
 
 
 def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float = 2.0,
-           refine: bool = True, frame="auto", progress=None) -> Decision:
+           refine: bool = True, frame="auto", exact: bool = True, progress=None) -> Decision:
     """Decide whether the robot can translate from ``start`` to ``goal``, by certified cells.
 
     Parameters
@@ -271,6 +289,11 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
         where cells are cut depends on it: the labels stay exact, and a proof in a turned
         frame holds for clearances above ``error_bound`` plus ``2**-48`` of the coordinates
         (the turned corners' rounding, :class:`cspace.planning.cells._Frame`).
+    exact : bool, default True
+        First make the exact free space (:func:`cspace.planning.free_space.free_space`), when
+        the C-obstacles are made of convex pieces: start and goal in different components
+        answer ``'no path'`` at once (for clearances above its ``error_bound``); in the same
+        one, the cells below look for the path.
     progress : callable, optional
         ``progress(fraction, message)`` after each level.
 
@@ -287,6 +310,16 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     q0, q1 = _endpoints(cspace, b, start, goal)
     obstacles, boxes, clearance, margin = _setup(cspace, b)
     F = _frame(frame, obstacles, b)
+    fs = None
+    if exact and not getattr(cspace, "robot_hull", False):
+        try:
+            fs = free_space(cspace, b, time=max(0.0, deadline - _time.perf_counter()))
+        except (UnsupportedError, TimeoutError):
+            pass  # pairs or non-convex sums, or too large for the budget: the cells alone
+        if fs is not None:
+            sep = fs.separation(q0, q1)
+            if sep is not None:
+                return _separated(fs, sep, b, t0)
     g = _Grid(b, depth, F)
     first = min(FIRST_LEVEL, depth)
     answer, reason, reached, path = "unknown", "", first - 1, None
@@ -335,7 +368,22 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
                     frame=np.eye(3) if F is None else F.M, cells_lo=lo, cells_hi=hi,
                     labels=np.concatenate([L_lab, refined[2]]),
                     start_component=np.concatenate([comp_start, np.zeros(k, bool)]),
-                    wall=wall, time=_time.perf_counter() - t0, reason=reason)
+                    wall=wall, time=_time.perf_counter() - t0, reason=reason, free_space=fs)
+
+
+def _separated(fs: FreeSpace, sep: Separation, b: np.ndarray, t0: float) -> Decision:
+    """The decision 'no path' from the exact free space's separation."""
+    none = np.zeros((0, 3))
+    reason = (f"start and goal in different components of the exact free space "
+              f"({fs.n_components} components of the bounds minus {fs.n_pieces} convex pieces "
+              f"grown onto one grid; the start's component's boundary, {len(sep.faces)} "
+              f"triangles, winds {sep.winding[0]} about the start and {sep.winding[1]} about "
+              f"the goal)")
+    return Decision(answer="no path", path=None, clearance=fs.error_bound, depth=0, bounds=b,
+                    frame=np.eye(3), cells_lo=none, cells_hi=none, labels=np.zeros(0, np.int8),
+                    start_component=np.zeros(0, bool), wall=np.zeros(0, bool),
+                    time=_time.perf_counter() - t0, reason=reason, free_space=fs,
+                    separation=sep)
 
 
 def _frame(frame, obstacles, b: np.ndarray) -> _Frame | None:

@@ -76,7 +76,10 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
             report[body.name] = f"obstacle only: its C-obstacle failed to build: {body.error}"
         elif not cos:
             report[body.name] = f"obstacle only ({body.kind}: {body.reason.split(': ', 1)[-1]})"
-    if decision is not None and decision.answer == "no path":
+    if decision is not None and decision.answer == "no path" and decision.separation is not None:
+        # the exact proof: the closed surface around the start's component
+        view.add_cells("separating surface", decision.to_trimesh("start"), opacity=0.35)
+    elif decision is not None and decision.answer == "no path":
         view.add_cells("confined", decision.to_trimesh("start"), opacity=0.2)
         view.add_cells("wall", decision.to_trimesh("blocked"), opacity=0.45)
         report["decision"] = f"no path: {decision.reason}"

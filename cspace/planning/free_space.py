@@ -1,0 +1,286 @@
+"""The free space at one orientation, exactly: the bounds minus the union of the C-obstacles.
+
+:func:`free_space` puts every convex piece of the C-obstacles that meets the planning bounds
+on one grid, grown outward (each vertex replaced by the corners of the grid cell holding it,
+and the hull taken: the piece only grows, by at most one step per axis), adds a frame (a box
+around everything minus the bounds, snapped outward), and makes the exact arrangement of all
+their triangles (:class:`cspace.minkowski.union.UnionCells`). Its cells of winding number 0,
+other than the unbounded one, are the free space's components: each lies inside the bounds.
+
+**What it proves.** Two free points in different components: every path between them meets
+the grown union, so no path between them has a clearance above
+:attr:`FreeSpace.error_bound` (the C-obstacles' own ``error_bound`` plus the growth, ``sqrt(3)``
+steps). The proof is checked on its own (:meth:`FreeSpace.separation`): the boundary of the
+start's component, oriented away from it, has different winding numbers at the two points.
+
+**Which C-obstacles.** Those made of convex pieces (kinds ``'convex'``, ``'union'`` of such,
+``'surface'``). Triangle-pair and non-convex mesh C-obstacles raise
+:class:`~cspace.errors.UnsupportedError`; :func:`cspace.planning.decide.decide` then decides
+with certified cells alone.
+"""
+
+from __future__ import annotations
+
+import math
+import time as _time
+from dataclasses import dataclass
+from fractions import Fraction
+
+import numpy as np
+
+from ..errors import ExactnessError, InvalidArgumentError, UnsupportedError
+from ..geometry.exact import Grid
+from ..mesh.convex import ConvexPolytope
+from ..minkowski.output import _to_float_compiled
+from ..minkowski.union import UnionCells
+
+#: Default largest number of convex pieces :func:`free_space` unites.
+MAX_PIECES = 4000
+
+# The box of the unit cube's corners, for growing a vertex to its grid cell.
+_CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.int64)
+# The unit cube's triangles, counter-clockwise seen from outside (corner index i*4 + j*2 + k).
+_BOX = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                 [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]],
+                dtype=np.int64)
+
+
+def _pieces(co, name: str) -> list:
+    """The convex pieces (ConvexPolytope) whose union is the stored C-obstacle ``co``."""
+    if co.kind == "convex":
+        return [co.polytope]
+    if co.kind == "union":
+        return [p for part in co.parts for p in _pieces(part, name)]
+    if co.kind == "surface":
+        return list(co._impl.pieces)
+    raise UnsupportedError(
+        f"free_space: C-obstacle {name} is of kind {co.kind!r}; the exact union takes "
+        "C-obstacles made of convex pieces ('convex', 'union', 'surface')")
+
+
+def _box_faces(lo: np.ndarray, hi: np.ndarray, outward: bool) -> tuple[np.ndarray, np.ndarray]:
+    V = np.where(_CORNERS.astype(bool), hi, lo)
+    return V, (_BOX if outward else _BOX[:, ::-1])
+
+
+@dataclass(repr=False)
+class Separation:
+    """A proof that two points are in different components of the free space.
+
+    Attributes
+    ----------
+    start, goal : int
+        Their components.
+    winding : tuple of 2 int
+        The winding numbers of the start component's boundary at the two points.
+    vertices : (n, 3) float64
+    faces : (m, 3) int64
+        That boundary (scene units), oriented away from the start's component: a closed
+        surface in the grown C-obstacles' union that every path between them meets.
+    """
+
+    start: int
+    goal: int
+    winding: tuple
+    vertices: np.ndarray
+    faces: np.ndarray
+
+    def __repr__(self) -> str:
+        return (f"Separation(start={self.start}, goal={self.goal}, winding={self.winding}, "
+                f"triangles={len(self.faces)})")
+
+    def to_trimesh(self):
+        import trimesh
+
+        return trimesh.Trimesh(self.vertices, self.faces, process=False)
+
+
+class FreeSpace:
+    """The free space of a C-space at one orientation inside its bounds, exactly (of the
+    C-obstacles grown within :attr:`error_bound`). Made by :func:`free_space`.
+
+    Attributes
+    ----------
+    bounds : (2, 3) float64
+    grid : Grid
+        The grid every piece was put on.
+    error_bound : float
+        Scene units: the largest ``error_bound`` of the C-obstacles plus the growth onto the
+        grid (``sqrt(3)`` steps). A proof of separation holds for paths whose clearance
+        exceeds it.
+    n_pieces : int
+        Convex pieces united.
+    n_components : int
+        Components of the free space inside the bounds.
+    time : float
+        Seconds taken.
+    """
+
+    def __init__(self, cells: UnionCells, grid: Grid, bounds: np.ndarray, error_bound: float,
+                 planes: list, n_pieces: int, seconds: float):
+        self.cells, self.grid, self.bounds = cells, grid, bounds
+        self.error_bound, self.n_pieces, self.time = error_bound, n_pieces, seconds
+        self._planes = planes  # (normals (f, 3) object, offsets (f,) object) per piece
+        free = np.nonzero(cells.winding == 0)[0]
+        free = free[free != cells.unbounded]
+        self._component = {int(c): k for k, c in enumerate(free.tolist())}
+        self._cell = free
+        self.n_components = len(free)
+        self._mesh = None
+
+    def __repr__(self) -> str:
+        return (f"FreeSpace(components={self.n_components}, pieces={self.n_pieces}, "
+                f"error_bound={self.error_bound:.3g}, time={self.time:.3f})")
+
+    def _grid_point(self, q) -> tuple:
+        """``q`` (scene units) as an exact homogeneous point ``(X, Y, Z, W)`` in grid units."""
+        q = np.asarray(q, dtype=np.float64).reshape(3)
+        if not np.isfinite(q).all():
+            raise InvalidArgumentError(f"free_space: point {q.tolist()} is not finite")
+        step = Fraction(2) ** self.grid.exponent
+        x = [Fraction(float(v)) / step - o for v, o in zip(q, self.grid.origin)]
+        W = math.lcm(*(v.denominator for v in x))
+        return tuple(int(v * W) for v in x) + (W,)
+
+    def _strictly_free(self, P: tuple) -> bool:
+        """``P`` outside every grown piece (some facet plane strictly below it) and strictly
+        inside the frame's inner box: exact, Python integers."""
+        X, Y, Z, W = P
+        lo, hi = self._inner
+        if not all(lo[k] * W < P[k] < hi[k] * W for k in range(3)):
+            return False
+        for N, d in self._planes:
+            if not any(n0 * X + n1 * Y + n2 * Z > dd * W for (n0, n1, n2), dd in zip(N, d)):
+                return False
+        return True
+
+    def component_of(self, q) -> int | None:
+        """The component holding the translation ``q`` (scene units), in
+        ``range(n_components)``; None when ``q`` is not strictly outside the grown
+        C-obstacles or not strictly inside the bounds (snapped outward)."""
+        P = self._grid_point(q)
+        if not self._strictly_free(P):
+            return None
+        cell = self.cells.locate(P)
+        return None if cell is None else self._component.get(cell)
+
+    def separation(self, start, goal) -> Separation | None:
+        """A proof that ``start`` and ``goal`` are in different components, or None when they
+        are in the same one (or either is not strictly free)."""
+        a, b = self.component_of(start), self.component_of(goal)
+        if a is None or b is None or a == b:
+            return None
+        cell = int(self._cell[a])
+        P, Q = self._grid_point(start), self._grid_point(goal)
+        w = (self.cells.winding_of_cell(cell, P), self.cells.winding_of_cell(cell, Q))
+        if w[0] == w[1]:  # pragma: no cover - the joins and the windings disagree
+            raise ExactnessError("free_space: two cells by the lines, one by the windings")
+        points, faces = self.cells.cell_boundary(cell)
+        V = _to_float_compiled(points, self.grid)
+        return Separation(start=a, goal=b, winding=w, vertices=V, faces=faces)
+
+    def component_mesh(self, k: int):
+        """The boundary of component ``k`` as a trimesh (scene units, oriented away from it)."""
+        import trimesh
+
+        points, faces = self.cells.cell_boundary(int(self._cell[k]))
+        return trimesh.Trimesh(_to_float_compiled(points, self.grid), faces, process=False)
+
+    def to_trimesh(self):
+        """The union's surface inside and around the bounds (the frame's inner box is its
+        part facing the bounds), scene units, oriented outwards."""
+        import trimesh
+
+        if self._mesh is None:
+            out = self.cells.boundary()
+            self._mesh = (_to_float_compiled(out.points, self.grid), out.faces)
+        return trimesh.Trimesh(*self._mesh, process=False)
+
+
+def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
+               time: float | None = None) -> FreeSpace:
+    """The exact free space of ``cspace`` (a :class:`~cspace.CSpace` at one orientation)
+    inside ``bounds`` (default ``cspace.bounds``).
+
+    Parameters
+    ----------
+    cspace : CSpace
+    bounds : (2, 3) float64, optional
+        Scene units; a flat axis (``lo == hi``: a planar problem) is widened by a step.
+    max_pieces : int
+        The most convex pieces it unites.
+    time : float, optional
+        Wall seconds; past them :class:`TimeoutError` (a union too large to decide in
+        the time given).
+
+    Raises
+    ------
+    TimeoutError
+        Past ``time``.
+    UnsupportedError
+        A C-obstacle that meets the bounds is not made of convex pieces, or they number more
+        than ``max_pieces``.
+    """
+    t0 = _time.perf_counter()
+    deadline = t0 + time if time is not None else math.inf
+
+    def check(stage: str, detail: str = "") -> None:
+        if _time.perf_counter() > deadline:
+            raise TimeoutError(f"free_space: out of time ({time} s) at {stage}{detail}")
+
+    b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
+    if not (np.isfinite(b).all() and (b[0] <= b[1]).all()):
+        raise InvalidArgumentError(f"free_space: bounds {b.tolist()} are not a box")
+    if hasattr(cspace, "build"):  # a lazy C-space: what meets the bounds, built now
+        cspace.build(b[0], b[1])
+    pieces, err = [], 0.0
+    for i, co in enumerate(cspace.obstacles):
+        B = np.asarray(co.bounds, dtype=np.float64)
+        if (B[1] < b[0]).any() or (B[0] > b[1]).any():
+            continue  # does not meet the closed bounds: nothing inside them changes
+        name = f"#{i}" + (f" ({co.name})" if getattr(co, "name", None) else "")
+        for p in _pieces(co, name):
+            V = p.vertices
+            if (V.max(axis=0) >= b[0]).all() and (V.min(axis=0) <= b[1]).all():
+                pieces.append(V)
+        err = max(err, float(co.error_bound))
+        if len(pieces) > max_pieces:
+            raise UnsupportedError(
+                f"free_space: more than {max_pieces} convex pieces meet the bounds")
+    lo = np.min([b[0]] + [V.min(axis=0) for V in pieces], axis=0)
+    hi = np.max([b[1]] + [V.max(axis=0) for V in pieces], axis=0)
+    G = Grid.for_box(lo, hi)
+    e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
+    ints, faces, planes, n = [], [], [], 0
+    for V in pieces:
+        check("pieces")
+        s = np.ldexp(V, -e)  # exact: grid steps
+        k_lo = np.floor(s).astype(np.int64) - origin
+        k_hi = np.ceil(s).astype(np.int64) - origin
+        pts = np.where(_CORNERS[None].astype(bool), k_hi[:, None, :], k_lo[:, None, :])
+        P = ConvexPolytope.from_ints(pts.reshape(-1, 3), grid=G, name="piece")
+        F, _ = P.triangles()
+        ints.append(P.ints)
+        faces.append(F + n)
+        n += len(P.ints)
+        N = P.normals.astype(object)
+        d = [max(int(np.dot(nn, v)) for v in P.ints.astype(object).tolist())
+             for nn in N.tolist()]
+        planes.append((N.tolist(), d))
+    s_lo = np.floor(np.ldexp(b[0], -e)).astype(np.int64) - origin
+    s_hi = np.ceil(np.ldexp(b[1], -e)).astype(np.int64) - origin
+    # flat bounds (a planar problem): a step either side, so the frame's inner box is a box
+    flat = s_lo == s_hi
+    s_lo, s_hi = s_lo - flat, s_hi + flat
+    allp = np.vstack([s_lo, s_hi] + ints)
+    o_lo, o_hi = allp.min(axis=0) - 2, allp.max(axis=0) + 2
+    for lo_, hi_, out in ((o_lo, o_hi, True), (s_lo, s_hi, False)):
+        V, F = _box_faces(lo_, hi_, out)
+        ints.append(V)
+        faces.append(F + n)
+        n += 8
+    cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check)
+    fs = FreeSpace(cells, G, b, err + math.sqrt(3.0) * G.step, planes, len(pieces),
+                   _time.perf_counter() - t0)
+    fs._inner = (s_lo.tolist(), s_hi.tolist())
+    return fs

@@ -1,0 +1,216 @@
+"""The exact free space (cspace.planning.free_space; its kernel cspace.minkowski.union): the
+components of the bounds minus the grown union of convex C-obstacle pieces, point location,
+and the separating surface that proves 'no path'.
+
+Oracles that share nothing with the union: FCL on the raw meshes (every sampled point of a
+separating surface collides, or lies within the stated clearance of a body), winding numbers
+by solid angles for which side of that surface start and goal are on, and the scenes' construction
+(a slot narrower than the robot, C-obstacles touching along a face or an edge: closed; at a
+vertex, or a gap: open). Each scene is also moved far from the origin, scaled and turned."""
+
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+import cspace
+from cspace.check.oracle import SceneOracle
+from cspace.errors import InvalidArgumentError, UnsupportedError
+from cspace.planning.free_space import free_space
+
+sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+from test_corridor import (FAR, MOVES, TURN, _c_boxes_scene, _flat_seam,  # noqa: E402
+                           _place)
+from test_decide import CAGE_MOVES, _cage  # noqa: E402
+
+decide = sys.modules["cspace.planning.decide"].decide
+
+
+def _winding(V, F, p) -> np.ndarray:
+    """Generalised winding numbers of the triangles ``V[F]`` at points ``p`` (solid angles,
+    van Oosterom and Strackee; floats, no code of ours): an integer for a closed surface."""
+    out = []
+    for q in np.atleast_2d(p):
+        a, b, c = (V[F[:, k]] - q for k in range(3))
+        la, lb, lc = (np.linalg.norm(x, axis=1) for x in (a, b, c))
+        num = np.einsum("ij,ij->i", a, np.cross(b, c))
+        den = (la * lb * lc + np.einsum("ij,ij->i", a, b) * lc
+               + np.einsum("ij,ij->i", b, c) * la + np.einsum("ij,ij->i", c, a) * lb)
+        out.append(2.0 * np.arctan2(num, den).sum() / (4.0 * np.pi))
+    return np.array(out)
+
+
+def _check_separation(scene, fs, sep, n_points=300, seed=0, bounds=None):
+    """The separating surface lies in the grown C-obstacles (FCL on the raw meshes: collides,
+    or within ``fs.error_bound`` of a body) or on the bounds' box (snapped outward), and
+    start and goal are on different sides of it (its winding numbers by solid angles)."""
+    rng = np.random.default_rng(seed)
+    V, F = sep.vertices, sep.faces
+    w = rng.dirichlet([1.0, 1.0, 1.0], size=n_points)
+    t = rng.integers(0, len(F), size=n_points)
+    pts = np.vstack([V, np.einsum("ki,kij->kj", w, V[F[t]])])
+    b = np.asarray(scene.bounds if bounds is None else bounds, dtype=np.float64)
+    size = float(np.abs(b).max())
+    on_box = ((np.abs(pts - b[0]) <= 1e-6 * size) | (np.abs(pts - b[1]) <= 1e-6 * size)).any(1)
+    oracle = SceneOracle(scene)
+    rest = pts[~on_box]
+    hit = oracle.collides(rest)
+    if not hit.all():
+        assert (oracle.distance(rest[~hit]) <= fs.error_bound + 1e-9 * size).all()
+    w = _winding(V, F, np.array([scene.start, scene.goal], dtype=np.float64))
+    assert np.allclose(w, np.round(w), atol=1e-6) and np.round(w).tolist() == list(sep.winding)
+
+
+@pytest.mark.parametrize("move", [{}] + CAGE_MOVES)
+def test_a_closed_cage_is_two_components_wherever_it_is(tmp_path, move):
+    scene, cs = _cage(tmp_path, slot=0.2, **move)
+    fs = free_space(cs, scene.bounds)
+    assert fs.n_components == 2 and fs.n_pieces == 7
+    a, b = fs.component_of(scene.start), fs.component_of(scene.goal)
+    assert {a, b} == {0, 1}
+    sep = fs.separation(scene.start, scene.goal)
+    assert sep is not None and sep.winding == (1, 0)
+    _check_separation(scene, fs, sep)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "no path" and d.separation is not None, d.reason
+    assert d.clearance == fs.error_bound < 1e-6 * move.get("scale", 1.0)
+    assert "exact free space" in d.reason and len(d.to_trimesh("start").faces) == len(sep.faces)
+
+
+@pytest.mark.parametrize("slot", [0.4 + 2.0**-10, 0.6])
+def test_a_slot_wider_than_the_robot_is_one_component(tmp_path, slot):
+    scene, cs = _cage(tmp_path, slot=slot, offset=FAR)
+    fs = free_space(cs, scene.bounds)
+    assert fs.n_components == 1
+    assert fs.component_of(scene.start) == fs.component_of(scene.goal) == 0
+    assert fs.separation(scene.start, scene.goal) is None
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30)
+    assert d.answer == "path" and d.free_space is not None, d.reason
+    assert d.free_space.n_components == 1
+
+
+def test_a_slot_exactly_the_robots_width_is_closed(tmp_path):
+    """The two halves of the +x wall a robot's width apart: their C-obstacles touch along a
+    face (touching is a collision), so the start's component is closed."""
+    scene, cs = _cage(tmp_path, slot=0.4, offset=FAR)
+    fs = free_space(cs, scene.bounds)
+    sep = fs.separation(scene.start, scene.goal)
+    assert sep is not None
+    _check_separation(scene, fs, sep)
+
+
+@pytest.mark.parametrize("move", MOVES)
+def test_c_obstacles_touching_along_an_edge_close_the_pockets(tmp_path, move):
+    """test_corridor's edge scene: two pockets meeting only along the line where two
+    C-obstacles touch. Exactly: two components, separated."""
+    E, t, w = 4.0, 0.5, 0.6
+    c_boxes = [((-t, -E, -E), (t, 0, 0)), ((-t, 0, 0), (t, E, E)),
+               ((t, 0, -E), (t + w, E, 0)), ((-t - w, -E, 0), (-t, 0, E))]
+    scene, cs = _c_boxes_scene(tmp_path, "edge", c_boxes, (-1.5, 0.5, -0.5), (1.5, -0.5, 0.5),
+                               **move)
+    fs = free_space(cs, scene.bounds)
+    sep = fs.separation(scene.start, scene.goal)
+    assert sep is not None, fs
+    _check_separation(scene, fs, sep)
+    # the pockets' points 1e-4 from the line are free, each in its side's component
+    pockets = _place([[0, 1e-4, -1e-4], [0, -1e-4, 1e-4]], **move)
+    assert fs.component_of(pockets[0]) == fs.component_of(scene.start)
+    assert fs.component_of(pockets[1]) == fs.component_of(scene.goal)
+    assert fs.component_of(_place([0.0, 0.0, 0.0], **move)) is None  # on the touching line
+
+
+@pytest.mark.parametrize("move", MOVES)
+def test_c_obstacles_touching_along_a_face_are_a_wall(tmp_path, move):
+    E, t = 4.0, 0.5
+    c_boxes = [((-t, -E, -E), (t, 0.3, E)), ((-t, 0.3, -E), (t, E, E))]
+    scene, cs = _c_boxes_scene(tmp_path, "seam", c_boxes, (-1.5, 0.2, 0.1), (1.5, 0.4, -0.3),
+                               **move)
+    fs = free_space(cs, scene.bounds)
+    sep = fs.separation(scene.start, scene.goal)
+    assert sep is not None and fs.n_components == 2
+    _check_separation(scene, fs, sep)
+
+
+@pytest.mark.parametrize("move", MOVES)
+def test_c_obstacles_touching_at_a_vertex_leave_one_component(tmp_path, move):
+    c_boxes = [((-1.0, -1.0, -1.0), (0.0, 0.0, 0.0)), ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))]
+    scene, cs = _c_boxes_scene(tmp_path, "vertex", c_boxes, (-1.5, 1.5, 1.5),
+                               (1.5, -1.5, -1.5), half=3.0 if "turn" in move else 2.0, **move)
+    fs = free_space(cs, scene.bounds)
+    assert fs.n_components == 1 and fs.separation(scene.start, scene.goal) is None
+    assert fs.component_of(scene.start) == fs.component_of(scene.goal) == 0
+    assert fs.component_of(_place([0.0, 0.0, 0.0], **move)) is None
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), FAR])
+@pytest.mark.parametrize("gap", [0.0, 1e-5, -1e-3])
+def test_a_seam_in_flat_bounds_is_decided_exactly(tmp_path, offset, gap):
+    scene, cs, b = _flat_seam(tmp_path, offset, gap)
+    fs = free_space(cs, b)
+    sep = fs.separation(scene.start, scene.goal)
+    assert (sep is None) == (gap > 0)
+    if sep is not None:
+        _check_separation(scene, fs, sep, bounds=b)
+
+
+def test_points_in_or_on_the_c_obstacles_or_outside_the_bounds_have_no_component(tmp_path):
+    scene, cs = _cage(tmp_path, slot=0.2, offset=FAR)
+    fs = free_space(cs, scene.bounds)
+    wall = np.asarray(FAR) + [-1.05, 0.0, 0.0]
+    assert cs.contains(wall) and fs.component_of(wall) is None
+    assert fs.component_of(np.asarray(FAR) + 9.0) is None
+    with pytest.raises(InvalidArgumentError, match="not finite"):
+        fs.component_of([np.nan, 0.0, 0.0])
+    assert "components=2" in repr(fs) and "pieces=7" in repr(fs)
+
+
+def test_the_union_is_a_closed_surface_that_holds_every_c_obstacle(tmp_path):
+    """Random points: inside a C-obstacle (exact query, shares nothing with the union) means
+    inside the union's surface (its winding number by solid angles), and points the union
+    holds are within its error bound of a C-obstacle."""
+    scene, cs = _cage(tmp_path, slot=0.2, offset=FAR, turn=TURN)
+    fs = free_space(cs, scene.bounds)
+    m = fs.to_trimesh()
+    assert m.is_watertight and m.volume > 0
+    rng = np.random.default_rng(3)
+    b = np.asarray(scene.bounds)
+    q = b[0] + rng.random((1000, 3)) * (b[1] - b[0])
+    ins = np.round(_winding(np.asarray(m.vertices), np.asarray(m.faces), q)) > 0
+    co = cs.contains(q)
+    assert not (co & ~ins).any()
+    extra = ins & ~co
+    assert (cs.signed_distance(q[extra]) >= -1e-12).all()
+    assert (cs.signed_distance(q[extra]) <= fs.error_bound + 1e-9).all()
+
+
+def test_c_obstacles_not_made_of_convex_pieces_are_declined(tmp_path):
+    """Open walls (triangle pairs): the exact union does not take them, by name; decide
+    then proves the cage closed with its cells."""
+    scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, turn=TURN)
+    with pytest.raises(UnsupportedError, match="kind 'pairs'"):
+        free_space(cs, scene.bounds)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30)
+    assert d.answer == "no path" and d.separation is None and d.free_space is None
+
+
+def test_the_free_space_keeps_its_time_budget(tmp_path):
+    scene, cs = _cage(tmp_path, slot=0.2)
+    with pytest.raises(TimeoutError):
+        free_space(cs, scene.bounds, time=0.0)
+    with pytest.raises(UnsupportedError, match="more than 3"):
+        free_space(cs, scene.bounds, max_pieces=3)
+
+
+def test_the_shipped_scenes_components(tmp_path):
+    """Every shipped scene at its start orientation: the cage and the piano (which must turn)
+    are separated, the others one component."""
+    from pathlib import Path
+
+    for path in sorted((Path(__file__).parent.parent / "scenes").glob("*.toml")):
+        scene = cspace.load_scene(path)
+        cs = cspace.model_scene(scene).cspace()
+        fs = free_space(cs, scene.bounds)
+        sep = fs.separation(scene.start, scene.goal)
+        assert (sep is not None) == (path.stem in ("cage", "piano")), path.stem
