@@ -418,6 +418,26 @@ def test_colours_are_documented_in_the_module_docstring():
     assert scene_view.KINDS == SUPERSET_KINDS == cspace.FACET_KINDS
 
 
+def test_an_exact_proof_is_drawn_as_its_separating_surface():
+    """With the exact free space's proof, draw_scene draws the closed surface around the
+    start's component (its triangles, in the cells colour) and no cells."""
+    from cspace.planning.decide import decide
+    from cspace.scene.files import load_scene
+    from cspace.scene.model import model_scene
+
+    scene = load_scene(SCENES / "cage.toml")
+    d = decide(model_scene(scene).cspace(), scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "no path" and d.separation is not None
+    view = viz.SceneView(axes=False)
+    viz.draw_scene(view, scene, decision=d, animate=False)
+    objects = {c["path"]: c["object"] for c in scene_commands(view.static_html())
+               if c["type"] == "set_object"}
+    assert "/meshcat/cells/confined" not in objects and "/meshcat/cells/wall" not in objects
+    (geometry,) = objects["/meshcat/cells/separator"]["geometries"]
+    index = np.frombuffer(geometry["data"]["index"]["array"].data, dtype=np.uint32)
+    assert len(index) == 3 * len(d.separation.faces) > 0
+
+
 def test_a_proof_that_no_path_exists_is_drawn_as_its_cells():
     """draw_scene(decision=...) draws the cells the robot is confined to and the wall around
     them, in the cells colour, one box (12 triangles) per cell."""
@@ -426,7 +446,8 @@ def test_a_proof_that_no_path_exists_is_drawn_as_its_cells():
     from cspace.scene.model import model_scene
 
     scene = load_scene(SCENES / "cage.toml")
-    d = decide(model_scene(scene).cspace(), scene.start, scene.goal, bounds=scene.bounds)
+    d = decide(model_scene(scene).cspace(), scene.start, scene.goal, bounds=scene.bounds,
+               exact=False)  # the cells' proof (the exact one: the test below)
     assert d.answer == "no path"
     view = viz.SceneView(axes=False)
     report = viz.draw_scene(view, scene, decision=d, animate=False)

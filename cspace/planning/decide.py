@@ -82,7 +82,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InvalidArgumentError, UnsupportedError
+from ..errors import ExactnessError, InvalidArgumentError, UnsupportedError
 from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _choose_frame, _components, _Frame,
                     _free_leaf_graph, _Grid, _labels, _OutOfTime, _polyline, _setup, _shift)
 from .corridor import EXTRA, refine_route
@@ -92,6 +92,8 @@ from .free_space import FreeSpace, Separation, free_space
 ANSWERS = ("no path", "path", "unknown")
 #: The first level cut into cells (8 per axis), and the default finest level.
 FIRST_LEVEL, DEPTH = 3, 7
+#: The share of its budget :func:`decide` gives the exact free space (the cells get the rest).
+EXACT_SHARE = 0.5
 
 
 @dataclass(repr=False)
@@ -293,7 +295,8 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
         First make the exact free space (:func:`cspace.planning.free_space.free_space`), when
         the C-obstacles are made of convex pieces: start and goal in different components
         answer ``'no path'`` at once (for clearances above its ``error_bound``); in the same
-        one, the cells below look for the path.
+        one, the cells below look for the path. It gets at most ``EXACT_SHARE`` (half) of
+        ``time``; past that the cells decide alone.
     progress : callable, optional
         ``progress(fraction, message)`` after each level.
 
@@ -313,13 +316,15 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     fs = None
     if exact and not getattr(cspace, "robot_hull", False):
         try:
-            fs = free_space(cspace, b, time=max(0.0, deadline - _time.perf_counter()))
-        except (UnsupportedError, TimeoutError):
-            pass  # pairs or non-convex sums, or too large for the budget: the cells alone
-        if fs is not None:
+            # half the budget at most: a union too large for it leaves the cells the rest
+            fs = free_space(cspace, b, time=EXACT_SHARE * max(0.0, deadline - t0))
             sep = fs.separation(q0, q1)
-            if sep is not None:
-                return _separated(fs, sep, b, t0)
+        except (UnsupportedError, TimeoutError):
+            fs = sep = None  # pairs or non-convex sums, or too large: the cells alone
+        except ExactnessError:  # pragma: no cover - the lines' joins and the windings differ
+            fs = sep = None  # no proof from it: the cells decide
+        if sep is not None:
+            return _separated(fs, sep, b, t0)
     g = _Grid(b, depth, F)
     first = min(FIRST_LEVEL, depth)
     answer, reason, reached, path = "unknown", "", first - 1, None

@@ -32,9 +32,11 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
     cache : COCache, path, True, or None
         The disk cache the C-obstacles are built through (:func:`cspace.scene.model.model_scene`).
     decision : Decision, optional
-        A :func:`cspace.planning.decide.decide` answer: with ``'no path'``, the cells the
-        robot is confined to (``/cells/confined``) and the wall of cells inside the
-        C-obstacles around them (``/cells/wall``).
+        A :func:`cspace.planning.decide.decide` answer: with ``'no path'``, the closed
+        surface around the start's component when the exact free space proved it
+        (``/cells/separator``); else the cells the robot is confined to
+        (``/cells/confined``) and the wall of cells inside the C-obstacles around them
+        (``/cells/wall``).
 
     Returns
     -------
@@ -78,7 +80,7 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
             report[body.name] = f"obstacle only ({body.kind}: {body.reason.split(': ', 1)[-1]})"
     if decision is not None and decision.answer == "no path" and decision.separation is not None:
         # the exact proof: the closed surface around the start's component
-        view.add_cells("separating surface", decision.to_trimesh("start"), opacity=0.35)
+        view.add_cells("separator", decision.to_trimesh("start"), opacity=0.35)
     elif decision is not None and decision.answer == "no path":
         view.add_cells("confined", decision.to_trimesh("start"), opacity=0.2)
         view.add_cells("wall", decision.to_trimesh("blocked"), opacity=0.45)
