@@ -26,9 +26,14 @@
 
 Writes ``benchmarks/reports/planning.md``. Run: ``python benchmarks/bench_planning.py``
 (``--quick``: fewer planners and seeds, no Parasol solids; ``--turning``, ``--auto``,
-``--decide``, ``--long``: only the section on planning with turns, on planning without
-flags, on deciding, or on deciding the bug trap with a long budget, replaced in the existing
-report).
+``--decide``, ``--long``, ``--free-space``: only the section on planning with turns, on
+planning without flags, on deciding, on deciding the bug trap with a long budget, or on the
+exact free space, replaced in the existing report).
+
+- The exact free space: ``free_space`` on the deciding section's scenes (its time, pieces,
+  components, and whether it separates start and goal, against the truth), ``decide`` with it
+  and with the cells alone (``exact=False``), and its time on random boxes far from the
+  origin (10^2 to 2 10^3 C-obstacles).
 
 - Deciding: scenes with and without a path (cages whose slot is narrower or wider than the
   robot, moved and with open walls; the piano at its start orientation; the shipped scenes):
@@ -65,6 +70,7 @@ QUICK = "--quick" in sys.argv
 TURNING_ONLY = "--turning" in sys.argv
 AUTO_ONLY = "--auto" in sys.argv
 DECIDE_ONLY = "--decide" in sys.argv
+FREE_ONLY = "--free-space" in sys.argv
 LONG_ONLY = "--long" in sys.argv
 TURN_SEEDS = [1, 2] if QUICK else [1, 2, 3, 4, 5]
 PLANNERS = ["RRTConnect", "RRT"] if QUICK else ["RRTConnect", "RRT", "PRM", "BITstar", "KPIECE1"]
@@ -524,6 +530,70 @@ def decide_section() -> list[str]:
     return lines
 
 
+def free_space_section() -> list[str]:
+    """The exact free space on the deciding scenes and on random boxes: time, pieces,
+    components, its answer; ``decide`` with it and with the cells alone."""
+    from cspace.errors import UnsupportedError
+    from cspace.planning.decide import decide
+    from cspace.planning.free_space import free_space
+
+    lines = [f"## The exact free space ({DECIDE_TIME:g} s budget for `decide`)", "",
+             "`cspace.planning.free_space.free_space(cspace, bounds)`: every convex piece of the "
+             "C-obstacles meeting the bounds grown onto one grid (at most a step per axis), a "
+             "frame around the bounds, the exact arrangement of their triangles "
+             "(`cspace.minkowski.union`) and its cells of winding number 0. *separated*: start "
+             "and goal in different components (the proof: the start component's closed "
+             "boundary winds differently about them); *declined*: a C-obstacle not made of "
+             "convex pieces (triangle pairs, non-convex sums; `UnsupportedError`). *decide*: "
+             "`decide` as `cspace plan` runs it (the free space first, then the cells), and "
+             "*cells alone* with `exact=False`; their answers and seconds. *clearance*: the "
+             "statement's bound (the free space's `error_bound`, or the cells').",
+             "",
+             "| scene | truth | free space | pieces | components | free space s | decide | "
+             "decide s | clearance | cells alone | cells alone s |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]
+    with tempfile.TemporaryDirectory() as tmp:
+        for name, scene, truth in decide_scenes(Path(tmp)):
+            cs = cspace.CSpace.from_scene(scene)
+            t = time.perf_counter()
+            try:
+                fs = free_space(cs, scene.bounds)
+                sep = fs.separation(scene.start, scene.goal)
+                said = "separated" if sep is not None else "one component"
+                cells = f"{fs.n_pieces} | {fs.n_components}"
+            except UnsupportedError:
+                said, cells = "declined", "- | -"
+            t_fs = time.perf_counter() - t
+            # each decision on its own C-space: engines made by one query do not speed the next
+            d = decide(cspace.CSpace.from_scene(scene), scene.start, scene.goal,
+                       bounds=scene.bounds, time=DECIDE_TIME)
+            c = decide(cspace.CSpace.from_scene(scene), scene.start, scene.goal,
+                       bounds=scene.bounds, time=DECIDE_TIME, exact=False)
+            stated = f"{d.clearance:.2g}" if d.answer == "no path" else "-"
+            lines.append(f"| {name} | {truth} | {said} | {cells} | {t_fs:.3f} | {d.answer} | "
+                         f"{d.time:.3f} | {stated} | {c.answer} | {c.time:.3f} |")
+            print(lines[-1], flush=True)
+    lines += ["", "Random boxes (sides 1 to 5, a unit cube robot, in a cube of side "
+              "10 N^(1/3) at (250, 150, -300)): one `free_space` of all of them.", "",
+              "| C-obstacles | sub-facets | cells | components | seconds |", "|---|---|---|---|---|"]
+    rng = np.random.default_rng(0)
+    off = np.array([250.0, 150.0, -300.0])
+    unit = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    for n in (100, 400, 1000, 2000):
+        side = 10.0 * n ** (1 / 3)
+        cos = [cspace.CSpaceObstacle.build(off + rng.random(3) * side
+                                           + unit * (1 + 4 * rng.random(3)), unit,
+                                           reference_point=(0.5, 0.5, 0.5)) for _ in range(n)]
+        cs = cspace.CSpace(cos, bounds=np.stack([off - 2.0, off + side + 7.0]))
+        t = time.perf_counter()
+        fs = free_space(cs)
+        secs = time.perf_counter() - t
+        lines.append(f"| {n} | {len(fs.cells.cx.face_plane)} | {fs.cells.n_cells} | "
+                     f"{fs.n_components} | {secs:.2f} |")
+        print(lines[-1], flush=True)
+    return lines + [""]
+
+
 LONG_TIME, REFUTE_TIME = 300.0, 60.0
 
 
@@ -587,11 +657,12 @@ def _replace_section(text: str, section: list[str], title: str) -> str:
 
 
 def main():
-    if TURNING_ONLY or AUTO_ONLY or DECIDE_ONLY or LONG_ONLY:
+    if TURNING_ONLY or AUTO_ONLY or DECIDE_ONLY or LONG_ONLY or FREE_ONLY:
         out = ROOT / "benchmarks" / "reports" / "planning.md"
         section, title = ((turning_section(), "Planning with turns") if TURNING_ONLY
                           else (auto_section(), "Without flags") if AUTO_ONLY
                           else (long_section(), "Long decisions") if LONG_ONLY
+                          else (free_space_section(), "The exact free space") if FREE_ONLY
                           else (decide_section(), "Deciding"))
         out.write_text(_replace_section(out.read_text(), section, title))
         print(f"wrote {out}")
@@ -666,6 +737,7 @@ def main():
     lines += [""] + turning_section()
     lines += [""] + auto_section()
     lines += [""] + decide_section()
+    lines += [""] + free_space_section()
     lines += ["", "Note: window and cavity (narrow passages) and maze (a long serpentine) are "
               "rarely solved by the planners above within 1 s with uniform sampling, so only "
               "comb and the FCL environment are timed there; see the narrow-passage section for PRM with the narrow "

@@ -95,6 +95,23 @@ def test_view_writes_offline_html_of_a_shipped_scene(tmp_path, capsys):
     assert set(__import__("re").findall(r"https?://[^\s\"'<>)]+", html)) <= {"http://www.w3.org/1999/xhtml"}
 
 
+def test_view_draws_the_free_space_or_says_why_not(tmp_path, capsys):
+    """--free-space: the cage's two components, each its own node; a scene of triangle
+    pairs is drawn without them, saying why."""
+    out = tmp_path / "cage.html"
+    assert main(["view", str(SCENES / "cage.toml"), "-o", str(out), "--free-space"]) == 0
+    assert "free space: FreeSpace(components=2" in capsys.readouterr().out
+    from test_decide import cage_toml
+    from test_viz import scene_commands
+
+    paths = {str(c.get("path", "")) for c in scene_commands(out.read_text())}
+    assert {"/meshcat/cells/free 0", "/meshcat/cells/free 1"} <= paths
+    bug = tmp_path / "bug.toml"  # an open wall: triangle pairs
+    bug.write_text(cage_toml(slot=0.2, surfaces=True, tmp=tmp_path))
+    assert main(["view", str(bug), "-o", str(tmp_path / "bug.html"), "--free-space"]) == 0
+    assert "free space: not drawn: free_space: C-obstacle" in capsys.readouterr().out
+
+
 def test_view_live_serves_and_stops_without_a_terminal(capsys):
     assert main(["view", str(SCENES / "comb.toml"), "--live"]) == 0
     assert "meshcat is serving the scene at http://127.0.0.1:" in capsys.readouterr().out

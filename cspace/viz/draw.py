@@ -13,7 +13,7 @@ __all__ = ["draw_scene"]
 
 def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
                superset: bool = False, animate: bool = True, cache=None,
-               decision=None) -> dict[str, str]:
+               decision=None, free_space=None) -> dict[str, str]:
     """Draw a :class:`cspace.scene.scene.Scene`: obstacles, the robot at start and goal, C-obstacles, a path.
 
     The scene is modelled and built as :func:`cspace.scene.model.model_scene` does (exact robot
@@ -37,6 +37,9 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
         (``/cells/separator``); else the cells the robot is confined to
         (``/cells/confined``) and the wall of cells inside the C-obstacles around them
         (``/cells/wall``).
+    free_space : FreeSpace, optional
+        A :func:`cspace.planning.free_space.free_space`: the boundary of each of its
+        components (``/cells/free 0``, ...; the first bounded by the bounds' box too).
 
     Returns
     -------
@@ -85,6 +88,10 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
         view.add_cells("confined", decision.to_trimesh("start"), opacity=0.2)
         view.add_cells("wall", decision.to_trimesh("blocked"), opacity=0.45)
         report["decision"] = f"no path: {decision.reason}"
+    if free_space is not None:
+        for k in range(free_space.n_components):
+            view.add_cells(f"free {k}", free_space.component_mesh(k), opacity=0.2)
+        report["free space"] = repr(free_space)
     view.add_robot("start", scene.robot.vertices, scene.robot.faces, scene.start,
                    reference=scene.reference_point)
     view.add_robot("goal", scene.robot.vertices, scene.robot.faces, scene.goal,
