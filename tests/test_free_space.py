@@ -155,6 +155,53 @@ def test_a_seam_in_flat_bounds_is_decided_exactly(tmp_path, offset, gap):
         _check_separation(scene, fs, sep, bounds=b)
 
 
+def test_a_c_obstacle_far_larger_than_the_bounds_is_clipped(tmp_path):
+    """The cage over a floor slab 10^5 wide crossing the bounds (and a slanted one): the
+    pieces are clipped to the frame's box, so the grid's step follows the bounds (the error
+    bound is the slabs' own, from their grids); the answer is the cage's."""
+    from scipy.spatial.transform import Rotation
+
+    scene, cs = _cage(tmp_path, slot=0.2, offset=FAR)
+    unit = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    slab = (unit - 0.5) * [1e5, 1e5, 0.1] + np.asarray(FAR) + [0.0, 0.0, -1.9]
+    turned = ((unit - 0.5) * [1e5, 1e5, 0.1]) @ Rotation.from_euler(
+        "xyz", (2.0, -1.5, 40.0), degrees=True).as_matrix().T + np.asarray(FAR) + [0, 0, -1.8]
+    robot = 0.4 * (unit - 0.5)
+    big = [cspace.CSpaceObstacle.build(v, robot) for v in (slab, turned)]
+    plain = free_space(cs, scene.bounds)
+    fs = free_space(cspace.CSpace(list(cs.obstacles) + big, bounds=scene.bounds), scene.bounds)
+    assert fs.grid.exponent == plain.grid.exponent
+    assert fs.error_bound == max(co.error_bound for co in big) + 3**0.5 * fs.grid.step
+    sep = fs.separation(scene.start, scene.goal)
+    assert sep is not None and fs.n_pieces == 9
+    assert fs.component_of(np.asarray(FAR) + [0.0, 0.0, -1.9]) is None  # in the slab
+    _check_separation(scene, fs, sep, n_points=50)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_clipping_a_piece_to_a_box_keeps_exactly_their_intersection(seed):
+    """_clipped's vertices span P ∩ box: the same volume as scipy's half-space intersection
+    (floats, its own code), and every vertex in both."""
+    from scipy.spatial import ConvexHull, HalfspaceIntersection
+
+    from cspace.mesh.convex import ConvexPolytope
+    from cspace.planning.free_space import _clipped
+
+    rng = np.random.default_rng(seed)
+    P = ConvexPolytope.from_points(rng.normal(size=(30, 3)) + 250.0)
+    lo, hi = 250.0 + rng.uniform(-1.5, 0.0, 3), 250.0 + rng.uniform(0.0, 1.5, 3)
+    X = np.array([[float(c) for c in x] for x in _clipped(P, lo, hi)])
+    V = P.vertices
+    H = ConvexHull(V).equations
+    box = np.vstack([np.hstack([-np.eye(3), lo[:, None]]), np.hstack([np.eye(3), -hi[:, None]])])
+    inner = np.clip(V.mean(axis=0), lo + 1e-3, hi - 1e-3)
+    assert (H[:, :3] @ inner + H[:, 3] < 0).all()  # an interior point of both
+    ref = ConvexHull(HalfspaceIntersection(np.vstack([H, box]), inner).intersections).volume
+    assert abs(ConvexHull(X).volume - ref) <= 1e-9 * max(ref, 1.0)
+    assert (X >= lo - 1e-12).all() and (X <= hi + 1e-12).all()
+    assert (H[:, :3] @ X.T + H[:, 3:4] <= 1e-9).all()
+
+
 def test_points_in_or_on_the_c_obstacles_or_outside_the_bounds_have_no_component(tmp_path):
     scene, cs = _cage(tmp_path, slot=0.2, offset=FAR)
     fs = free_space(cs, scene.bounds)

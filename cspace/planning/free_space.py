@@ -3,7 +3,9 @@
 :func:`free_space` puts every convex piece of the C-obstacles that meets the planning bounds
 on one grid, grown outward (each vertex replaced by the corners of the grid cell holding it,
 and the hull taken: the piece only grows, by at most one step per axis), adds a frame (a box
-around everything minus the bounds, snapped outward), and makes the exact arrangement of all
+an eighth of the bounds' size larger, minus the bounds snapped outward; pieces that cross its
+outer box are clipped to it exactly, so a floor slab of any size leaves the step to the
+bounds), and makes the exact arrangement of all
 their triangles (:class:`cspace.minkowski.union.UnionCells`). Its cells of winding number 0,
 other than the unbounded one, are the free space's components: each lies inside the bounds.
 
@@ -28,7 +30,7 @@ from fractions import Fraction
 
 import numpy as np
 
-from ..errors import ExactnessError, InvalidArgumentError, UnsupportedError
+from ..errors import DegenerateError, ExactnessError, InvalidArgumentError, UnsupportedError
 from ..geometry.exact import Grid
 from ..mesh.convex import ConvexPolytope
 from ..minkowski.output import _to_float_compiled
@@ -56,6 +58,47 @@ def _pieces(co, name: str) -> list:
     raise UnsupportedError(
         f"free_space: C-obstacle {name} is of kind {co.kind!r}; the exact union takes "
         "C-obstacles made of convex pieces ('convex', 'union', 'surface')")
+
+
+def _clipped(P: ConvexPolytope, lo, hi) -> list:
+    """The vertices (exact fractions, scene units) of ``P ∩ [lo, hi]``: P's vertices in the
+    box, P's edges across the box's faces, the box's corners in P, and the box's edges across
+    P's facet planes (empty when they miss)."""
+    step, org = Fraction(2) ** P.grid.exponent, P.grid.origin
+    L, H = [Fraction(float(c)) for c in lo], [Fraction(float(c)) for c in hi]
+    planes = [((n0, n1, n2), d) for n0, n1, n2, d in P.planes()]
+
+    def level(x, n, d):  # n . k - d for the grid units k of x (P's grid)
+        return sum(n[i] * (x[i] / step - org[i]) for i in range(3)) - d
+
+    def in_box(x) -> bool:
+        return all(L[i] <= x[i] <= H[i] for i in range(3))
+
+    def cross(a, b, sa, sb):  # the point where the level goes from sa to sb along a -> b
+        t = sa / (sa - sb)
+        return tuple(a[i] + t * (b[i] - a[i]) for i in range(3))
+
+    V = [tuple(Fraction(float(c)) for c in v) for v in P.vertices]
+    pts = [v for v in V if in_box(v)]
+    for u, w in P.edges.tolist():
+        for k in range(3):
+            for bound in (L[k], H[k]):
+                sa, sb = V[u][k] - bound, V[w][k] - bound
+                if sa * sb < 0 and in_box(x := cross(V[u], V[w], sa, sb)):
+                    pts.append(x)
+    corners = [tuple(H[i] if c[i] else L[i] for i in range(3)) for c in _CORNERS.tolist()]
+    pts += [c for c in corners if all(level(c, n, d) <= 0 for n, d in planes)]
+    for a in range(8):
+        for k in range(3):
+            if not _CORNERS[a, k]:
+                b = a | (4 >> k)  # the corner across the box along axis k
+                for n, d in planes:
+                    sa, sb = level(corners[a], n, d), level(corners[b], n, d)
+                    if sa * sb < 0:
+                        x = cross(corners[a], corners[b], sa, sb)
+                        if all(level(x, m, e) <= 0 for m, e in planes):
+                            pts.append(x)
+    return pts
 
 
 def _box_faces(lo: np.ndarray, hi: np.ndarray, outward: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -233,6 +276,11 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         raise InvalidArgumentError(f"free_space: bounds {b.tolist()} are not a box")
     if hasattr(cspace, "build"):  # a lazy C-space: what meets the bounds, built now
         cspace.build(b[0], b[1])
+    # The frame's outer box: the bounds and an eighth of their size around them. Parts of
+    # pieces beyond it change nothing inside the bounds (the frame fills the rest), so pieces
+    # that cross it are clipped to it (exactly) and the grid's step follows the bounds.
+    pad = 0.125 * float((b[1] - b[0]).max()) + 2.0**-20 * float(np.abs(b).max() + 1.0)
+    o_lo, o_hi = b[0] - pad, b[1] + pad
     pieces, err = [], 0.0
     for i, co in enumerate(cspace.obstacles):
         B = np.asarray(co.bounds, dtype=np.float64)
@@ -242,23 +290,34 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         for p in _pieces(co, name):
             V = p.vertices
             if (V.max(axis=0) >= b[0]).all() and (V.min(axis=0) <= b[1]).all():
-                pieces.append(V)
+                inside = (V.min(axis=0) >= o_lo).all() and (V.max(axis=0) <= o_hi).all()
+                pieces.append(V if inside else p)
         err = max(err, float(co.error_bound))
         if len(pieces) > max_pieces:
             raise UnsupportedError(
                 f"free_space: more than {max_pieces} convex pieces meet the bounds")
-    lo = np.min([b[0]] + [V.min(axis=0) for V in pieces], axis=0)
-    hi = np.max([b[1]] + [V.max(axis=0) for V in pieces], axis=0)
-    G = Grid.for_box(lo, hi)
+    G = Grid.for_box(o_lo, o_hi)
     e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
     ints, faces, planes, n = [], [], [], 0
     for V in pieces:
         check("pieces")
-        s = np.ldexp(V, -e)  # exact: grid steps
-        k_lo = np.floor(s).astype(np.int64) - origin
-        k_hi = np.ceil(s).astype(np.int64) - origin
+        if isinstance(V, ConvexPolytope):  # crosses the outer box: clipped to it, exactly
+            X = _clipped(V, o_lo, o_hi)
+            if not X:
+                continue
+            step = Fraction(2) ** e
+            k_lo = np.array([[math.floor(c / step) for c in x] for x in X], dtype=np.int64)
+            k_hi = np.array([[math.ceil(c / step) for c in x] for x in X], dtype=np.int64)
+            k_lo, k_hi = k_lo - origin, k_hi - origin
+        else:
+            s = np.ldexp(V, -e)  # exact: grid steps
+            k_lo = np.floor(s).astype(np.int64) - origin
+            k_hi = np.ceil(s).astype(np.int64) - origin
         pts = np.where(_CORNERS[None].astype(bool), k_hi[:, None, :], k_lo[:, None, :])
-        P = ConvexPolytope.from_ints(pts.reshape(-1, 3), grid=G, name="piece")
+        try:
+            P = ConvexPolytope.from_ints(pts.reshape(-1, 3), grid=G, name="piece")
+        except DegenerateError:  # a clipped piece flat on the outer box: beyond the bounds
+            continue
         F, _ = P.triangles()
         ints.append(P.ints)
         faces.append(F + n)
@@ -273,8 +332,8 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     flat = s_lo == s_hi
     s_lo, s_hi = s_lo - flat, s_hi + flat
     allp = np.vstack([s_lo, s_hi] + ints)
-    o_lo, o_hi = allp.min(axis=0) - 2, allp.max(axis=0) + 2
-    for lo_, hi_, out in ((o_lo, o_hi, True), (s_lo, s_hi, False)):
+    f_lo, f_hi = allp.min(axis=0) - 2, allp.max(axis=0) + 2
+    for lo_, hi_, out in ((f_lo, f_hi, True), (s_lo, s_hi, False)):
         V, F = _box_faces(lo_, hi_, out)
         ints.append(V)
         faces.append(F + n)
