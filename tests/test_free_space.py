@@ -232,6 +232,21 @@ def test_the_union_is_a_closed_surface_that_holds_every_c_obstacle(tmp_path):
     assert (cs.signed_distance(q[extra]) <= fs.error_bound + 1e-9).all()
 
 
+def test_one_component_says_a_path_exists_when_the_cells_find_none():
+    """The window's gap is finer than cells at depth 3: the cells answer 'unknown', and the
+    exact free space adds that start and goal are in one component (a path exists); without
+    it, no such claim."""
+    from pathlib import Path
+
+    scene = cspace.load_scene(Path(__file__).parent.parent / "scenes" / "window.toml")
+    cs = cspace.model_scene(scene).cspace()
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, depth=3, refine=False)
+    assert d.answer == "unknown" and d.reason.endswith("a path exists")
+    c = decide(cs, scene.start, scene.goal, bounds=scene.bounds, depth=3, refine=False,
+               exact=False)
+    assert c.answer == "unknown" and "path exists" not in c.reason
+
+
 def test_c_obstacles_not_made_of_convex_pieces_are_declined(tmp_path):
     """Open walls (triangle pairs): the exact union does not take them, by name; decide
     then proves the cage closed with its cells."""

@@ -72,7 +72,9 @@ computation using C-obstacle query", 2008), with the cells' labels decided exact
 the pieces grown onto one grid, their union's arrangement and its cells). Start and goal in
 different components answer "no path" at once, with the closed surface that separates them
 (``Decision.separation``; clearance: its ``error_bound``). In one component, the cells above
-look for the path; triangle-pair and non-convex mesh C-obstacles are decided by the cells alone.
+look for the path, and if they find none in time the reason says that a path exists (the grown
+union holds the C-obstacles, so its free space is free); triangle-pair and non-convex mesh
+C-obstacles are decided by the cells alone.
 """
 
 from __future__ import annotations
@@ -313,12 +315,13 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     q0, q1 = _endpoints(cspace, b, start, goal)
     obstacles, boxes, clearance, margin = _setup(cspace, b)
     F = _frame(frame, obstacles, b)
-    fs = None
+    fs, one = None, False
     if exact and not getattr(cspace, "robot_hull", False):
         try:
             # half the budget at most: a union too large for it leaves the cells the rest
             fs = free_space(cspace, b, time=EXACT_SHARE * max(0.0, deadline - t0))
             sep = fs.separation(q0, q1)
+            one = (k := fs.component_of(q0)) is not None and k == fs.component_of(q1)
         except (UnsupportedError, TimeoutError):
             fs = sep = None  # pairs or non-convex sums, or too large: the cells alone
         except ExactnessError:  # pragma: no cover - the lines' joins and the windings differ
@@ -358,6 +361,11 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
         reason = f"no path for the robot's convex hull ({reason}): no proof for the robot"
     if answer == "unknown" and not reason:
         reason = f"no wall found and no free route at depth {reached}"
+    if answer == "unknown" and one:
+        # one component of the grown union's complement: a path exists (the grown union
+        # holds the C-obstacles), the cells only did not find it in time
+        reason += ("; start and goal are in one component of the exact free space: a path "
+                   "exists")
     L_lo, L_sz, L_lab = L
     if comp_start is None or len(comp_start) != len(L_lo):  # out of time: none
         comp_start = wall = np.zeros(len(L_lo), dtype=bool)
