@@ -458,7 +458,8 @@ def decide_section() -> list[str]:
 
     lines = [f"## Deciding: a path, or a proof that none exists ({DECIDE_TIME:g} s budget, "
              f"seeds {AUTO_SEEDS})", "",
-             "*decide* = `cspace.planning.decide.decide` alone (certified cells, depth 7: a "
+             "*decide* = `cspace.planning.decide.decide` alone (the exact free space where "
+             "the C-obstacles are convex pieces, then certified cells, depth 7: a "
              "path through free cells, a proof that start and goal are in different "
              "components, or unknown; deterministic). *auto* = `plan(scene, planner='auto', "
              "turns=False, time=10)` (`cspace plan --no-turns`): its answers over the seeds "
@@ -480,7 +481,7 @@ def decide_section() -> list[str]:
         for name, scene, truth in decide_scenes(Path(tmp)):
             cs = cspace.CSpace.from_scene(scene)
             alone = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=DECIDE_TIME,
-                           refine=False)
+                           refine=False, exact=False)
             d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=DECIDE_TIME)
             answers, secs, rrt, prm, fcl, wrong = [], [], 0, 0, 0, 0
             for seed in AUTO_SEEDS:
@@ -506,7 +507,8 @@ def decide_section() -> list[str]:
                          f"{stated} | {said} | "
                          f"{np.mean(secs):.2f} | {rrt}/{n} | {prm}/{n} | {fcl}/{n} | {wrong} |")
             print(lines[-1], flush=True)
-    lines += ["", "*octree alone*: `decide(..., refine=False)`, the octree to 1/128 of the "
+    lines += ["", "*octree alone*: `decide(..., refine=False, exact=False)`, the octree to "
+              "1/128 of the "
               "bounds per axis; *decide*: then, if undecided, refining cells along the cheapest "
               "route (`cspace.planning.corridor`), down to 2^-20 of a finest cell, in the same "
               "budget: slabs across a slot and bars along an edge where the cells' labels change "

@@ -1,12 +1,12 @@
-"""A path, or a proof that none exists: the decision by certified cells on two shipped scenes.
+"""A path, or a proof that none exists: the decision on two shipped scenes.
 
 - ``scenes/cage.toml``: a cube shut in a cage whose only opening is a slot half its width.
-  :func:`cspace.planning.decide.decide` proves that no translation path exists (start and goal
-  in different components of the cells not inside a C-obstacle); the page is a cutaway (the
-  lower half) of the cage and of the wall of cells, each inside one C-obstacle, that shuts the
-  robot in.
-- ``scenes/comb.toml``: the same decision finds a path through free cells, between the teeth (every segment then
-  proved by ``segment_free``); the page shows it.
+  :func:`cspace.planning.decide.decide` proves that no translation path exists: start and goal
+  are in different components of the exact free space (:mod:`cspace.planning.free_space`); the
+  page is a cutaway (the lower half) of the cage and of the proof, the closed surface of the
+  C-obstacles' union around the start's component, that shuts the robot in.
+- ``scenes/comb.toml``: the same decision finds a path through free cells, between the teeth
+  (every segment then proved by ``segment_free``); the page shows it.
 
 Run: ``python examples/decide_scenes.py [--out out] [--screenshot docs]`` (``--screenshot``
 also renders ``decide_cage.png`` and ``decide_comb.png`` there with headless Chromium).
@@ -27,8 +27,9 @@ SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
 
 def draw_cut(view: SceneView, scene, d) -> None:
-    """The lower half (below the start) of the obstacles and of the proof's wall of cells,
-    the robot at start and goal: a cutaway that shows the robot shut in."""
+    """The lower half (below the start) of the obstacles and of the proof (its separating
+    surface, or its wall of cells), the robot at start and goal: a cutaway that shows the
+    robot shut in."""
     import numpy as np
     import trimesh
 

@@ -247,13 +247,61 @@ def test_one_component_says_a_path_exists_when_the_cells_find_none():
     assert c.answer == "unknown" and "path exists" not in c.reason
 
 
-def test_c_obstacles_not_made_of_convex_pieces_are_declined(tmp_path):
-    """Open walls (triangle pairs): the exact union does not take them, by name; decide
-    then proves the cage closed with its cells."""
+@pytest.mark.parametrize("move", [dict(), dict(offset=FAR, scale=3.0, turn=TURN)])
+def test_open_walls_as_triangle_pairs_are_united(tmp_path, move):
+    """Open walls against the cube (triangle-pair C-obstacles): each wall triangle's pieces
+    over the cube's triangles are one convex piece (the cube is closed and convex), and the
+    cage is separated, checked by FCL."""
+    scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, **move)
+    assert {co.kind for co in cs.obstacles} == {"pairs"}
+    fs = free_space(cs, scene.bounds)
+    assert fs.n_pieces == 14  # the walls' triangles (the +x wall in two halves)
+    sep = fs.separation(scene.start, scene.goal)
+    assert sep is not None
+    _check_separation(scene, fs, sep)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    assert d.answer == "no path" and d.separation is not None
+
+
+def test_closed_convex_triangles_are_told_from_others():
+    from cspace.planning.free_space import _closed_convex
+
+    cube = np.array([[x, y, z] for x in (0, 2) for y in (0, 2) for z in (0, 2)])
+    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    assert _closed_convex(cube[F]) and _closed_convex(-cube[F])  # either orientation
+    assert not _closed_convex(cube[F[:-1]])  # open
+    dented = cube.copy()
+    dented[7] = [1, 1, 1]  # a corner pushed in: closed, not convex
+    assert not _closed_convex(dented[F])
+
+
+def test_a_non_convex_sum_off_the_grid_is_declined_by_name():
+    """An L ⊕ a turned cube (NCC-CVMS, kind 'mesh'): its vertices are off the union's grid,
+    so the exact union declines it, naming it; decide goes on with its cells."""
+    from scipy.spatial.transform import Rotation
+    from zoo import l_shape
+
+    V, F = l_shape()
+    unit = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    robot = (0.3 * (unit - 0.5)) @ Rotation.from_euler("xyz", TURN, degrees=True).as_matrix().T
+    co = cspace.CSpaceObstacle.build((V + np.asarray(FAR), F), robot)
+    assert co.kind == "mesh"
+    cs = cspace.CSpace([co], bounds=np.stack([np.asarray(FAR) - 2.0, np.asarray(FAR) + 5.0]))
+    with pytest.raises(UnsupportedError, match="kind 'mesh'.*off the union's grid"):
+        free_space(cs)
+    q0, q1 = np.asarray(FAR) - 1.5, np.asarray(FAR) + 4.5
+    d = decide(cs, q0, q1, time=30)
+    assert d.answer == "path" and d.free_space is None
+
+
+def test_too_many_pieces_are_declined_before_any_is_made(tmp_path):
+    """Too many triangle pairs near the bounds: declined, by count, before any piece is
+    made; decide then proves the cage closed with its cells."""
     scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, turn=TURN)
-    with pytest.raises(UnsupportedError, match="kind 'pairs'"):
-        free_space(cs, scene.bounds)
-    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30)
+    with pytest.raises(UnsupportedError, match="more than 10 convex pieces"):
+        free_space(cs, scene.bounds, max_pieces=10)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30, exact=False)
     assert d.answer == "no path" and d.separation is None and d.free_space is None
 
 

@@ -16,7 +16,11 @@ steps). The proof is checked on its own (:meth:`FreeSpace.separation`): the boun
 start's component, oriented away from it, has different winding numbers at the two points.
 
 **Which C-obstacles.** Those made of convex pieces (kinds ``'convex'``, ``'union'`` of such,
-``'surface'``). Triangle-pair and non-convex mesh C-obstacles raise
+``'surface'``, and ``'pairs'``: each triangle pair's grown piece that can meet the bounds, up
+to ``max_pieces``), and closed meshes (kind ``'mesh'``: a pair's containment terms) whose
+vertices lie on the union's grid, taken whole. A flat piece (parallel triangles of an open
+surface) is grown by one more step on every side, and the error bound says so. Other
+C-obstacles (a non-convex sum's surface, off the grid) raise
 :class:`~cspace.errors.UnsupportedError`; :func:`cspace.planning.decide.decide` then decides
 with certified cells alone.
 """
@@ -47,17 +51,100 @@ _BOX = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1
                 dtype=np.int64)
 
 
-def _pieces(co, name: str) -> list:
-    """The convex pieces (ConvexPolytope) whose union is the stored C-obstacle ``co``."""
+def _pieces(co, name: str, b: np.ndarray) -> tuple[list, list, list]:
+    """What the stored C-obstacle ``co`` is made of, near the closed box ``b``: its convex
+    pieces (ConvexPolytope, or ``(k, 3)`` float64 points: their hull), its closed meshes
+    (C-obstacles of kind ``'mesh'``, whose vertices :func:`free_space` needs on its grid) and
+    its triangle pairs (:func:`_pair_plan`: counted before any piece is made)."""
     if co.kind == "convex":
-        return [co.polytope]
+        return [co.polytope], [], []
     if co.kind == "union":
-        return [p for part in co.parts for p in _pieces(part, name)]
+        got = [_pieces(part, name, b) for part in co.parts]
+        return tuple([x for g in got for x in g[k]] for k in range(3))
     if co.kind == "surface":
-        return list(co._impl.pieces)
+        return list(co._impl.pieces), [], []
+    if co.kind == "mesh":
+        return [], [co], []
+    if co.kind == "pairs":
+        return [], [], [_pair_plan(co, b)]
     raise UnsupportedError(
         f"free_space: C-obstacle {name} is of kind {co.kind!r}; the exact union takes "
-        "C-obstacles made of convex pieces ('convex', 'union', 'surface')")
+        "C-obstacles made of convex pieces ('convex', 'union', 'surface', 'pairs') and "
+        "closed meshes on its grid ('mesh')")
+
+
+def _pair_plan(co, b: np.ndarray) -> tuple:
+    """The pieces ``S[i] ⊕ T[j] ⊕ box`` of a triangle-pair C-obstacle whose boxes meet ``b``
+    (flat ones left out when an operand is closed, as the C-obstacle leaves them):
+    ``(co, T, i, j)``. With a closed convex robot part, one piece per obstacle triangle."""
+    from ..cobstacle.pairs import TrianglePairs, _flat
+
+    S, T, g = co.S, co.T, np.asarray(co._impl.g, dtype=np.int64).reshape(3)
+    bg = np.ldexp(b, -co.grid.exponent) - np.asarray(co.grid.origin, dtype=np.float64)
+    merged = _closed_convex(T)
+    if merged:
+        # A closed convex robot part: the pieces of one obstacle triangle s, over all of the
+        # part's triangles, and the other pairs (or the containment term, for a part of the
+        # obstacle that fits in the robot) cover s ⊕ (c - R), one convex piece.
+        T = np.unique(T.reshape(-1, 3), axis=0)[None]
+    s_lo, s_hi, t_lo, t_hi = S.min(axis=1), S.max(axis=1), T.min(axis=1), T.max(axis=1)
+    tp = TrianglePairs(S, T, np.zeros((0, 2), np.int64), np.zeros(0, bool), margin=g)
+    I, J = [], []
+    rows = max(1, 200_000 // max(len(T), 1))  # pairs tested at once
+    for i0 in range(0, len(S), rows):
+        lo = s_lo[i0:i0 + rows, None] + t_lo[None] - g
+        hi = s_hi[i0:i0 + rows, None] + t_hi[None] + g
+        ii, jj = np.nonzero(((lo <= bg[1]) & (hi >= bg[0])).all(axis=2))
+        ii += i0
+        if co.closed and len(ii) and not merged:
+            keep = ~_flat(tp, ii, jj)
+            ii, jj = ii[keep], jj[keep]
+        I.append(ii)
+        J.append(jj)
+    return co, T, np.concatenate(I), np.concatenate(J)
+
+
+def _pair_pieces(plan: tuple, name: str, outer) -> list:
+    """The pieces of :func:`_pair_plan` as float64 points (exact: grid points of the
+    C-obstacle's grid), or, crossing the box ``outer``, as their hull."""
+    from ..geometry.snapping import grow_points
+
+    co, T, I, J = plan
+    g = np.asarray(co._impl.g, dtype=np.int64).reshape(3)
+    out = []
+    for i, j in zip(I.tolist(), J.tolist()):
+        pts = grow_points((co.S[i][:, None] + T[j][None]).reshape(-1, 3), g)
+        V = co.grid.to_float(pts)
+        if (V.min(axis=0) >= outer[0]).all() and (V.max(axis=0) <= outer[1]).all():
+            out.append(V)
+        else:
+            out.append(ConvexPolytope.from_ints(pts, grid=co.grid, name=name))
+    return out
+
+
+def _closed_convex(T: np.ndarray) -> bool:
+    """Whether the triangles ``T (l, 3, 3)`` (grid ints) close up (every directed edge met by
+    its reverse) and bound a convex solid (every vertex on one side of every triangle's
+    plane, the same side for all, and some strictly: ``c - t`` turns the robot's
+    orientation inside out): exact, integers."""
+    if len(T) < 4:
+        return False
+    keys = {}
+    for tri in T.tolist():
+        for k in range(3):
+            e = (tuple(tri[k]), tuple(tri[(k + 1) % 3]))
+            keys[e] = keys.get(e, 0) + 1
+    if any(keys.get((b, a), 0) != c for (a, b), c in keys.items()):
+        return False
+    P = np.unique(T.reshape(-1, 3), axis=0).astype(object)
+    signs = set()
+    for a, b, c in T.astype(object).tolist():
+        n = np.cross(np.array(b) - np.array(a), np.array(c) - np.array(a))
+        side = (P - np.array(a)) @ n
+        if (side > 0).any() and (side < 0).any():
+            return False
+        signs.add(1 if (side > 0).any() else -1 if (side < 0).any() else 0)
+    return len(signs) == 1 and 0 not in signs
 
 
 def _clipped(P: ConvexPolytope, lo, hi) -> list:
@@ -197,12 +284,16 @@ class FreeSpace:
                 return False
         return True
 
+    def _off_meshes(self, q) -> bool:
+        """``q`` outside every closed mesh taken whole (their exact test: touching counts)."""
+        return not any(bool(co.contains(q)) for co in self._meshes)
+
     def component_of(self, q) -> int | None:
         """The component holding the translation ``q`` (scene units), in
         ``range(n_components)``; None when ``q`` is not strictly outside the grown
         C-obstacles or not strictly inside the bounds (snapped outward)."""
         P = self._grid_point(q)
-        if not self._strictly_free(P):
+        if not self._strictly_free(P) or not self._off_meshes(q):
             return None
         cell = self.cells.locate(P)
         return None if cell is None else self._component.get(cell)
@@ -281,27 +372,52 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     # that cross it are clipped to it (exactly) and the grid's step follows the bounds.
     pad = 0.125 * float((b[1] - b[0]).max()) + 2.0**-20 * float(np.abs(b).max() + 1.0)
     o_lo, o_hi = b[0] - pad, b[1] + pad
-    pieces, err = [], 0.0
-    for i, co in enumerate(cspace.obstacles):
+    meshes: list = []
+    found, count, err = [], 0, 0.0
+    for i, co in enumerate(cspace.obstacles):  # what each C-obstacle is made of, counted
         B = np.asarray(co.bounds, dtype=np.float64)
         if (B[1] < b[0]).any() or (B[0] > b[1]).any():
             continue  # does not meet the closed bounds: nothing inside them changes
         name = f"#{i}" + (f" ({co.name})" if getattr(co, "name", None) else "")
-        for p in _pieces(co, name):
-            V = p.vertices
+        got, closed, plans = _pieces(co, name, b)
+        found.append((name, got, plans))
+        count += len(got) + sum(len(p[2]) for p in plans)
+        if count > max_pieces:
+            raise UnsupportedError(
+                f"free_space: more than {max_pieces} convex pieces meet the bounds (at "
+                f"C-obstacle {name})")
+        meshes += closed
+        err = max(err, float(co.error_bound))
+        check("pieces")
+    pieces = []
+    for name, got, plans in found:
+        for plan in plans:
+            got = got + _pair_pieces(plan, name, (o_lo, o_hi))
+        for p in got:
+            V = p.vertices if isinstance(p, ConvexPolytope) else p
             if (V.max(axis=0) >= b[0]).all() and (V.min(axis=0) <= b[1]).all():
                 inside = (V.min(axis=0) >= o_lo).all() and (V.max(axis=0) <= o_hi).all()
                 pieces.append(V if inside else p)
-        err = max(err, float(co.error_bound))
-        if len(pieces) > max_pieces:
-            raise UnsupportedError(
-                f"free_space: more than {max_pieces} convex pieces meet the bounds")
+        check("pieces")
     G = Grid.for_box(o_lo, o_hi)
     e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
-    ints, faces, planes, n = [], [], [], 0
+    ints, faces, planes, n, widened = [], [], [], 0, 1
+    for co in meshes:  # closed meshes: their own triangles, when their vertices are on G
+        V = np.asarray(co._impl.vertices, dtype=np.float64)
+        k = np.ldexp(V, -e)
+        if not (np.floor(k) == k).all() or np.abs(k - origin).max() >= 2**27 - 8:
+            raise UnsupportedError(
+                f"free_space: C-obstacle {getattr(co, 'name', '')!r} (kind 'mesh') has "
+                f"vertices off the union's grid (step 2**{e}) or beyond its range; the exact "
+                "union takes closed meshes only on it")
+        ints.append(k.astype(np.int64) - origin)
+        faces.append(np.asarray(co._impl.faces, dtype=np.int64) + n)
+        n += len(V)
     for V in pieces:
         check("pieces")
-        if isinstance(V, ConvexPolytope):  # crosses the outer box: clipped to it, exactly
+        if not isinstance(V, np.ndarray):  # crosses the outer box: clipped to it, exactly
+            if not isinstance(V, ConvexPolytope):  # pragma: no cover - pieces are one of two
+                raise TypeError(type(V))
             X = _clipped(V, o_lo, o_hi)
             if not X:
                 continue
@@ -316,8 +432,13 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         pts = np.where(_CORNERS[None].astype(bool), k_hi[:, None, :], k_lo[:, None, :])
         try:
             P = ConvexPolytope.from_ints(pts.reshape(-1, 3), grid=G, name="piece")
-        except DegenerateError:  # a clipped piece flat on the outer box: beyond the bounds
-            continue
+        except DegenerateError:
+            # flat (parallel triangles of an open surface, or a clip on the outer box): a
+            # step more on every side gives it volume; the growth bound doubles
+            widened = 2
+            pts = np.where(_CORNERS[None].astype(bool), k_hi[:, None, :] + 1,
+                           k_lo[:, None, :] - 1)
+            P = ConvexPolytope.from_ints(pts.reshape(-1, 3), grid=G, name="piece")
         F, _ = P.triangles()
         ints.append(P.ints)
         faces.append(F + n)
@@ -339,7 +460,8 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         faces.append(F + n)
         n += 8
     cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check)
-    fs = FreeSpace(cells, G, b, err + math.sqrt(3.0) * G.step, planes, len(pieces),
+    fs = FreeSpace(cells, G, b, err + widened * math.sqrt(3.0) * G.step, planes, len(pieces),
                    _time.perf_counter() - t0)
     fs._inner = (s_lo.tolist(), s_hi.tolist())
+    fs._meshes = meshes
     return fs
