@@ -202,6 +202,45 @@ def test_clipping_a_piece_to_a_box_keeps_exactly_their_intersection(seed):
     assert (H[:, :3] @ X.T + H[:, 3:4] <= 1e-9).all()
 
 
+@pytest.mark.parametrize("seed", range(8))
+def test_components_match_a_lattice_flood_fill(seed):
+    """Random boxes on a lattice of 1/4 (a cube robot of 1/2: the C-obstacles are boxes on
+    it too), at (250, 150, -300): every open lattice cell is wholly free or wholly inside,
+    and the free components are the face-connected free cells (scipy's labels, from the
+    cells' centres: nothing of ours). Same number of components, and the centres of a cell of
+    each and of 250 random free cells in the component their labels say."""
+    from scipy import ndimage
+
+    rng = np.random.default_rng(seed)
+    off, h = np.asarray(FAR), 0.25
+    unit = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    cos, boxes = [], []
+    for _ in range(int(rng.integers(15, 40))):
+        lo = rng.integers(0, 15, 3) * h
+        hi = lo + rng.integers(1, 7, 3) * h
+        cos.append(cspace.CSpaceObstacle.build(off + lo + unit * (hi - lo), unit * 0.5,
+                                               reference_point=(0.25, 0.25, 0.25)))
+        boxes.append((lo - h, hi + h))
+    b = np.stack([off, off + 4.0])
+    fs = free_space(cspace.CSpace(cos, bounds=b), b)
+    n = 16
+    centres = (np.stack(np.meshgrid(*[np.arange(n)] * 3, indexing="ij"), -1) + 0.5) * h
+    free = np.ones((n, n, n), bool)
+    for lo, hi in boxes:
+        free &= ~((centres >= lo) & (centres <= hi)).all(axis=-1)
+    labels, count = ndimage.label(free)
+    assert fs.n_components == count
+    seen = {}
+    cells = np.argwhere(free)
+    _, first = np.unique(labels[free], return_index=True)  # one cell of each component
+    pick = np.union1d(first, rng.choice(len(cells), size=min(250, len(cells)), replace=False))
+    for idx in map(tuple, cells[pick]):
+        k = fs.component_of(off + centres[idx])
+        assert k is not None
+        assert seen.setdefault(labels[idx], k) == k
+    assert len(set(seen.values())) == count
+
+
 def test_points_in_or_on_the_c_obstacles_or_outside_the_bounds_have_no_component(tmp_path):
     scene, cs = _cage(tmp_path, slot=0.2, offset=FAR)
     fs = free_space(cs, scene.bounds)
