@@ -96,19 +96,26 @@ def test_view_writes_offline_html_of_a_shipped_scene(tmp_path, capsys):
 
 
 def test_view_draws_the_free_space_or_says_why_not(tmp_path, capsys):
-    """--free-space: the cage's two components, each its own node; a scene of triangle
-    pairs is drawn without them, saying why."""
+    """--free-space: the cage's two components, each its own node; a scene the exact free
+    space does not take (a non-convex sum) is drawn without them, saying why."""
     out = tmp_path / "cage.html"
     assert main(["view", str(SCENES / "cage.toml"), "-o", str(out), "--free-space"]) == 0
     assert "free space: FreeSpace(components=2" in capsys.readouterr().out
-    from test_decide import cage_toml
     from test_viz import scene_commands
 
     paths = {str(c.get("path", "")) for c in scene_commands(out.read_text())}
     assert {"/meshcat/cells/free 0", "/meshcat/cells/free 1"} <= paths
-    bug = tmp_path / "bug.toml"  # an open wall: triangle pairs
-    bug.write_text(cage_toml(slot=0.2, surfaces=True, tmp=tmp_path))
-    assert main(["view", str(bug), "-o", str(tmp_path / "bug.html"), "--free-space"]) == 0
+    from zoo import l_shape
+
+    V, F = l_shape()  # an L against a turned cube: a non-convex sum, off the union's grid
+    trimesh.Trimesh(V, F, process=False).export(tmp_path / "l.obj")
+    ell = tmp_path / "ell.toml"
+    ell.write_text('name = "ell"\n[robot]\nbox = [0.3, 0.3, 0.3]\n'
+                   'orientation = [17.0, -31.0, 52.0]\n[planning]\n'
+                   'bounds = [[-2.0, -2.0, -2.0], [5.0, 5.0, 3.0]]\n'
+                   'start = [-1.5, -1.5, -1.5]\ngoal = [4.5, 4.5, 2.5]\n'
+                   '[[obstacles]]\nmesh = "l.obj"\n')
+    assert main(["view", str(ell), "-o", str(tmp_path / "ell.html"), "--free-space"]) == 0
     assert "free space: not drawn: free_space: C-obstacle" in capsys.readouterr().out
 
 

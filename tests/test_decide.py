@@ -167,7 +167,7 @@ def test_open_walls_block_cells_too(tmp_path):
     """Walls as open one-sided squares (surface C-obstacles: a convex piece per triangle)."""
     scene, cs = _cage(tmp_path, slot=0.2, surfaces=True, offset=(250.0, 150.0, -300.0))
     assert {co.kind for co in cs.obstacles} - {"convex"}, [co.kind for co in cs.obstacles]
-    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=20)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=20, exact=False)
     assert d.answer == "no path", d.reason
     _check_wall_with_fcl(scene, d, n_cells=20)
 
@@ -340,7 +340,7 @@ def _hollow(tmp_path, start, goal, offset=(250.0, 150.0, -300.0)):
 def test_a_non_convex_solid_shuts_the_robot_in(tmp_path):
     scene, cs = _hollow(tmp_path, start=(0, 0, 0), goal=(1.6, 1.6, 1.6))
     assert [co.kind for co in cs.obstacles] == ["mesh"]
-    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, exact=False)  # the cells'
     assert d.answer == "no path", d.reason
     _check_wall_with_fcl(scene, d, n_cells=30)
     outside, cs2 = _hollow(tmp_path, start=(-1.6, -1.6, -1.6), goal=(1.6, 1.6, 1.6))

@@ -241,6 +241,46 @@ def test_components_match_a_lattice_flood_fill(seed):
     assert len(set(seen.values())) == count
 
 
+def test_a_components_sample_is_located_in_it(tmp_path):
+    """sample(k) is a symbolic point inside component k: located back in k, and in the free
+    space of more C-obstacles on the same bounds, in the component that holds it there."""
+    scene, cs = _cage(tmp_path, slot=0.2, offset=FAR, turn=TURN)
+    fs = free_space(cs, scene.bounds)
+    for k in range(fs.n_components):
+        assert fs.component_at(fs.sample(k)) == k
+    start = fs.component_of(scene.start)
+    inner = fs.sample(start)  # inside the cage: free of a far box too, in its start's part
+    unit = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)
+    far_box = cspace.CSpaceObstacle.build(np.asarray(FAR) + 1.6 + 0.2 * unit, 0.4 * unit)
+    more = free_space(cspace.CSpace(list(cs.obstacles) + [far_box], bounds=scene.bounds),
+                      scene.bounds)
+    assert more.component_at(inner) == more.component_of(scene.start) is not None
+
+
+@pytest.mark.parametrize("move", [dict(), dict(offset=FAR, scale=3.0)])
+def test_turning_decisions_on_the_exact_free_spaces(tmp_path, move):
+    """Over 8 slices: the cage (a cube never fits its slot) is 'no path' from the exact free
+    spaces, as from the cells; the piano (it turns through the door) stays 'unknown', joined
+    in them."""
+    from pathlib import Path
+
+    from cspace.planning.decide import decide_turning
+    from cspace.planning.plan import default_slices
+    from cspace.planning.turning import TurningCSpace
+
+    scene, _ = _cage(tmp_path, slot=0.2, **move)
+    tcs = TurningCSpace(scene, default_slices(scene, 8))
+    td = decide_turning(tcs, scene.start, scene.goal)
+    assert td.answer == "no path" and "exact free spaces" in td.reason
+    assert len(td.components) == 8 and td.links > 0 and td.clearance < 1e-5 * move.get("scale", 1)
+    cells = decide_turning(tcs, scene.start, scene.goal, exact=False)
+    assert cells.answer == "no path" and "exact" not in cells.reason
+    piano = cspace.load_scene(Path(__file__).parent.parent / "scenes" / "piano.toml")
+    tp = TurningCSpace(piano, default_slices(piano, 8))
+    td = decide_turning(tp, piano.start, piano.goal)
+    assert td.answer == "unknown" and "joined" in td.reason
+
+
 def test_points_in_or_on_the_c_obstacles_or_outside_the_bounds_have_no_component(tmp_path):
     scene, cs = _cage(tmp_path, slot=0.2, offset=FAR)
     fs = free_space(cs, scene.bounds)
@@ -313,6 +353,24 @@ def test_closed_convex_triangles_are_told_from_others():
     dented = cube.copy()
     dented[7] = [1, 1, 1]  # a corner pushed in: closed, not convex
     assert not _closed_convex(dented[F])
+
+
+def test_a_hollow_solid_on_the_grid_is_taken_whole(tmp_path):
+    """test_decide's hollow box (a closed room with a cube inside, one 'mesh' C-obstacle
+    whose vertices are on the union's grid): taken whole, the room is its own component,
+    checked by FCL; from outside, one component."""
+    from test_decide import _hollow
+
+    scene, cs = _hollow(tmp_path, start=(0, 0, 0), goal=(1.6, 1.6, 1.6))
+    fs = free_space(cs, scene.bounds)
+    assert fs.n_pieces == 0 and fs.n_components == 2
+    sep = fs.separation(scene.start, scene.goal)
+    assert sep is not None
+    _check_separation(scene, fs, sep)
+    outside, cs2 = _hollow(tmp_path, start=(-1.6, -1.6, -1.6), goal=(1.6, 1.6, 1.6))
+    fs2 = free_space(cs2, outside.bounds)
+    assert fs2.separation(outside.start, outside.goal) is None
+    assert fs2.component_of(outside.start) == fs2.component_of(outside.goal) is not None
 
 
 def test_a_non_convex_sum_off_the_grid_is_declined_by_name():

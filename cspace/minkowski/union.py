@@ -116,8 +116,8 @@ class _Lines:
 
     def hits(self, y0: Fraction, z0: Fraction) -> list:
         """The sub-facets the line ``(t, y0 + eps, z0 + eps**2)`` meets, in increasing order
-        of ``t``: ``[(x0, f), ...]`` with ``x0`` the exact ``x`` of the hit at ``eps = 0``
-        (two hits are ordered by ``x0``, then by the perturbation's terms)."""
+        of ``t``: ``[(key, f), ...]``; the hit is at ``x = k0 + k1 eps + k2 eps**2`` for
+        ``key = (k0, k1, k2)`` (fractions; keys compare as tuples)."""
         yf, zf = float(y0), float(z0)
         cand = np.nonzero((self.lo[:, 0] <= yf) & (yf <= self.hi[:, 0])
                           & (self.lo[:, 1] <= zf) & (zf <= self.hi[:, 1]))[0]
@@ -135,7 +135,7 @@ class _Lines:
         for (k0, f0), (k1, f1) in zip(out, out[1:]):
             if k0 == k1:  # pragma: no cover - two sub-facets of one plane overlap
                 raise ExactnessError(f"sub-facets {f0} and {f1} overlap on a line")
-        return [(k[0], f) for k, f in out]
+        return out
 
     @staticmethod
     def _side(a, b, y0, z0) -> int:
@@ -279,12 +279,47 @@ class UnionCells:
         X, Y, Z, W = (int(v) for v in P4)
         x = Fraction(X, W)
         hits = self.lines.hits(Fraction(Y, W), Fraction(Z, W))
-        for x0, g in hits:
-            if x0 == x:
+        for key, g in hits:
+            if key[0] == x:
                 return None
-            if x0 > x:
+            if key[0] > x:
                 return int(self.cell_of_shell[self.shells.of[self.lines.minus[g]]])
         return self.unbounded
+
+    def locate_key(self, y0: Fraction, z0: Fraction, key: tuple) -> int | None:
+        """The cell holding the symbolic point ``(k0 + k1 eps + k2 eps**2, y0 + eps,
+        z0 + eps**2)`` (:meth:`sample`'s), or None when it lies on the union's surface
+        (exact: such a point is on no sub-facet parallel to ``x``, and on another only
+        where the line's hit there has its key)."""
+        for k, g in self.lines.hits(y0, z0):
+            if k == key:
+                return None
+            if k > key:
+                return int(self.cell_of_shell[self.shells.of[self.lines.minus[g]]])
+        return self.unbounded
+
+    def sample(self, cell: int) -> tuple:
+        """A symbolic point strictly inside ``cell``: ``(y0, z0, key)`` for
+        :meth:`locate_key` (here or in another arrangement on the same grid). On the line
+        through a point of a sub-facet the cell bounds, between that hit and the next one
+        on the cell's side."""
+        cs, of, L = self.cell_of_shell, self.shells.of, self.lines
+        for f in np.unique(L.face).tolist():  # sub-facets across x
+            below, above = cs[of[L.minus[f]]] == cell, cs[of[L.plus[f]]] == cell
+            if not (below or above):
+                continue
+            X, Y, Z, W = _face_point(self.cx, f)
+            y0, z0 = Fraction(Y, W), Fraction(Z, W)
+            hits = L.hits(y0, z0)
+            at = next(i for i, (_, g) in enumerate(hits) if g == f)
+            key = hits[at][0]
+            nxt = at - 1 if below else at + 1
+            if 0 <= nxt < len(hits):
+                other = hits[nxt][0]
+                return y0, z0, tuple((a + b) / 2 for a, b in zip(key, other))
+            step = -1 if below else 1  # no hit beyond: one unit further out
+            return y0, z0, (key[0] + step, key[1], key[2])
+        raise InvalidArgumentError(f"union: cell {cell} has no sub-facet across x")
 
     def winding_of_cell(self, cell: int, P4: tuple) -> int:
         """Winding number at ``P4`` of the boundary of ``cell``, oriented away from it: the
@@ -295,7 +330,7 @@ class UnionCells:
         x = Fraction(X, W)
         cs, of = self.cell_of_shell, self.shells.of
         n = 0
-        for x0, g in self.lines.hits(Fraction(Y, W), Fraction(Z, W)):
+        for (x0, _, _), g in self.lines.hits(Fraction(Y, W), Fraction(Z, W)):
             if x0 <= x:
                 if x0 == x:
                     raise InvalidArgumentError("the point lies on the union's surface")

@@ -85,6 +85,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import ExactnessError, InvalidArgumentError, UnsupportedError
+from ..scene.model import CSpace
 from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _choose_frame, _components, _Frame,
                     _free_leaf_graph, _Grid, _labels, _OutOfTime, _polyline, _setup, _shift)
 from .corridor import EXTRA, refine_route
@@ -496,7 +497,7 @@ class TurningDecision:
 
 
 def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
-                   frame="auto") -> TurningDecision:
+                   frame="auto", exact: bool = True) -> TurningDecision:
     """Decide over orientations: can the robot go from ``start`` (at orientation 0) to
     ``goal`` (at ``tcs.slices.goal``) by translations at the orientations of ``tcs`` and turns
     in place between neighbouring ones?
@@ -521,6 +522,12 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
         As :func:`decide`'s, one for every orientation (so their cells coincide): ``'auto'``
         turns it to the start orientation's C-obstacles (the obstacles' faces are in every
         orientation's).
+    exact : bool, default True
+        First, where every orientation's C-obstacles are convex pieces: the exact free
+        space of each orientation (:func:`cspace.planning.free_space.free_space`), and
+        components of neighbours linked where their free spaces meet (each component of the
+        free space of both orientations' C-obstacles together, located in each): a superset
+        of the turns, exactly. Within ``EXACT_SHARE`` of ``time``; else the cells.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -531,6 +538,10 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
     b = np.asarray(tcs.bounds, dtype=np.float64).reshape(2, 3)
     slices = tcs.slices
     n = len(slices)
+    if exact and not getattr(tcs, "robot_hull", False):
+        td = _turning_exact(tcs, start, goal, b, t0, t0 + EXACT_SHARE * float(time))
+        if td is not None:
+            return td
     g = F = None
     labels, counts, clearance = [], [], 0.0
     try:
@@ -589,4 +600,63 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
     else:
         answer, reason = "unknown", f"start and goal may be joined at depth {depth}"
     return TurningDecision(answer, reason, clearance, depth, counts, links,
+                           _time.perf_counter() - t0)
+
+
+def _turning_exact(tcs, start, goal, b: np.ndarray, t0: float, deadline: float):
+    """:func:`decide_turning` on the exact free spaces (see its ``exact``): 'no path', or
+    'unknown' when start and goal are joined there (the cells' components hold the free
+    spaces', so they would be joined too); None when the free spaces cannot be made in
+    time, or start or goal is not strictly free in them. Every
+    free space has the same bounds, so the same grid: a component of the free space of two
+    neighbours' C-obstacles together lies in one component of each, and every point free at
+    both lies in one of them."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    slices = tcs.slices
+    n = len(slices)
+
+    def left() -> float:
+        if (t := deadline - _time.perf_counter()) <= 0:
+            raise TimeoutError
+        return t
+
+    try:
+        spaces = [free_space(tcs.slice(k), b, time=left()) for k in range(n)]
+        offset = np.concatenate([[0], np.cumsum([fs.n_components for fs in spaces])])
+        A, B, bound = [], [], max(fs.error_bound for fs in spaces)
+        for i in range(n):
+            for j in range(i + 1, n):
+                if not slices.neighbours(i, j):
+                    continue
+                both = CSpace(list(tcs.slice(i).obstacles) + list(tcs.slice(j).obstacles),
+                              bounds=b)
+                U = free_space(both, b, time=left())
+                bound = max(bound, U.error_bound)
+                for z in range(U.n_components):
+                    point = U.sample(z)
+                    a, c = spaces[i].component_at(point), spaces[j].component_at(point)
+                    if a is None or c is None:  # pragma: no cover - U's are inside both
+                        raise ExactnessError("a component free at both orientations is not")
+                    A.append(offset[i] + a)
+                    B.append(offset[j] + c)
+    except (UnsupportedError, TimeoutError, ExactnessError):
+        return None
+    k0 = spaces[0].component_of(start)
+    k1 = spaces[slices.goal].component_of(goal)
+    if k0 is None or k1 is None:
+        return None
+    m = int(offset[-1])
+    _, cls = connected_components(coo_matrix((np.ones(len(A)), (A, B)), shape=(m, m)),
+                                  directed=False)
+    counts = [fs.n_components for fs in spaces]
+    if cls[offset[0] + k0] == cls[offset[slices.goal] + k1]:  # the cells would join them too
+        return TurningDecision("unknown", f"start and goal joined over {n} orientations in "
+                               "their exact free spaces (by a superset of the turns)", bound, 0,
+                               counts, len(set(zip(A, B))), _time.perf_counter() - t0)
+    reason = (f"start and goal in different components of the exact free spaces of {n} "
+              f"orientations ({sum(counts)} components), joined where neighbours' free "
+              f"spaces meet ({len(set(zip(A, B)))} links: a superset of the turns)")
+    return TurningDecision("no path", reason, bound, 0, counts, len(set(zip(A, B))),
                            _time.perf_counter() - t0)

@@ -298,6 +298,18 @@ class FreeSpace:
         cell = self.cells.locate(P)
         return None if cell is None else self._component.get(cell)
 
+    def sample(self, k: int) -> tuple:
+        """A symbolic point strictly inside component ``k``, for :meth:`component_at` of
+        this free space or another one of the same bounds (the same grid):
+        :meth:`cspace.minkowski.union.UnionCells.sample`."""
+        return self.cells.sample(int(self._cell[k]))
+
+    def component_at(self, point: tuple) -> int | None:
+        """The component holding a symbolic point of :meth:`sample` (None: on or in the
+        grown C-obstacles, or outside the bounds)."""
+        cell = self.cells.locate_key(*point)
+        return None if cell is None else self._component.get(cell)
+
     def separation(self, start, goal) -> Separation | None:
         """A proof that ``start`` and ``goal`` are in different components, or None when they
         are in the same one (or either is not strictly free)."""
