@@ -281,6 +281,16 @@ def test_turning_decisions_on_the_exact_free_spaces(tmp_path, move):
     assert td.answer == "unknown" and "joined" in td.reason
 
 
+def test_the_frames_boxes_face_the_right_way():
+    from cspace.planning.free_space import _box_faces
+
+    for outward, sign in ((True, 1), (False, -1)):
+        V, F = _box_faces(np.array([-1, -2, -3]), np.array([4, 5, 6]), outward)
+        a, b, c = (V[F[:, k]].astype(float) for k in range(3))
+        volume6 = np.einsum("ij,ij->i", a, np.cross(b, c)).sum()
+        assert volume6 == sign * 6 * 5 * 7 * 9
+
+
 def test_points_in_or_on_the_c_obstacles_or_outside_the_bounds_have_no_component(tmp_path):
     scene, cs = _cage(tmp_path, slot=0.2, offset=FAR)
     fs = free_space(cs, scene.bounds)

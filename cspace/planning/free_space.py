@@ -2,18 +2,22 @@
 
 :func:`free_space` puts every convex piece of the C-obstacles that meets the planning bounds
 on one grid, grown outward (each vertex replaced by the corners of the grid cell holding it,
-and the hull taken: the piece only grows, by at most one step per axis), adds a frame (a box
-an eighth of the bounds' size larger, minus the bounds snapped outward; pieces that cross its
-outer box are clipped to it exactly, so a floor slab of any size leaves the step to the
-bounds), and makes the exact arrangement of all
-their triangles (:class:`cspace.minkowski.union.UnionCells`). Its cells of winding number 0,
-other than the unbounded one, are the free space's components: each lies inside the bounds.
+and the hull taken: the piece only grows, by at most one step per axis). It adds a frame: a
+box an eighth of the bounds' size larger, minus the bounds snapped outward (pieces that cross
+its outer box are clipped to it exactly, so a floor slab of any size leaves the step to the
+bounds). Then it makes the exact arrangement of all their triangles
+(:class:`cspace.minkowski.union.UnionCells`). Its cells of winding number 0, other than the
+unbounded one, are the free space's components: each lies inside the bounds. The grid depends
+on the bounds only, so free spaces of one bounds share it (:meth:`FreeSpace.sample` of one is
+located in another: :func:`cspace.planning.decide.decide_turning`).
 
 **What it proves.** Two free points in different components: every path between them meets
-the grown union, so no path between them has a clearance above
-:attr:`FreeSpace.error_bound` (the C-obstacles' own ``error_bound`` plus the growth, ``sqrt(3)``
-steps). The proof is checked on its own (:meth:`FreeSpace.separation`): the boundary of the
-start's component, oriented away from it, has different winding numbers at the two points.
+the grown union, so no path between them has a clearance above :attr:`FreeSpace.error_bound`
+(the C-obstacles' own ``error_bound`` plus the growth, ``sqrt(3)`` steps, or twice that when a
+flat piece was widened). The proof is checked on its own (:meth:`FreeSpace.separation`): the
+boundary of the start's component, oriented away from it, has different winding numbers at
+the two points. Two points in one component: a path joins them (the grown union holds the
+C-obstacles).
 
 **Which C-obstacles.** Those made of convex pieces (kinds ``'convex'``, ``'union'`` of such,
 ``'surface'``, and ``'pairs'``: each triangle pair's grown piece that can meet the bounds, up
@@ -236,8 +240,8 @@ class FreeSpace:
         The grid every piece was put on.
     error_bound : float
         Scene units: the largest ``error_bound`` of the C-obstacles plus the growth onto the
-        grid (``sqrt(3)`` steps). A proof of separation holds for paths whose clearance
-        exceeds it.
+        grid (``sqrt(3)`` steps, twice that when a flat piece was widened). A proof of
+        separation holds for paths whose clearance exceeds it.
     n_pieces : int
         Convex pieces united.
     n_components : int
