@@ -545,8 +545,9 @@ def free_space_section() -> list[str]:
              "frame around the bounds, the exact arrangement of their triangles "
              "(`cspace.minkowski.union`) and its cells of winding number 0. *separated*: start "
              "and goal in different components (the proof: the start component's closed "
-             "boundary winds differently about them); *declined*: a C-obstacle not made of "
-             "convex pieces (triangle pairs, non-convex sums; `UnsupportedError`). *decide*: "
+             "boundary winds differently about them); *declined*: more than 4000 convex "
+             "pieces near the bounds (the real scenes' triangle pairs), or a non-convex sum "
+             "whose vertices are off the grid (`UnsupportedError`). *decide*: "
              "`decide` as `cspace plan` runs it (the free space first, then the cells), and "
              "*cells alone* with `exact=False`; their answers and seconds. *clearance*: the "
              "statement's bound (the free space's `error_bound`, or the cells').",
