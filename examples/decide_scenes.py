@@ -26,6 +26,23 @@ from cspace.viz.scene_view import SceneView
 SCENES = Path(__file__).resolve().parents[1] / "scenes"
 
 
+def _below(V, F, z0):
+    """The triangles ``V[F]`` clipped to ``z <= z0`` (each clipped polygon fanned)."""
+    import numpy as np
+
+    out = []
+    for tri in V[F]:
+        poly = []
+        for a, b in zip(tri, np.roll(tri, -1, axis=0)):
+            if a[2] <= z0:
+                poly.append(a)
+            if (a[2] - z0) * (b[2] - z0) < 0:
+                poly.append(a + (z0 - a[2]) / (b[2] - a[2]) * (b - a))
+        out += [(poly[0], poly[k], poly[k + 1]) for k in range(1, len(poly) - 1)]
+    P = np.array(out, dtype=np.float64).reshape(-1, 3)
+    return P, np.arange(len(P)).reshape(-1, 3)
+
+
 def draw_cut(view: SceneView, scene, d) -> None:
     """The lower half (below the start) of the obstacles and of the proof (its separating
     surface, or its wall of cells), the robot at start and goal: a cutaway that shows the
@@ -40,8 +57,12 @@ def draw_cut(view: SceneView, scene, d) -> None:
             m = trimesh.creation.box(bounds=[lo, hi])
             view.add_obstacle(body.name, m.vertices, m.faces)
     wall = d.to_trimesh("blocked")
-    keep = wall.triangles_center[:, 2] <= scene.start[2]
-    wall = trimesh.Trimesh(wall.vertices, wall.faces[keep], process=False)
+    if d.separation is not None:  # one closed surface: cut by the plane, both sides drawn
+        V, F = _below(np.asarray(wall.vertices), np.asarray(wall.faces), scene.start[2])
+        wall = trimesh.Trimesh(V, np.vstack([F, F[:, ::-1]]), process=False)
+    else:  # boxes of cells: those below the plane
+        keep = wall.triangles_center[:, 2] <= scene.start[2]
+        wall = trimesh.Trimesh(wall.vertices, wall.faces[keep], process=False)
     view.add_cells("wall", wall.vertices, wall.faces, opacity=0.3)
     for end in ("start", "goal"):
         view.add_robot(end, scene.robot.vertices, scene.robot.faces, getattr(scene, end),
