@@ -578,7 +578,8 @@ def free_space_section() -> list[str]:
             print(lines[-1], flush=True)
     lines += ["", "Random boxes (sides 1 to 5, a unit cube robot, in a cube of side "
               "10 N^(1/3) at (250, 150, -300)): one `free_space` of all of them.", "",
-              "| C-obstacles | sub-facets | cells | components | seconds |", "|---|---|---|---|---|"]
+              "| C-obstacles | sub-facets | cells | components | seconds |",
+              "|---|---|---|---|---|"]
     rng = np.random.default_rng(0)
     off = np.array([250.0, 150.0, -300.0])
     unit = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], float)

@@ -21,5 +21,5 @@ from .plan import PlanResult, plan, plan_turning
 from .sampled import plan_sampled
 from .turning import TurningCSpace
 
-__all__ = ["Decision", "decide", "FreeSpace", "free_space", "PlanResult", "plan", "plan_turning", "plan_sampled",
-           "TurningCSpace"]
+__all__ = ["Decision", "decide", "FreeSpace", "free_space", "PlanResult", "plan", "plan_turning",
+           "plan_sampled", "TurningCSpace"]
