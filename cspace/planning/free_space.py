@@ -251,10 +251,13 @@ class FreeSpace:
     """
 
     def __init__(self, cells: UnionCells, grid: Grid, bounds: np.ndarray, error_bound: float,
-                 planes: list, n_pieces: int, seconds: float):
+                 n_pieces: int, seconds: float, *, planes: list, inner: tuple, meshes: list):
         self.cells, self.grid, self.bounds = cells, grid, bounds
         self.error_bound, self.n_pieces, self.time = error_bound, n_pieces, seconds
-        self._planes = planes  # (normals (f, 3) object, offsets (f,) object) per piece
+        # what a point must be strictly outside of, exactly: each grown piece's facet planes
+        # (normals, offsets: Python ints, grid units), the closed meshes taken whole, and
+        # strictly inside the frame's inner box (grid units)
+        self._planes, self._meshes, self._inner = planes, meshes, inner
         free = np.nonzero(cells.winding == 0)[0]
         free = free[free != cells.unbounded]
         self._component = {int(c): k for k, c in enumerate(free.tolist())}
@@ -476,8 +479,6 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         faces.append(F + n)
         n += 8
     cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check)
-    fs = FreeSpace(cells, G, b, err + widened * math.sqrt(3.0) * G.step, planes, len(pieces),
-                   _time.perf_counter() - t0)
-    fs._inner = (s_lo.tolist(), s_hi.tolist())
-    fs._meshes = meshes
-    return fs
+    return FreeSpace(cells, G, b, err + widened * math.sqrt(3.0) * G.step, len(pieces),
+                     _time.perf_counter() - t0, planes=planes,
+                     inner=(s_lo.tolist(), s_hi.tolist()), meshes=meshes)
