@@ -202,13 +202,27 @@ def test_clipping_a_piece_to_a_box_keeps_exactly_their_intersection(seed):
     assert (H[:, :3] @ X.T + H[:, 3:4] <= 1e-9).all()
 
 
-@pytest.mark.parametrize("seed", range(8))
+# Lattice scenes: seeds of one free component and of 2 to 4 (closed pockets).
+LATTICE_SEEDS = (0, 1, 2, 5, 15, 16, 18, 29)
+POCKETED = (1, 5, 15, 18, 29)
+
+
+@pytest.mark.parametrize("seed", LATTICE_SEEDS)
 def test_components_match_a_lattice_flood_fill(seed):
     """Random boxes on a lattice of 1/4 (a cube robot of 1/2: the C-obstacles are boxes on
     it too), at (250, 150, -300): every open lattice cell is wholly free or wholly inside,
     and the free components are the face-connected free cells (scipy's labels, from the
     cells' centres: nothing of ours). Same number of components, and the centres of a cell of
     each and of 250 random free cells in the component their labels say."""
+    cs, b, free, labels, count, centres, off, rng = _lattice(seed)
+    fs = free_space(cs, b)
+    assert fs.n_components == count
+    _check_lattice_components(fs, free, labels, count, centres, off, rng)
+
+
+def _lattice(seed):
+    """A random lattice scene (test_components_match_a_lattice_flood_fill): its C-space,
+    bounds, free cells, scipy's labels and count, the cells' centres and the offset."""
     from scipy import ndimage
 
     rng = np.random.default_rng(seed)
@@ -222,14 +236,16 @@ def test_components_match_a_lattice_flood_fill(seed):
                                                reference_point=(0.25, 0.25, 0.25)))
         boxes.append((lo - h, hi + h))
     b = np.stack([off, off + 4.0])
-    fs = free_space(cspace.CSpace(cos, bounds=b), b)
     n = 16
     centres = (np.stack(np.meshgrid(*[np.arange(n)] * 3, indexing="ij"), -1) + 0.5) * h
     free = np.ones((n, n, n), bool)
     for lo, hi in boxes:
         free &= ~((centres >= lo) & (centres <= hi)).all(axis=-1)
     labels, count = ndimage.label(free)
-    assert fs.n_components == count
+    return cspace.CSpace(cos, bounds=b), b, free, labels, count, centres, off, rng
+
+
+def _check_lattice_components(fs, free, labels, count, centres, off, rng):
     seen = {}
     cells = np.argwhere(free)
     _, first = np.unique(labels[free], return_index=True)  # one cell of each component
@@ -289,6 +305,31 @@ def test_the_frames_boxes_face_the_right_way():
         a, b, c = (V[F[:, k]].astype(float) for k in range(3))
         volume6 = np.einsum("ij,ij->i", a, np.cross(b, c)).sum()
         assert volume6 == sign * 6 * 5 * 7 * 9
+
+
+@pytest.mark.parametrize("seed", POCKETED)
+def test_the_cells_never_contradict_the_exact_free_space(seed):
+    """Two deciders that share only the C-obstacles: on lattice scenes, start and goal in
+    different flood-fill components are 'no path' exactly and never 'path' by the cells; in
+    one component, never 'no path' by either."""
+    cs, b, free, labels, count, centres, off, rng = _lattice(seed)
+    cells = np.argwhere(free)
+    lab = labels[free]
+    assert count > 1  # POCKETED seeds have closed pockets
+    pairs = [rng.choice(len(cells), size=2, replace=False) for _ in range(2)]
+    for k in range(2):  # and from two different components
+        a = rng.choice(np.nonzero(lab == lab[pairs[0][0]])[0])
+        pairs.append((a, rng.choice(np.nonzero(lab != lab[a])[0])))
+    for i, j in pairs:
+        q0, q1 = off + centres[tuple(cells[i])], off + centres[tuple(cells[j])]
+        apart = labels[tuple(cells[i])] != labels[tuple(cells[j])]
+        d = decide(cs, q0, q1, bounds=b, time=10)
+        c = decide(cs, q0, q1, bounds=b, time=3, exact=False)
+        if apart:
+            assert d.answer == "no path" and d.separation is not None, d.reason
+            assert c.answer != "path", c.reason
+        else:
+            assert d.answer != "no path" and c.answer != "no path", (d.reason, c.reason)
 
 
 def test_points_in_or_on_the_c_obstacles_or_outside_the_bounds_have_no_component(tmp_path):
