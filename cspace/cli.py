@@ -27,6 +27,9 @@
   (``plan(..., planner='auto')``); exit
   status 3 when no path exists, proved. ``--workers`` / ``--scheduler`` build through an
   executor, as for ``build``.
+- ``cspace free-space SCENE`` — :func:`cspace.planning.free_space.free_space` at the start's
+  orientation: its components, which hold start and goal, the proof when they differ;
+  ``-o`` writes the union's surface.
 - ``cspace view SCENE`` — :func:`cspace.viz.draw.draw_scene`: an offline HTML page of a scene
   (default ``<scene>.html``), or a live meshcat server with ``--live``; ``--free-space`` adds
   the components of :func:`cspace.planning.free_space.free_space`.
@@ -601,6 +604,31 @@ def _view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _free_space(args: argparse.Namespace) -> int:
+    from .planning.free_space import free_space
+    from .scene.files import load_scene
+    from .scene.model import model_scene
+
+    out = _out(args.output, MESH_FORMATS, "-o")
+    scene = load_scene(args.scene)
+    cache = None if args.no_cache else (args.cache_dir or True)
+    fs = free_space(model_scene(scene, cache=cache).cspace(), scene.bounds)
+    print(f"{scene.name}: {fs!r}")
+    a, b = fs.component_of(scene.start), fs.component_of(scene.goal)
+    print(f"  start in component {a}, goal in component {b} (None: not strictly free)")
+    sep = fs.separation(scene.start, scene.goal)
+    if sep is not None:
+        print(f"  separated: the start's component's boundary ({len(sep.faces)} triangles) "
+              f"winds {sep.winding[0]} about the start and {sep.winding[1]} about the goal: no "
+              f"path with a clearance above {fs.error_bound:.3g}")
+    elif a is not None and a == b:
+        print("  one component: a path exists (the grown union holds the C-obstacles)")
+    if out is not None:
+        write_atomic(out, lambda p: fs.to_trimesh().export(p))
+        print(f"wrote {out} (the union's surface, with the frame around the bounds)")
+    return 0
+
+
 def _executor_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=_positive_int, default=None, metavar="N",
                    help="build in N processes here (default: this process); with "
@@ -780,6 +808,14 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="re-check the path with FCL sampled every 1e-3 of the scene size")
     p.add_argument("--result", help="write a JSON summary (model, plan, path, checks)")
     p.set_defaults(func=_plan)
+    p = sub.add_parser("free-space", help="the exact free space at the start's orientation: "
+                       "components, start and goal, the union's surface", **_help(
+                           "cspace free-space scenes/cage.toml -o cage_union.stl"))
+    p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
+    p.add_argument("-o", "--output", help="write the union's surface (any format trimesh exports)")
+    p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
+    p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
+    p.set_defaults(func=_free_space)
     p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)", **_help(
         "cspace view scenes/window.toml -o window.html"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")

@@ -119,6 +119,21 @@ def test_view_draws_the_free_space_or_says_why_not(tmp_path, capsys):
     assert "free space: not drawn: free_space: C-obstacle" in capsys.readouterr().out
 
 
+def test_free_space_reports_components_and_writes_the_union(tmp_path, capsys):
+    out = tmp_path / "union.stl"
+    assert main(["free-space", str(SCENES / "cage.toml"), "-o", str(out), "--no-cache"]) == 0
+    text = capsys.readouterr().out
+    assert "components=2" in text and "separated" in text and "winds 1" in text
+    mesh = trimesh.load(out)  # a closed 2-cycle (walls meeting along edges: non-manifold)
+    F = np.asarray(mesh.faces)
+    directed = {(int(a), int(b)) for f in F for a, b in zip(f, np.roll(f, -1))}
+    assert all((b, a) in directed for a, b in directed) and mesh.volume > 0
+    assert main(["free-space", str(SCENES / "window.toml"), "--no-cache"]) == 0
+    assert "one component: a path exists" in capsys.readouterr().out
+    assert main(["free-space", str(SCENES / "cage.toml"), "-o", str(tmp_path / "u.xyz")]) == 2
+    assert "unknown format" in capsys.readouterr().err
+
+
 def test_view_live_serves_and_stops_without_a_terminal(capsys):
     assert main(["view", str(SCENES / "comb.toml"), "--live"]) == 0
     assert "meshcat is serving the scene at http://127.0.0.1:" in capsys.readouterr().out
