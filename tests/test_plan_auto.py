@@ -117,11 +117,13 @@ def test_cspace_plan_no_turns_keeps_auto_at_the_start_orientation(tmp_path):
 def test_translations_only_give_the_rest_of_the_budget_to_the_decision(monkeypatch):
     """With turns=False and nothing found, what is left of the budget goes to deciding again
     (a proof may take minutes). The first decision is given far too little time here (its
-    share set to 1e-4 s), so it ends 'unknown'; the second proves the cage closed."""
+    share set to 1e-4 s of the 10), so it ends 'unknown'; the second proves the cage
+    closed."""
     plan_module = sys.modules["cspace.planning.plan"]  # the package shadows it by plan()
     shares = [(p, s, 1e-5 if p == "decide" else f, 1e-4 if p == "decide" else c)
               for p, s, f, c in plan_module.AUTO_SHARES]
     monkeypatch.setattr(plan_module, "AUTO_SHARES", tuple(shares))
+    monkeypatch.setattr(plan_module, "AUTO_DECIDE_ALONE", 1e-5)
     r = plan(cspace.load_scene(SCENES / "cage.toml"), planner="auto", time=10.0, seed=1,
              turns=False)
     assert [t["planner"] for t in r.tried] == ["RRTConnect", "decide", "PRM", "decide"]

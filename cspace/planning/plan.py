@@ -407,6 +407,10 @@ AUTO_SLICES = 8
 #: exists, or unknown: then the planners go on).
 AUTO_SHARES = (("RRTConnect", "uniform", 0.05, 0.5), ("decide", None, 0.2, 2.0),
                ("PRM", "narrow", 0.3, 3.0))
+#: ``planner='auto'`` with translations only (``turns=False``, or a C-space without its
+#: scene): the decision's share of the budget, uncapped. Only PRM comes after it, and a proof
+#: may need most of the time (the Parasol bug trap's: about 7 s of ``--time 10``).
+AUTO_DECIDE_ALONE = 0.85
 #: ``planner='auto'``: when the start's orientation has no path, the share of the budget for
 #: deciding over :data:`AUTO_SLICES` slices and the turns between them (before planning them).
 AUTO_TURN_DECIDE = 0.3
@@ -419,8 +423,9 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     this orientation, which skips the samplers), then PRM with the narrow-passage sampler
     (gaps a uniform sampler rarely hits), then, on a scene whose robot may turn, the turning
     planner over :data:`AUTO_SLICES` slices (a passage the robot fits through only turned)
-    with the rest of the budget; translations only (``turns=False``), the rest goes to the
-    decision again, when it is more than the first decision had. After a proof at the start's
+    with the rest of the budget. Translations only (``turns=False``): the decision gets
+    :data:`AUTO_DECIDE_ALONE` of the budget, PRM the rest (and the decision again what is
+    left, when it is more than the first one had). After a proof at the start's
     orientation, the decision over those slices comes first
     (:func:`cspace.planning.decide.decide_turning`): a proof there too ends the search (not
     solved, ``decision.answer == 'no path'``). Stops at the first solution; every answer is
@@ -439,8 +444,10 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     q0, q1 = (_endpoint(cs, q, _bounds(bounds if bounds is not None else cs.bounds), w)
               for q, w in ((start, "start"), (goal, "goal")))
     d, d_budget = None, 0.0
+    alone = not (turns and scene is not None)  # translations only: no turns to plan after
     for n, (planner, sampler, share, cap) in enumerate(AUTO_SHARES):
-        budget = min(cap, share * time)
+        budget = (AUTO_DECIDE_ALONE * time if planner == "decide" and alone
+                  else min(cap, share * time))
         if n:  # the first planner always runs: there is always a path or a status
             budget = min(budget, time - (_time.perf_counter() - t0))
         if budget <= 0:
@@ -461,7 +468,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         if r.solved:
             break
     left = time - (_time.perf_counter() - t0)
-    if (not (r is not None and r.solved) and not (turns and scene is not None)
+    if (not (r is not None and r.solved) and alone
             and d is not None and d.answer == "unknown" and left > d_budget):
         # Translations only, nothing found, and more time left than the decision had: the rest
         # goes to deciding again (a proof may take minutes: the Parasol bug trap's,
