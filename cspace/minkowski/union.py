@@ -75,13 +75,15 @@ def _sign(x) -> int:
 class _Lines:
     """The sub-facet triangles not parallel to ``x``, for lines parallel to ``x``: each
     triangle's sub-facet, its three vertices projected to ``yz`` (fractions, made on first
-    use) and their float box (a filter only: it is padded beyond the conversions' error)."""
+    use) and their float box (a filter only: it is padded beyond the conversions' error);
+    ``across[f]``: sub-facet ``f`` is not parallel to ``x`` (lines meet only those)."""
 
     def __init__(self, cx, planes):
         self.cx, self.planes = cx, planes
         nx = np.array([k[0] for k in planes.keys], dtype=np.int64)
+        self.across = nx[cx.face_plane] != 0  # per sub-facet: not parallel to x
         tri_face, tris = [], []
-        for f in np.nonzero(nx[cx.face_plane] != 0)[0].tolist():
+        for f in np.nonzero(self.across)[0].tolist():
             for t in _face_tris(cx, f):
                 tri_face.append(f)
                 tris.append(t)
@@ -200,22 +202,10 @@ class UnionCells:
         order = np.argsort(cx.inc_edge, kind="stable")
         same = cx.inc_edge[order[1:]] == cx.inc_edge[order[:-1]]
         _, comp = component_labels(nf, cx.inc_face[order[:-1]][same], cx.inc_face[order[1:]][same])
-        self.component = comp.astype(np.int64)
         n_comp = int(comp.max()) + 1 if nf else 0
-        U = sh.n  # the unbounded cell's node in the union-find below
-        parent = list(range(sh.n + 1))
-
-        def find(a: int) -> int:
-            while parent[a] != a:
-                parent[a] = parent[parent[a]]
-                a = parent[a]
-            return a
-
-        def join(a: int, b: int) -> None:
-            ra, rb = find(a), find(b)
-            if ra != rb:
-                parent[ra] = rb
-
+        U = sh.n  # the unbounded cell's node among the shells joined below
+        ja: list = []  # shells joined: (ja[k], jb[k]) bound one cell
+        jb: list = []
         w = [None] * sh.n
 
         def put(s: int, v: int) -> None:
@@ -226,9 +216,8 @@ class UnionCells:
 
         of, lines = sh.of.tolist(), self.lines
         minus, plus, drop = lines.minus.tolist(), lines.plus.tolist(), lines.drop.tolist()
-        nx = np.array([k[0] for k in planes.keys], dtype=np.int64)[cx.face_plane]
         first = np.full(n_comp, -1, dtype=np.int64)
-        cand = np.nonzero(nx != 0)[0]
+        cand = np.nonzero(lines.across)[0]
         first[comp[cand][::-1]] = cand[::-1]  # each component's first sub-facet not along x
         if (first < 0).any():  # pragma: no cover - a closed surface has one
             raise ExactnessError("a component of the union has no sub-facet across x")
@@ -238,10 +227,8 @@ class UnionCells:
             X, Y, Z, W = _face_point(cx, f)
             hits = lines.hits(Fraction(Y, W), Fraction(Z, W))
             sides = [(of[minus[g]], of[plus[g]]) for _, g in hits]
-            join(U, sides[0][0])
-            join(sides[-1][1], U)
-            for (_, b), (c, _) in zip(sides, sides[1:]):
-                join(b, c)
+            ja += [U, sides[-1][1]] + [b for _, b in sides[:-1]]
+            jb += [sides[0][0], U] + [c for c, _ in sides[1:]]
             v = 0
             for (_, g), (a, b) in zip(reversed(hits), reversed(sides)):
                 put(b, v)
@@ -250,10 +237,10 @@ class UnionCells:
             if self.anchor is None:
                 self.anchor = minus[hits[0][1]]
         _propagate(cx, sh, w)  # the rest of each component's shells, across sub-facets
-        roots = np.array([find(s) for s in range(sh.n + 1)], dtype=np.int64)
-        cells, cell_of = np.unique(roots, return_inverse=True)
-        self.n_cells = len(cells)
-        self.cell_of_shell = cell_of[:-1].astype(np.int64)
+        self.n_cells, cell_of = component_labels(sh.n + 1, np.array(ja, dtype=np.int64),
+                                                 np.array(jb, dtype=np.int64))
+        cell_of = cell_of.astype(np.int64)
+        self.cell_of_shell = cell_of[:-1]
         self.unbounded = int(cell_of[-1])
         wind = np.zeros(self.n_cells, dtype=np.int64)
         seen = np.zeros(self.n_cells, dtype=bool)
@@ -304,7 +291,7 @@ class UnionCells:
         through a point of a sub-facet the cell bounds, between that hit and the next one
         on the cell's side."""
         cs, of, L = self.cell_of_shell, self.shells.of, self.lines
-        for f in np.unique(L.face).tolist():  # sub-facets across x
+        for f in np.nonzero(L.across)[0].tolist():
             below, above = cs[of[L.minus[f]]] == cell, cs[of[L.plus[f]]] == cell
             if not (below or above):
                 continue
