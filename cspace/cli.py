@@ -621,8 +621,10 @@ def _free_space(args: argparse.Namespace) -> int:
         print(f"  separated: the start's component's boundary ({len(sep.faces)} triangles) "
               f"winds {sep.winding[0]} about the start and {sep.winding[1]} about the goal: no "
               f"path with a clearance above {fs.error_bound:.3g}")
-    elif a is not None and a == b:
+    elif fs.joined(scene.start, scene.goal):
         print("  one component: a path exists (the grown union holds the C-obstacles)")
+    elif a is not None and a == b:
+        print("  one component of the bounds snapped outward (a step larger at most)")
     if out is not None:
         write_atomic(out, lambda p: fs.to_trimesh().export(p))
         print(f"wrote {out} (the union's surface, with the frame around the bounds)")

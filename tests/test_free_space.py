@@ -86,6 +86,13 @@ def test_a_slot_wider_than_the_robot_is_one_component(tmp_path, slot):
     assert fs.n_components == 1
     assert fs.component_of(scene.start) == fs.component_of(scene.goal) == 0
     assert fs.separation(scene.start, scene.goal) is None
+    assert fs.bounds_on_grid and fs.joined(scene.start, scene.goal)
+    # bounds off the grid: the components are of the bounds snapped outward (a step larger),
+    # so one component proves no path inside the bounds themselves
+    off_grid = np.asarray(scene.bounds) + [[-0.1], [0.1]]
+    fs2 = free_space(cs, off_grid)
+    assert not fs2.bounds_on_grid and not fs2.joined(scene.start, scene.goal)
+    assert fs2.component_of(scene.start) == fs2.component_of(scene.goal) is not None
     d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30)
     assert d.answer == "path" and d.free_space is not None, d.reason
     assert d.free_space.n_components == 1
@@ -151,6 +158,7 @@ def test_a_seam_in_flat_bounds_is_decided_exactly(tmp_path, offset, gap):
     fs = free_space(cs, b)
     sep = fs.separation(scene.start, scene.goal)
     assert (sep is None) == (gap > 0)
+    assert not fs.bounds_on_grid and not fs.joined(scene.start, scene.goal)  # flat: a slab
     if sep is not None:
         _check_separation(scene, fs, sep, bounds=b)
 

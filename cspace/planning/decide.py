@@ -322,7 +322,7 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
             # half the budget at most: a union too large for it leaves the cells the rest
             fs = free_space(cspace, b, time=EXACT_SHARE * max(0.0, deadline - t0))
             sep = fs.separation(q0, q1)
-            one = (k := fs.component_of(q0)) is not None and k == fs.component_of(q1)
+            one = sep is None and fs.joined(q0, q1)
         except (UnsupportedError, TimeoutError):
             fs = sep = None  # pairs or non-convex sums, or too large: the cells alone
         except ExactnessError:  # pragma: no cover - the lines' joins and the windings differ
@@ -605,9 +605,10 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
 
 def _turning_exact(tcs, start, goal, b: np.ndarray, t0: float, deadline: float):
     """:func:`decide_turning` on the exact free spaces (see its ``exact``): 'no path', or
-    'unknown' when start and goal are joined there (the cells' components hold the free
-    spaces', so they would be joined too); None when the free spaces cannot be made in
-    time, or start or goal is not strictly free in them. Every
+    'unknown' when start and goal are joined there inside the bounds (the cells' components
+    hold the free spaces', so they would be joined too); None when the free spaces cannot be
+    made in time, start or goal is not strictly free in them, or they are joined in bounds
+    snapped outward (perhaps just outside the bounds). Every
     free space has the same bounds, so the same grid: a component of the free space of two
     neighbours' C-obstacles together lies in one component of each, and every point free at
     both lies in one of them."""
@@ -650,13 +651,15 @@ def _turning_exact(tcs, start, goal, b: np.ndarray, t0: float, deadline: float):
     m = int(offset[-1])
     _, cls = connected_components(coo_matrix((np.ones(len(A)), (A, B)), shape=(m, m)),
                                   directed=False)
-    counts = [fs.n_components for fs in spaces]
-    if cls[offset[0] + k0] == cls[offset[slices.goal] + k1]:  # the cells would join them too
+    counts, links = [fs.n_components for fs in spaces], len(set(zip(A, B)))
+    if cls[offset[0] + k0] == cls[offset[slices.goal] + k1]:
+        if not spaces[0].bounds_on_grid:  # joined perhaps just outside the bounds: the cells
+            return None
         return TurningDecision("unknown", f"start and goal joined over {n} orientations in "
                                "their exact free spaces (by a superset of the turns)", bound, 0,
-                               counts, len(set(zip(A, B))), _time.perf_counter() - t0)
+                               counts, links, _time.perf_counter() - t0)
     reason = (f"start and goal in different components of the exact free spaces of {n} "
               f"orientations ({sum(counts)} components), joined where neighbours' free "
-              f"spaces meet ({len(set(zip(A, B)))} links: a superset of the turns)")
-    return TurningDecision("no path", reason, bound, 0, counts, len(set(zip(A, B))),
+              f"spaces meet ({links} links: a superset of the turns)")
+    return TurningDecision("no path", reason, bound, 0, counts, links,
                            _time.perf_counter() - t0)

@@ -17,7 +17,8 @@ the grown union, so no path between them has a clearance above :attr:`FreeSpace.
 flat piece was widened). The proof is checked on its own (:meth:`FreeSpace.separation`): the
 boundary of the start's component, oriented away from it, has different winding numbers at
 the two points. Two points in one component: a path joins them (the grown union holds the
-C-obstacles).
+C-obstacles) inside the bounds snapped outward, inside the bounds themselves when they are on
+the grid (:meth:`FreeSpace.joined`).
 
 **Which C-obstacles.** Those made of convex pieces (kinds ``'convex'``, ``'union'`` of such,
 ``'surface'``, and ``'pairs'``: each triangle pair's grown piece that can meet the bounds, up
@@ -245,18 +246,22 @@ class FreeSpace:
     n_pieces : int
         Convex pieces united.
     n_components : int
-        Components of the free space inside the bounds.
+        Components of the free space inside the bounds (snapped outward).
+    bounds_on_grid : bool
+        The bounds are grid points and not flat: the frame's inner box is the bounds.
     time : float
         Seconds taken.
     """
 
     def __init__(self, cells: UnionCells, grid: Grid, bounds: np.ndarray, error_bound: float,
-                 n_pieces: int, seconds: float, *, planes: list, inner: tuple, meshes: list):
+                 n_pieces: int, seconds: float, *, planes: list, inner: tuple, meshes: list,
+                 bounds_on_grid: bool):
         self.cells, self.grid, self.bounds = cells, grid, bounds
+        self.bounds_on_grid = bounds_on_grid
         self.error_bound, self.n_pieces, self.time = error_bound, n_pieces, seconds
         # what a point must be strictly outside of, exactly: each grown piece's facet planes
-        # (normals, offsets: Python ints, grid units), the closed meshes taken whole, and
-        # strictly inside the frame's inner box (grid units)
+        # (n0, n1, n2, d: n . x <= d inside, Python ints, grid units), the closed meshes
+        # taken whole; and strictly inside the frame's inner box (grid units)
         self._planes, self._meshes, self._inner = planes, meshes, inner
         free = np.nonzero(cells.winding == 0)[0]
         free = free[free != cells.unbounded]
@@ -286,8 +291,8 @@ class FreeSpace:
         lo, hi = self._inner
         if not all(lo[k] * W < P[k] < hi[k] * W for k in range(3)):
             return False
-        for N, d in self._planes:
-            if not any(n0 * X + n1 * Y + n2 * Z > dd * W for (n0, n1, n2), dd in zip(N, d)):
+        for piece in self._planes:
+            if not any(n0 * X + n1 * Y + n2 * Z > d * W for n0, n1, n2, d in piece):
                 return False
         return True
 
@@ -304,6 +309,14 @@ class FreeSpace:
             return None
         cell = self.cells.locate(P)
         return None if cell is None else self._component.get(cell)
+
+    def joined(self, start, goal) -> bool:
+        """Whether a path proved to exist joins ``start`` and ``goal`` inside the bounds:
+        both in one component, and the bounds on the grid (else the components are of the
+        bounds snapped outward, up to a step larger: a path could leave the bounds). The
+        grown union holds the C-obstacles, so its free space is free."""
+        a = self.component_of(start)
+        return self.bounds_on_grid and a is not None and a == self.component_of(goal)
 
     def sample(self, k: int) -> tuple:
         """A symbolic point strictly inside component ``k``, for :meth:`component_at` of
@@ -391,14 +404,24 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     # that cross it are clipped to it (exactly) and the grid's step follows the bounds.
     pad = 0.125 * float((b[1] - b[0]).max()) + 2.0**-20 * float(np.abs(b).max() + 1.0)
     o_lo, o_hi = b[0] - pad, b[1] + pad
+    G = Grid.for_box(o_lo, o_hi)
+    e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
+    # The frame's inner box: the bounds snapped outward (flat bounds, a planar problem: a step
+    # either side, so that it is a box). Its free space is computed whole: every piece that
+    # meets it counts, so one component joins its points by a path inside it.
+    s_lo = np.floor(np.ldexp(b[0], -e)).astype(np.int64) - origin
+    s_hi = np.ceil(np.ldexp(b[1], -e)).astype(np.int64) - origin
+    flat = s_lo == s_hi
+    s_lo, s_hi = s_lo - flat, s_hi + flat
+    inner = np.stack([G.to_float(s_lo), G.to_float(s_hi)])  # exact: grid points
     meshes: list = []
     found, count, err = [], 0, 0.0
     for i, co in enumerate(cspace.obstacles):  # what each C-obstacle is made of, counted
         B = np.asarray(co.bounds, dtype=np.float64)
-        if (B[1] < b[0]).any() or (B[0] > b[1]).any():
-            continue  # does not meet the closed bounds: nothing inside them changes
+        if (B[1] < inner[0]).any() or (B[0] > inner[1]).any():
+            continue  # does not meet the closed inner box: nothing inside it changes
         name = f"#{i}" + (f" ({co.name})" if getattr(co, "name", None) else "")
-        got, closed, plans = _pieces(co, name, b)
+        got, closed, plans = _pieces(co, name, inner)
         found.append((name, got, plans))
         count += len(got) + sum(len(p[2]) for p in plans)
         if count > max_pieces:
@@ -414,12 +437,10 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
             got = got + _pair_pieces(plan, name, (o_lo, o_hi))
         for p in got:
             V = p.vertices if isinstance(p, ConvexPolytope) else p
-            if (V.max(axis=0) >= b[0]).all() and (V.min(axis=0) <= b[1]).all():
+            if (V.max(axis=0) >= inner[0]).all() and (V.min(axis=0) <= inner[1]).all():
                 inside = (V.min(axis=0) >= o_lo).all() and (V.max(axis=0) <= o_hi).all()
                 pieces.append(V if inside else p)
         check("pieces")
-    G = Grid.for_box(o_lo, o_hi)
-    e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
     ints, faces, planes, n, widened = [], [], [], 0, 1
     for co in meshes:  # closed meshes: their own triangles, when their vertices are on G
         V = np.asarray(co._impl.vertices, dtype=np.float64)
@@ -462,15 +483,7 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         ints.append(P.ints)
         faces.append(F + n)
         n += len(P.ints)
-        N = P.normals.astype(object)
-        d = [max(int(np.dot(nn, v)) for v in P.ints.astype(object).tolist())
-             for nn in N.tolist()]
-        planes.append((N.tolist(), d))
-    s_lo = np.floor(np.ldexp(b[0], -e)).astype(np.int64) - origin
-    s_hi = np.ceil(np.ldexp(b[1], -e)).astype(np.int64) - origin
-    # flat bounds (a planar problem): a step either side, so the frame's inner box is a box
-    flat = s_lo == s_hi
-    s_lo, s_hi = s_lo - flat, s_hi + flat
+        planes.append(sorted(P.planes()))
     allp = np.vstack([s_lo, s_hi] + ints)
     f_lo, f_hi = allp.min(axis=0) - 2, allp.max(axis=0) + 2
     for lo_, hi_, out in ((f_lo, f_hi, True), (s_lo, s_hi, False)):
@@ -481,4 +494,5 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check)
     return FreeSpace(cells, G, b, err + widened * math.sqrt(3.0) * G.step, len(pieces),
                      _time.perf_counter() - t0, planes=planes,
-                     inner=(s_lo.tolist(), s_hi.tolist()), meshes=meshes)
+                     inner=(s_lo.tolist(), s_hi.tolist()), meshes=meshes,
+                     bounds_on_grid=bool((inner == b).all()))
