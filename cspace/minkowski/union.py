@@ -57,15 +57,15 @@ MAX_COORDINATE = 2**27
 
 @dataclass
 class _Cycle:
-    """The input triangles as the trimming stages read a superset: each triangle its own
-    facet, counted once."""
+    """The input triangles as the trimming stages read a superset, each counted once:
+    ``facet[t]`` names the convex polygon triangle ``t`` is a fan triangle of."""
 
     ints: np.ndarray
     faces: np.ndarray
+    facet: np.ndarray
 
     def triangles(self):
-        m = len(self.faces)
-        return self.faces, np.arange(m, dtype=np.int64), np.ones(m, dtype=np.int64)
+        return self.faces, self.facet, np.ones(len(self.faces), dtype=np.int64)
 
 
 def _sign(x) -> int:
@@ -166,6 +166,10 @@ class UnionCells:
     check : callable, optional
         ``check(stage, detail='')``, called between stages, every 64 planes and every
         line: it may raise to stop the work (a deadline, a memory budget).
+    facet : (m,) int64, optional
+        Triangles with one number are the fan of one convex polygon (a facet of a convex
+        piece): a plane holding only those is arranged whole, in one compiled call (as the
+        trimming's planes of one superset facet). Default: each triangle on its own.
 
     Attributes
     ----------
@@ -177,7 +181,8 @@ class UnionCells:
         The input's winding number in each cell (> 0: inside the union).
     """
 
-    def __init__(self, ints: np.ndarray, faces: np.ndarray, *, workers: int = 1, check=None):
+    def __init__(self, ints: np.ndarray, faces: np.ndarray, *, workers: int = 1, check=None,
+                 facet: np.ndarray | None = None):
         ints = np.asarray(ints, dtype=np.int64).reshape(-1, 3)
         faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
         if len(ints) and np.abs(ints).max() >= MAX_COORDINATE:
@@ -187,7 +192,9 @@ class UnionCells:
             raise InvalidArgumentError("union: no triangles")
         if check is None:
             check = lambda stage, detail="": None  # noqa: E731 - nothing watched
-        S = _Cycle(ints, faces)
+        facet = (np.arange(len(faces), dtype=np.int64) if facet is None
+                 else np.asarray(facet, dtype=np.int64).reshape(len(faces)))
+        S = _Cycle(ints, faces, facet)
         planes = _plane_groups(S)
         cuts = _cuts(ints, planes, workers)
         check("intersections")

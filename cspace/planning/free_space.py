@@ -22,10 +22,13 @@ the grid (:meth:`FreeSpace.joined`).
 
 **Which C-obstacles.** Those made of convex pieces (kinds ``'convex'``, ``'union'`` of such,
 ``'surface'``, and ``'pairs'``: each triangle pair's grown piece that can meet the bounds, up
-to ``max_pieces``), and closed meshes (kind ``'mesh'``: a pair's containment terms) whose
-vertices lie on the union's grid, taken whole. A flat piece (parallel triangles of an open
+to ``max_pieces``; against a closed convex robot part, one piece per convex patch of
+coplanar obstacle triangles), and closed meshes (kind ``'mesh'``: a pair's containment terms)
+whose vertices lie on the union's grid, taken whole. A solid body's non-convex sum (NCC-CVMS,
+kind ``'mesh'``, off the grid) is taken as the same scene's triangle pairs, the same set
+(:func:`_operands`; it needs the C-space's scene). A flat piece (parallel triangles of an open
 surface) is grown by one more step on every side, and the error bound says so. Other
-C-obstacles (a non-convex sum's surface, off the grid) raise
+C-obstacles (a sum without its scene, a containment term off the grid) raise
 :class:`~cspace.errors.UnsupportedError`; :func:`cspace.planning.decide.decide` then decides
 with certified cells alone.
 """
@@ -41,12 +44,18 @@ import numpy as np
 
 from ..errors import DegenerateError, ExactnessError, InvalidArgumentError, UnsupportedError
 from ..geometry.exact import Grid
+from ..geometry.polygon import convex_patches
 from ..mesh.convex import ConvexPolytope
 from ..minkowski.output import _to_float_compiled
 from ..minkowski.union import UnionCells
 
 #: Default largest number of convex pieces :func:`free_space` unites.
 MAX_PIECES = 4000
+
+# How far (grid steps of a C-obstacle's grid) the triangles merged into one convex piece
+# (_pair_plan) may lie off one plane: a snapped flat face's are within about a step of it.
+# It is not a decision: a patch only grows within it, and error_bound states what it adds.
+PATCH_TOLERANCE = 2
 
 # The box of the unit cube's corners, for growing a vertex to its grid cell.
 _CORNERS = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)], dtype=np.int64)
@@ -81,7 +90,9 @@ def _pieces(co, name: str, b: np.ndarray) -> tuple[list, list, list]:
 def _pair_plan(co, b: np.ndarray) -> tuple:
     """The pieces ``S[i] ⊕ T[j] ⊕ box`` of a triangle-pair C-obstacle whose boxes meet ``b``
     (flat ones left out when an operand is closed, as the C-obstacle leaves them):
-    ``(co, T, i, j)``. With a closed convex robot part, one piece per obstacle triangle."""
+    ``(co, S, T, i, j, extra)``. With a closed convex robot part, one piece per convex
+    patch of (nearly) coplanar obstacle triangles (:func:`cspace.geometry.polygon.convex_patches`),
+    which may hold points up to ``extra`` (scene units) beyond the C-obstacle."""
     from ..cobstacle.pairs import TrianglePairs, _flat
 
     S, T, g = co.S, co.T, np.asarray(co._impl.g, dtype=np.int64).reshape(3)
@@ -90,10 +101,25 @@ def _pair_plan(co, b: np.ndarray) -> tuple:
     if merged:
         # A closed convex robot part: the pieces of one obstacle triangle s, over all of the
         # part's triangles, and the other pairs (or the containment term, for a part of the
-        # obstacle that fits in the robot) cover s ⊕ (c - R), one convex piece.
+        # obstacle that fits in the robot) cover s ⊕ (c - R), one convex piece. Coplanar
+        # triangles whose union is a convex polygon Q give one piece too: Q ⊕ (c - R) is the
+        # union of theirs (a sum distributes over a union), and a wall's pieces, one per
+        # triangle, would overlap their neighbours on shared planes, the union's costliest
+        # arrangements (the pieces of a shell of 400 squares: 140 s, 11 000 planes).
+        # Snapping leaves a flat face coplanar only within a step or so: a patch may hold
+        # vertices up to PATCH_TOLERANCE steps off its plane, its hull then within
+        # 2 sqrt(3) of that of its triangles (convex_patches), which the bound states.
         T = np.unique(T.reshape(-1, 3), axis=0)[None]
-    s_lo, s_hi, t_lo, t_hi = S.min(axis=1), S.max(axis=1), T.min(axis=1), T.max(axis=1)
-    tp = TrianglePairs(S, T, np.zeros((0, 2), np.int64), np.zeros(0, bool), margin=g)
+        V, F = np.unique(S.reshape(-1, 3), axis=0, return_inverse=True)
+        patches, _, off = convex_patches(V, F.reshape(-1, 3), PATCH_TOLERANCE)
+        S = [V[k] for k in patches]
+        extra = off * 6.0 * PATCH_TOLERANCE * co.grid.step
+    else:
+        tp = TrianglePairs(S, T, np.zeros((0, 2), np.int64), np.zeros(0, bool), margin=g)
+        extra = 0.0
+    s_lo = np.array([x.min(axis=0) for x in S]).reshape(-1, 3)
+    s_hi = np.array([x.max(axis=0) for x in S]).reshape(-1, 3)
+    t_lo, t_hi = T.min(axis=1), T.max(axis=1)
     I, J = [], []
     rows = max(1, 200_000 // max(len(T), 1))  # pairs tested at once
     for i0 in range(0, len(S), rows):
@@ -106,7 +132,7 @@ def _pair_plan(co, b: np.ndarray) -> tuple:
             ii, jj = ii[keep], jj[keep]
         I.append(ii)
         J.append(jj)
-    return co, T, np.concatenate(I), np.concatenate(J)
+    return co, S, T, np.concatenate(I), np.concatenate(J), extra
 
 
 def _pair_pieces(plan: tuple, name: str, outer) -> list:
@@ -114,17 +140,61 @@ def _pair_pieces(plan: tuple, name: str, outer) -> list:
     C-obstacle's grid), or, crossing the box ``outer``, as their hull."""
     from ..geometry.snapping import grow_points
 
-    co, T, I, J = plan
+    co, S, T, I, J, _ = plan
     g = np.asarray(co._impl.g, dtype=np.int64).reshape(3)
     out = []
     for i, j in zip(I.tolist(), J.tolist()):
-        pts = grow_points((co.S[i][:, None] + T[j][None]).reshape(-1, 3), g)
+        pts = grow_points((S[i][:, None] + T[j][None]).reshape(-1, 3), g)
         V = co.grid.to_float(pts)
         if (V.min(axis=0) >= outer[0]).all() and (V.max(axis=0) <= outer[1]).all():
             out.append(V)
         else:
             out.append(ConvexPolytope.from_ints(pts, grid=co.grid, name=name))
     return out
+
+
+def _on_grid(co, G: Grid) -> np.ndarray | None:
+    """A mesh C-obstacle's vertices in ``G``'s integers, or None when they are not grid
+    points of ``G`` within the union's range."""
+    e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
+    k = np.ldexp(np.asarray(co._impl.vertices, dtype=np.float64), -e)
+    if not (np.floor(k) == k).all() or np.abs(k - origin).max() >= 2**27 - 8:
+        return None
+    return k.astype(np.int64) - origin
+
+
+def _operands(cspace, inner: np.ndarray, G: Grid) -> tuple:
+    """The C-obstacles of ``cspace`` :func:`free_space` unites in the box ``inner`` (a lazy
+    C-space's built there now): its own, or, where a solid body's C-obstacle is a non-convex
+    sum (NCC-CVMS, kind ``'mesh'``) off ``G``, those of the same scene modelled with
+    ``sums=False``: each solid body against a convex robot part as triangle pairs, the same
+    set, with nothing to build (one convex piece per patch of coplanar triangles here:
+    :func:`_pair_plan`). A lazy C-space goes to pairs before building any sum. This needs the
+    C-space's scene (a C-space made from one has it); without it a sum off ``G`` stays, and
+    is declined."""
+    from ..scene.model import LazyCSpace, model_scene
+
+    model = getattr(cspace, "model", None)
+    if isinstance(cspace, LazyCSpace):
+        if not cspace.has_sums():
+            cspace.build(inner[0], inner[1])
+            return cspace.obstacles
+    else:
+        cos = cspace.obstacles
+
+        def off(co) -> bool:
+            B = np.asarray(co.bounds, dtype=np.float64)
+            return (co.kind == "mesh" and getattr(co, "sum", None) is not None
+                    and not ((B[1] < inner[0]).any() or (B[0] > inner[1]).any())
+                    and _on_grid(co, G) is None)
+
+        scene = getattr(cspace, "scene", None)
+        if scene is None or not any(off(co) for co in cos):
+            return cos
+        model = model_scene(scene, build=False, robot_hull=cspace.robot_hull)
+    pairs = LazyCSpace(model, sums=False)
+    pairs.build(inner[0], inner[1])
+    return pairs.obstacles
 
 
 def _closed_convex(T: np.ndarray) -> bool:
@@ -397,8 +467,6 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
     if not (np.isfinite(b).all() and (b[0] <= b[1]).all()):
         raise InvalidArgumentError(f"free_space: bounds {b.tolist()} are not a box")
-    if hasattr(cspace, "build"):  # a lazy C-space: what meets the bounds, built now
-        cspace.build(b[0], b[1])
     # The frame's outer box: the bounds and an eighth of their size around them. Parts of
     # pieces beyond it change nothing inside the bounds (the frame fills the rest), so pieces
     # that cross it are clipped to it (exactly) and the grid's step follows the bounds.
@@ -416,20 +484,21 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     inner = np.stack([G.to_float(s_lo), G.to_float(s_hi)])  # exact: grid points
     meshes: list = []
     found, count, err = [], 0, 0.0
-    for i, co in enumerate(cspace.obstacles):  # what each C-obstacle is made of, counted
+    for i, co in enumerate(_operands(cspace, inner, G)):  # what each is made of, counted
         B = np.asarray(co.bounds, dtype=np.float64)
         if (B[1] < inner[0]).any() or (B[0] > inner[1]).any():
             continue  # does not meet the closed inner box: nothing inside it changes
         name = f"#{i}" + (f" ({co.name})" if getattr(co, "name", None) else "")
         got, closed, plans = _pieces(co, name, inner)
         found.append((name, got, plans))
-        count += len(got) + sum(len(p[2]) for p in plans)
+        count += len(got) + sum(len(p[3]) for p in plans)
         if count > max_pieces:
             raise UnsupportedError(
                 f"free_space: more than {max_pieces} convex pieces meet the bounds (at "
                 f"C-obstacle {name})")
         meshes += closed
-        err = max(err, float(co.error_bound))
+        # a patch of nearly coplanar triangles adds its flatness (_pair_plan)
+        err = max(err, float(co.error_bound) + max([p[5] for p in plans], default=0.0))
         check("pieces")
     pieces = []
     for name, got, plans in found:
@@ -441,18 +510,20 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
                 inside = (V.min(axis=0) >= o_lo).all() and (V.max(axis=0) <= o_hi).all()
                 pieces.append(V if inside else p)
         check("pieces")
-    ints, faces, planes, n, widened = [], [], [], 0, 1
+    ints, faces, facets, planes, n, n_facets, widened = [], [], [], [], 0, 0, 1
     for co in meshes:  # closed meshes: their own triangles, when their vertices are on G
-        V = np.asarray(co._impl.vertices, dtype=np.float64)
-        k = np.ldexp(V, -e)
-        if not (np.floor(k) == k).all() or np.abs(k - origin).max() >= 2**27 - 8:
+        k = _on_grid(co, G)
+        if k is None:
             raise UnsupportedError(
                 f"free_space: C-obstacle {getattr(co, 'name', '')!r} (kind 'mesh') has "
                 f"vertices off the union's grid (step 2**{e}) or beyond its range; the exact "
                 "union takes closed meshes only on it")
-        ints.append(k.astype(np.int64) - origin)
-        faces.append(np.asarray(co._impl.faces, dtype=np.int64) + n)
-        n += len(V)
+        ints.append(k)
+        F = np.asarray(co._impl.faces, dtype=np.int64)
+        faces.append(F + n)
+        facets.append(np.arange(len(F), dtype=np.int64) + n_facets)  # each on its own
+        n += len(k)
+        n_facets += len(F)
     for V in pieces:
         check("pieces")
         if not isinstance(V, np.ndarray):  # crosses the outer box: clipped to it, exactly
@@ -479,10 +550,12 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
             pts = np.where(_CORNERS[None].astype(bool), k_hi[:, None, :] + 1,
                            k_lo[:, None, :] - 1)
             P = ConvexPolytope.from_ints(pts.reshape(-1, 3), grid=G, name="piece")
-        F, _ = P.triangles()
+        F, fid = P.triangles()
         ints.append(P.ints)
         faces.append(F + n)
+        facets.append(fid + n_facets)  # one number per facet polygon: arranged whole
         n += len(P.ints)
+        n_facets += P.n_facets
         planes.append(sorted(P.planes()))
     allp = np.vstack([s_lo, s_hi] + ints)
     f_lo, f_hi = allp.min(axis=0) - 2, allp.max(axis=0) + 2
@@ -490,8 +563,11 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         V, F = _box_faces(lo_, hi_, out)
         ints.append(V)
         faces.append(F + n)
+        facets.append(np.arange(12, dtype=np.int64) // 2 + n_facets)  # _BOX: a face's two
         n += 8
-    cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check)
+        n_facets += 6
+    cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check,
+                       facet=np.concatenate(facets))
     return FreeSpace(cells, G, b, err + widened * math.sqrt(3.0) * G.step, len(pieces),
                      _time.perf_counter() - t0, planes=planes,
                      inner=(s_lo.tolist(), s_hi.tolist()), meshes=meshes,

@@ -738,6 +738,11 @@ class LazyCSpace(CSpace):
         for k in np.nonzero(meet)[0].tolist():
             self._union._engine(k)
 
+    def has_sums(self) -> bool:
+        """Whether some (body, robot part) pair is built as one non-convex sum (NCC-CVMS)."""
+        return any(pair_construction(b.kind, p.kind, self._ctx.sums) == "NCC-CVMS"
+                   for b, p in self._todo)
+
     def _make(self, k: int) -> _UnionOf:
         b, part = self._todo[k]
         pair = _build_one(self._ctx, b, part, self.model.robot_parts)
