@@ -631,8 +631,8 @@ def _turning_exact(tcs, start, goal, b: np.ndarray, t0: float, deadline: float):
             for j in range(i + 1, n):
                 if not slices.neighbours(i, j):
                     continue
-                both = CSpace(list(tcs.slice(i).obstacles) + list(tcs.slice(j).obstacles),
-                              bounds=b)
+                # (what each free space united: a non-convex sum as its scene's triangle pairs)
+                both = CSpace(spaces[i].obstacles + spaces[j].obstacles, bounds=b)
                 U = free_space(both, b, time=left())
                 bound = max(bound, U.error_bound)
                 for z in range(U.n_components):

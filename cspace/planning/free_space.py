@@ -319,14 +319,18 @@ class FreeSpace:
         Components of the free space inside the bounds (snapped outward).
     bounds_on_grid : bool
         The bounds are grid points and not flat: the frame's inner box is the bounds.
+    obstacles : tuple of CSpaceObstacle
+        The C-obstacles it united: the C-space's, or for non-convex sums its scene's triangle
+        pairs (the same sets).
     time : float
         Seconds taken.
     """
 
     def __init__(self, cells: UnionCells, grid: Grid, bounds: np.ndarray, error_bound: float,
                  n_pieces: int, seconds: float, *, planes: list, inner: tuple, meshes: list,
-                 bounds_on_grid: bool):
+                 bounds_on_grid: bool, obstacles: tuple = ()):
         self.cells, self.grid, self.bounds = cells, grid, bounds
+        self.obstacles = tuple(obstacles)
         self.bounds_on_grid = bounds_on_grid
         self.error_bound, self.n_pieces, self.time = error_bound, n_pieces, seconds
         # what a point must be strictly outside of, exactly: each grown piece's facet planes
@@ -484,7 +488,8 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     inner = np.stack([G.to_float(s_lo), G.to_float(s_hi)])  # exact: grid points
     meshes: list = []
     found, count, err = [], 0, 0.0
-    for i, co in enumerate(_operands(cspace, inner, G)):  # what each is made of, counted
+    operands = _operands(cspace, inner, G)
+    for i, co in enumerate(operands):  # what each C-obstacle is made of, counted
         B = np.asarray(co.bounds, dtype=np.float64)
         if (B[1] < inner[0]).any() or (B[0] > inner[1]).any():
             continue  # does not meet the closed inner box: nothing inside it changes
@@ -571,4 +576,4 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     return FreeSpace(cells, G, b, err + widened * math.sqrt(3.0) * G.step, len(pieces),
                      _time.perf_counter() - t0, planes=planes,
                      inner=(s_lo.tolist(), s_hi.tolist()), meshes=meshes,
-                     bounds_on_grid=bool((inner == b).all()))
+                     bounds_on_grid=bool((inner == b).all()), obstacles=operands)
