@@ -73,32 +73,29 @@ def _sign(x) -> int:
 
 
 class _Lines:
-    """The sub-facet triangles not parallel to ``x``, for lines parallel to ``x``: each
-    triangle's sub-facet, its three vertices projected to ``yz`` (fractions, made on first
-    use) and their float box (a filter only: it is padded beyond the conversions' error);
-    ``across[f]``: sub-facet ``f`` is not parallel to ``x`` (lines meet only those)."""
+    """The sub-facets not parallel to ``x``, for lines parallel to ``x``: each one's float box
+    in the ``yz`` projection (a filter only: it is padded beyond the conversions' error), and,
+    made on first use by a line through its box, its triangles' vertices projected to ``yz``
+    (fractions); ``across[f]``: sub-facet ``f`` is not parallel to ``x`` (lines meet only
+    those). Triangulating only the sub-facets lines come near is most of the saving: lines
+    are few (one per component, and the points located)."""
 
     def __init__(self, cx, planes):
         self.cx, self.planes = cx, planes
         nx = np.array([k[0] for k in planes.keys], dtype=np.int64)
         self.across = nx[cx.face_plane] != 0  # per sub-facet: not parallel to x
-        tri_face, tris = [], []
-        for f in np.nonzero(self.across)[0].tolist():
-            for t in _face_tris(cx, f):
-                tri_face.append(f)
-                tris.append(t)
-        self.face = np.array(tri_face, dtype=np.int64)
-        self.tris = np.array(tris, dtype=np.int64).reshape(-1, 3)
+        self.face = np.nonzero(self.across)[0]
         P = cx.points
-        used = np.unique(self.tris)
-        yz = np.zeros((len(P), 2))
-        for i in used.tolist():
-            X, Y, Z, W = P[i]
-            yz[i] = (Y / W, Z / W)
-        c = yz[self.tris]  # (t, 3, 2)
-        pad = 1e-9 * (np.abs(c).max(axis=(1, 2)) + 1.0)
-        self.lo = c.min(axis=1) - pad[:, None]
-        self.hi = c.max(axis=1) + pad[:, None]
+        lo = np.empty((len(self.face), 2))
+        hi = np.empty((len(self.face), 2))
+        for r, f in enumerate(self.face.tolist()):
+            rings = cx.face_rings[f]
+            ids = rings[0] if rings is not None else [i for t in cx.face_tris[f] for i in t]
+            c = np.array([P[i][1:] for i in ids], dtype=np.float64)  # the outer ring holds it
+            yz = c[:, :2] / c[:, 2:]
+            lo[r], hi[r] = yz.min(axis=0), yz.max(axis=0)
+        pad = 1e-9 * (np.maximum(np.abs(lo), np.abs(hi)).max(axis=1, initial=0.0) + 1.0)
+        self.lo, self.hi = lo - pad[:, None], hi + pad[:, None]
         self._q: dict = {}
         # the side nodes on the -x and +x sides of each sub-facet, and the winding number's
         # change from the -x to the +x side (the coverage counts along planes.normal)
@@ -124,12 +121,15 @@ class _Lines:
         cand = np.nonzero((self.lo[:, 0] <= yf) & (yf <= self.hi[:, 0])
                           & (self.lo[:, 1] <= zf) & (zf <= self.hi[:, 1]))[0]
         out = []
-        for k in cand.tolist():
-            a, b, c = (self._yz(i) for i in self.tris[k].tolist())
-            s = {self._side(a, b, y0, z0), self._side(b, c, y0, z0), self._side(c, a, y0, z0)}
-            if len(s) != 1:
+        for f in self.face[cand].tolist():
+            for t in _face_tris(self.cx, f):
+                a, b, c = (self._yz(i) for i in t)
+                s = {self._side(a, b, y0, z0), self._side(b, c, y0, z0),
+                     self._side(c, a, y0, z0)}
+                if len(s) == 1:
+                    break  # inside this triangle (the perturbed point is on no edge)
+            else:
                 continue
-            f = int(self.face[k])
             n0, n1, n2, d = self.planes.keys[int(self.cx.face_plane[f])]
             x0 = (d - n1 * y0 - n2 * z0) / n0
             out.append(((x0, Fraction(-n1, n0), Fraction(-n2, n0)), f))

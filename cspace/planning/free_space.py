@@ -52,6 +52,11 @@ from ..minkowski.union import UnionCells
 #: Default largest number of convex pieces :func:`free_space` unites.
 MAX_PIECES = 4000
 
+# Pieces whose vertices reach this far from G's origin (grid steps; the outer box reaches
+# 2**26) are clipped to the frame's outer box; nearer ones are taken whole (grown by two steps
+# at most, and the frame's outer box two beyond everything, they stay below the union's 2**27).
+_UNCLIPPED = 2**27 - 16
+
 # How far (grid steps of a C-obstacle's grid) the triangles merged into one convex piece
 # (_pair_plan) may lie off one plane: a snapped flat face's are within about a step of it.
 # It is not a decision: a patch only grows within it, and error_bound states what it adds.
@@ -135,9 +140,9 @@ def _pair_plan(co, b: np.ndarray) -> tuple:
     return co, S, T, np.concatenate(I), np.concatenate(J), extra
 
 
-def _pair_pieces(plan: tuple, name: str, outer) -> list:
+def _pair_pieces(plan: tuple, name: str, far) -> list:
     """The pieces of :func:`_pair_plan` as float64 points (exact: grid points of the
-    C-obstacle's grid), or, crossing the box ``outer``, as their hull."""
+    C-obstacle's grid), or, where ``far(points)`` (beyond the union's range), as their hull."""
     from ..geometry.snapping import grow_points
 
     co, S, T, I, J, _ = plan
@@ -146,10 +151,7 @@ def _pair_pieces(plan: tuple, name: str, outer) -> list:
     for i, j in zip(I.tolist(), J.tolist()):
         pts = grow_points((S[i][:, None] + T[j][None]).reshape(-1, 3), g)
         V = co.grid.to_float(pts)
-        if (V.min(axis=0) >= outer[0]).all() and (V.max(axis=0) <= outer[1]).all():
-            out.append(V)
-        else:
-            out.append(ConvexPolytope.from_ints(pts, grid=co.grid, name=name))
+        out.append(ConvexPolytope.from_ints(pts, grid=co.grid, name=name) if far(V) else V)
     return out
 
 
@@ -505,15 +507,20 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         # a patch of nearly coplanar triangles adds its flatness (_pair_plan)
         err = max(err, float(co.error_bound) + max([p[5] for p in plans], default=0.0))
         check("pieces")
+    def far(V: np.ndarray) -> bool:
+        # Only a piece beyond the union's range on G is clipped to the outer box (exactly,
+        # and slowly: fractions); one that merely crosses it is taken whole, and the frame's
+        # outer box grows to hold it.
+        return bool(np.abs(np.ldexp(V, -e) - origin).max() >= _UNCLIPPED)
+
     pieces = []
     for name, got, plans in found:
         for plan in plans:
-            got = got + _pair_pieces(plan, name, (o_lo, o_hi))
+            got = got + _pair_pieces(plan, name, far)
         for p in got:
             V = p.vertices if isinstance(p, ConvexPolytope) else p
             if (V.max(axis=0) >= inner[0]).all() and (V.min(axis=0) <= inner[1]).all():
-                inside = (V.min(axis=0) >= o_lo).all() and (V.max(axis=0) <= o_hi).all()
-                pieces.append(V if inside else p)
+                pieces.append(p if far(V) else V)
         check("pieces")
     ints, faces, facets, planes, n, n_facets, widened = [], [], [], [], 0, 0, 1
     for co in meshes:  # closed meshes: their own triangles, when their vertices are on G
@@ -531,7 +538,7 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         n_facets += len(F)
     for V in pieces:
         check("pieces")
-        if not isinstance(V, np.ndarray):  # crosses the outer box: clipped to it, exactly
+        if not isinstance(V, np.ndarray):  # beyond the range: clipped to the outer box
             if not isinstance(V, ConvexPolytope):  # pragma: no cover - pieces are one of two
                 raise TypeError(type(V))
             X = _clipped(V, o_lo, o_hi)
