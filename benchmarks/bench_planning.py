@@ -478,7 +478,7 @@ def decide_section() -> list[str]:
              "RRTConnect (FCL) solved | FCL wrong |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     with tempfile.TemporaryDirectory() as tmp:
-        for name, scene, truth in decide_scenes(Path(tmp)):
+        for name, scene, truth in decide_scenes(Path(tmp)) + bottle_scenes(Path(tmp)):
             cs = cspace.CSpace.from_scene(scene)
             alone = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=DECIDE_TIME,
                            refine=False, exact=False)
@@ -532,6 +532,29 @@ def decide_section() -> list[str]:
     return lines
 
 
+def bottle_scenes(tmp: Path) -> list:
+    """``(name, scene, truth)``: tests/test_free_space.py's bottle (one solid body of 400
+    triangles, a cavity whose neck is narrower than the robot cube: its C-obstacle a
+    non-convex sum, which the free space takes as triangle pairs), moved and turned; a
+    narrower cube gets out."""
+    from test_free_space import bottle_scene
+
+    far, turn = (250.0, 150.0, -300.0), (17.0, -31.0, 52.0)
+    out = []
+    for name, robot, kw, truth in (
+            ("bottle (solid, 400 triangles) at (250, 150, -300), x3", 1.5,
+             dict(offset=far, scale=3.0), "no path"),
+            ("the bottle turned (17, -31, 52) degrees", 1.5,
+             dict(offset=far, scale=3.0, turn=turn), "no path"),
+            ("the turned bottle, a cube narrower than its neck", 0.8,
+             dict(offset=far, scale=3.0, turn=turn), "path")):
+        where = tmp / f"bottle{len(out)}"
+        where.mkdir()
+        scene, _ = bottle_scene(where, robot, (0, 0, 0), (3.5, 0, 0), **kw)
+        out.append((name, scene, truth))
+    return out
+
+
 def free_space_section() -> list[str]:
     """The exact free space on the deciding scenes and on random boxes: time, pieces,
     components, its answer; ``decide`` with it and with the cells alone."""
@@ -546,8 +569,9 @@ def free_space_section() -> list[str]:
              "(`cspace.minkowski.union`) and its cells of winding number 0. *separated*: start "
              "and goal in different components (the proof: the start component's closed "
              "boundary winds differently about them); *declined*: more than 4000 convex "
-             "pieces near the bounds (the real scenes' triangle pairs), or a non-convex sum "
-             "whose vertices are off the grid (`UnsupportedError`). *decide*: "
+             "pieces near the bounds (the real scenes' triangle pairs: `UnsupportedError`). "
+             "A solid body's non-convex sum off the grid is taken as the scene's triangle "
+             "pairs, one piece per convex patch of coplanar triangles (the bottles). *decide*: "
              "`decide` as `cspace plan` runs it (the free space first, then the cells), and "
              "*cells alone* with `exact=False`; their answers and seconds. *clearance*: the "
              "statement's bound (the free space's `error_bound`, or the cells').",
@@ -556,7 +580,7 @@ def free_space_section() -> list[str]:
              "decide s | clearance | cells alone | cells alone s |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     with tempfile.TemporaryDirectory() as tmp:
-        for name, scene, truth in decide_scenes(Path(tmp)):
+        for name, scene, truth in decide_scenes(Path(tmp)) + bottle_scenes(Path(tmp)):
             cs = cspace.CSpace.from_scene(scene)
             t = time.perf_counter()
             try:

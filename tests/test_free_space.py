@@ -482,42 +482,19 @@ def test_the_shipped_scenes_components(tmp_path):
         assert (sep is not None) == (path.stem in ("cage", "piano")), path.stem
 
 
-def _voxel_surface(occupied: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The closed surface of a set of unit voxels (outward; the squares between an occupied
-    voxel and an empty one, two triangles each), centred on the origin."""
-    V, F, index = [], [], {}
-    n = np.array(occupied.shape)
-    for c in zip(*np.nonzero(occupied)):
-        for ax in range(3):
-            for sg in (1, -1):
-                nb = np.array(c)
-                nb[ax] += sg
-                if (nb >= 0).all() and (nb < n).all() and occupied[tuple(nb)]:
-                    continue
-                a, b = (ax + 1) % 3, (ax + 2) % 3
-                quad = []
-                for da, db in ((0, 0), (1, 0), (1, 1), (0, 1)):
-                    p = np.array(c)
-                    p[ax] += sg > 0
-                    p[a] += da
-                    p[b] += db
-                    quad.append(index.setdefault(tuple(p.tolist()), len(index)))
-                q = quad if sg > 0 else quad[::-1]
-                F += [(q[0], q[1], q[2]), (q[0], q[2], q[3])]
-    V = np.array(sorted(index, key=index.get), dtype=np.float64) - n / 2
-    return V, np.array(F, dtype=np.int64)
-
-
-def _bottle(tmp_path, robot: float, start, goal, offset=(0.0, 0.0, 0.0), scale=1.0, turn=None):
+def bottle_scene(tmp_path, robot: float, start, goal, offset=(0.0, 0.0, 0.0), scale=1.0,
+                 turn=None):
     """A closed box of 5^3 unit voxels whose 3^3 cavity opens through one unit hole in its
     +x wall (400 triangles, one non-convex solid: its C-obstacle against a ``robot`` cube is
-    an NCC-CVMS sum), turned, scaled and moved, with its bounds (4 each side)."""
+    an NCC-CVMS sum), turned, scaled and moved, with its bounds (4 each side); and its
+    C-space."""
     import trimesh
+    from zoo import voxel_solid
 
     occupied = np.ones((5, 5, 5), dtype=bool)
     occupied[1:4, 1:4, 1:4] = False
     occupied[4, 2, 2] = False
-    V, F = _voxel_surface(occupied)
+    V, F = voxel_solid(occupied, origin=(-2.5, -2.5, -2.5))
     trimesh.Trimesh(_place(V, offset, scale, turn), F, process=False).export(tmp_path / "b.obj")
 
     def at(p, turned=True):
@@ -540,7 +517,7 @@ def test_a_solid_non_convex_body_is_united_as_convex_patches(tmp_path, move):
     instead (the same set), one piece per convex patch of the walls' coplanar triangles (400
     triangles; turned, snapped, coplanar within a step): the cavity is its own component, the
     proof checked by FCL on the raw meshes and by solid angles; a narrower cube gets out."""
-    scene, cs = _bottle(tmp_path, 1.5, (0, 0, 0), (3.5, 0, 0), **move)
+    scene, cs = bottle_scene(tmp_path, 1.5, (0, 0, 0), (3.5, 0, 0), **move)
     assert [co.kind for co in cs.obstacles] == ["mesh"]
     fs = free_space(cs, scene.bounds)
     assert fs.n_components == 2 and fs.n_pieces < 100  # not one per triangle
@@ -550,7 +527,7 @@ def test_a_solid_non_convex_body_is_united_as_convex_patches(tmp_path, move):
     assert fs.error_bound < 1e-5 * move.get("scale", 1.0)
     d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30)
     assert d.answer == "no path" and d.separation is not None, d.reason
-    scene2, cs2 = _bottle(tmp_path, 0.8, (0, 0, 0), (3.5, 0, 0), **move)
+    scene2, cs2 = bottle_scene(tmp_path, 0.8, (0, 0, 0), (3.5, 0, 0), **move)
     fs2 = free_space(cs2, scene2.bounds)
     assert fs2.separation(scene2.start, scene2.goal) is None
     assert fs2.component_of(scene2.start) == fs2.component_of(scene2.goal) is not None
