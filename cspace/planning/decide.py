@@ -73,8 +73,11 @@ the pieces grown onto one grid, their union's arrangement and its cells). Start 
 different components answer "no path" at once, with the closed surface that separates them
 (``Decision.separation``; clearance: its ``error_bound``). In one component, the cells above
 look for the path, and if they find none in time the reason says that a path exists (the grown
-union holds the C-obstacles, so its free space is free); triangle-pair and non-convex mesh
-C-obstacles are decided by the cells alone.
+union holds the C-obstacles, so its free space is free). A solid body's non-convex sum, which
+the free space takes as the scene's triangle pairs (many overlapping pieces: seconds), waits
+for the octree's levels, which decide most such scenes in milliseconds; the exact free space
+comes before the refinement along routes. Scenes of more pieces than the free space takes are
+decided by the cells alone.
 """
 
 from __future__ import annotations
@@ -89,7 +92,7 @@ from ..scene.model import CSpace
 from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _choose_frame, _components, _Frame,
                     _free_leaf_graph, _Grid, _labels, _OutOfTime, _polyline, _setup, _shift)
 from .corridor import EXTRA, refine_route
-from .free_space import FreeSpace, Separation, free_space
+from .free_space import FreeSpace, Separation, free_space, unites_sums_as_pairs
 
 #: Answers of :func:`decide`.
 ANSWERS = ("no path", "path", "unknown")
@@ -299,7 +302,8 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
         the C-obstacles are made of convex pieces: start and goal in different components
         answer ``'no path'`` at once (for clearances above its ``error_bound``); in the same
         one, the cells below look for the path. It gets at most ``EXACT_SHARE`` (half) of
-        ``time``; past that the cells decide alone.
+        the time left; past that the cells decide alone. Where it would take a non-convex sum
+        as triangle pairs, it comes after the octree's levels, before the refinement.
     progress : callable, optional
         ``progress(fraction, message)`` after each level.
 
@@ -317,16 +321,28 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     obstacles, boxes, clearance, margin = _setup(cspace, b)
     F = _frame(frame, obstacles, b)
     fs, one = None, False
-    if exact and not getattr(cspace, "robot_hull", False):
+
+    def exact_first() -> tuple:
+        """The exact free space, in EXACT_SHARE of the time left at most: (fs, separation,
+        start and goal joined), or Nones."""
         try:
-            # half the budget at most: a union too large for it leaves the cells the rest
-            fs = free_space(cspace, b, time=EXACT_SHARE * max(0.0, deadline - t0))
-            sep = fs.separation(q0, q1)
-            one = sep is None and fs.joined(q0, q1)
+            # a union too large for its share leaves the cells the rest
+            left = max(0.0, deadline - _time.perf_counter())
+            got = free_space(cspace, b, time=EXACT_SHARE * left)
+            sep = got.separation(q0, q1)
+            return got, sep, sep is None and got.joined(q0, q1)
         except (UnsupportedError, TimeoutError):
-            fs = sep = None  # pairs or non-convex sums, or too large: the cells alone
+            return None, None, False  # too many pieces, or too large: the cells alone
         except ExactnessError:  # pragma: no cover - the lines' joins and the windings differ
-            fs = sep = None  # no proof from it: the cells decide
+            return None, None, False  # no proof from it: the cells decide
+
+    # A non-convex sum the free space would unite as triangle pairs (many overlapping
+    # pieces: seconds) waits for the octree, which decides most such scenes in milliseconds;
+    # otherwise the exact free space comes first (milliseconds for convex pieces).
+    deferred = exact and not getattr(cspace, "robot_hull", False)
+    if deferred and not unites_sums_as_pairs(cspace, b):
+        deferred = False
+        fs, sep, one = exact_first()
         if sep is not None:
             return _separated(fs, sep, b, t0)
     g = _Grid(b, depth, F)
@@ -348,6 +364,10 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
             if answer != "unknown":
                 break
         else:  # the octree ended undecided: on below its finest level, along routes
+            if deferred:
+                fs, sep, one = exact_first()
+                if sep is not None:
+                    return _separated(fs, sep, b, t0)
             if refine and L[0].size:
                 ids, lab = _paint(g, size, *L)
                 answer, reason, path, refined = refine_route(

@@ -165,6 +165,52 @@ def _on_grid(co, G: Grid) -> np.ndarray | None:
     return k.astype(np.int64) - origin
 
 
+def _frame_of(b: np.ndarray) -> tuple:
+    """The frame around the bounds ``b``: ``(G, (o_lo, o_hi), (s_lo, s_hi), inner)``.
+
+    The outer box: the bounds and an eighth of their size around them. Parts of pieces beyond
+    it change nothing inside the bounds (the frame fills the rest), so pieces far beyond it
+    are clipped to it (exactly) and the grid ``G``'s step follows the bounds. The inner box:
+    the bounds snapped outward (``s_lo, s_hi``, G's integers; ``inner``, scene units; flat
+    bounds, a planar problem: a step either side, so that it is a box). Its free space is
+    computed whole: every piece that meets it counts, so one component joins its points by
+    a path inside it."""
+    pad = 0.125 * float((b[1] - b[0]).max()) + 2.0**-20 * float(np.abs(b).max() + 1.0)
+    o_lo, o_hi = b[0] - pad, b[1] + pad
+    G = Grid.for_box(o_lo, o_hi)
+    e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
+    s_lo = np.floor(np.ldexp(b[0], -e)).astype(np.int64) - origin
+    s_hi = np.ceil(np.ldexp(b[1], -e)).astype(np.int64) - origin
+    flat = s_lo == s_hi
+    s_lo, s_hi = s_lo - flat, s_hi + flat
+    inner = np.stack([G.to_float(s_lo), G.to_float(s_hi)])  # exact: grid points
+    return G, (o_lo, o_hi), (s_lo, s_hi), inner
+
+
+def unites_sums_as_pairs(cspace, bounds=None) -> bool:
+    """Whether :func:`free_space` would take a non-convex sum of ``cspace`` as its scene's
+    triangle pairs (:func:`_operands`): a union of many overlapping pieces, slower than
+    certified cells' octree, which often decides such scenes at once (so
+    :func:`cspace.planning.decide.decide` asks the cells' octree first then). Builds nothing
+    new."""
+    from ..scene.model import LazyCSpace
+
+    b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
+    if isinstance(cspace, LazyCSpace):
+        return cspace.has_sums()
+    G, _, _, inner = _frame_of(b)
+    return getattr(cspace, "scene", None) is not None and any(
+        _off_grid_sum(co, inner, G) for co in cspace.obstacles)
+
+
+def _off_grid_sum(co, inner: np.ndarray, G: Grid) -> bool:
+    """``co`` is a non-convex sum meeting the box ``inner`` whose vertices are off ``G``."""
+    B = np.asarray(co.bounds, dtype=np.float64)
+    return (co.kind == "mesh" and getattr(co, "sum", None) is not None
+            and not ((B[1] < inner[0]).any() or (B[0] > inner[1]).any())
+            and _on_grid(co, G) is None)
+
+
 def _operands(cspace, inner: np.ndarray, G: Grid) -> tuple:
     """The C-obstacles of ``cspace`` :func:`free_space` unites in the box ``inner`` (a lazy
     C-space's built there now): its own, or, where a solid body's C-obstacle is a non-convex
@@ -183,15 +229,8 @@ def _operands(cspace, inner: np.ndarray, G: Grid) -> tuple:
             return cspace.obstacles
     else:
         cos = cspace.obstacles
-
-        def off(co) -> bool:
-            B = np.asarray(co.bounds, dtype=np.float64)
-            return (co.kind == "mesh" and getattr(co, "sum", None) is not None
-                    and not ((B[1] < inner[0]).any() or (B[0] > inner[1]).any())
-                    and _on_grid(co, G) is None)
-
         scene = getattr(cspace, "scene", None)
-        if scene is None or not any(off(co) for co in cos):
+        if scene is None or not any(_off_grid_sum(co, inner, G) for co in cos):
             return cos
         model = model_scene(scene, build=False, robot_hull=cspace.robot_hull)
     pairs = LazyCSpace(model, sums=False)
@@ -473,21 +512,8 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
     if not (np.isfinite(b).all() and (b[0] <= b[1]).all()):
         raise InvalidArgumentError(f"free_space: bounds {b.tolist()} are not a box")
-    # The frame's outer box: the bounds and an eighth of their size around them. Parts of
-    # pieces beyond it change nothing inside the bounds (the frame fills the rest), so pieces
-    # that cross it are clipped to it (exactly) and the grid's step follows the bounds.
-    pad = 0.125 * float((b[1] - b[0]).max()) + 2.0**-20 * float(np.abs(b).max() + 1.0)
-    o_lo, o_hi = b[0] - pad, b[1] + pad
-    G = Grid.for_box(o_lo, o_hi)
+    G, (o_lo, o_hi), (s_lo, s_hi), inner = _frame_of(b)
     e, origin = G.exponent, np.asarray(G.origin, dtype=np.int64)
-    # The frame's inner box: the bounds snapped outward (flat bounds, a planar problem: a step
-    # either side, so that it is a box). Its free space is computed whole: every piece that
-    # meets it counts, so one component joins its points by a path inside it.
-    s_lo = np.floor(np.ldexp(b[0], -e)).astype(np.int64) - origin
-    s_hi = np.ceil(np.ldexp(b[1], -e)).astype(np.int64) - origin
-    flat = s_lo == s_hi
-    s_lo, s_hi = s_lo - flat, s_hi + flat
-    inner = np.stack([G.to_float(s_lo), G.to_float(s_hi)])  # exact: grid points
     meshes: list = []
     found, count, err = [], 0, 0.0
     operands = _operands(cspace, inner, G)
