@@ -572,7 +572,8 @@ def free_space_section() -> list[str]:
              "pieces near the bounds (the real scenes' triangle pairs: `UnsupportedError`). "
              "A solid body's non-convex sum off the grid is taken as the scene's triangle "
              "pairs, one piece per convex patch of coplanar triangles (the bottles). *decide*: "
-             "`decide` as `cspace plan` runs it (the free space first, then the cells), and "
+             "`decide` as `cspace plan` runs it (the free space first, then the cells; for a "
+             "sum taken as pairs, the octree's levels first, then the free space), and "
              "*cells alone* with `exact=False`; their answers and seconds. *clearance*: the "
              "statement's bound (the free space's `error_bound`, or the cells').",
              "",

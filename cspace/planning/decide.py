@@ -547,7 +547,9 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
         space of each orientation (:func:`cspace.planning.free_space.free_space`), and
         components of neighbours linked where their free spaces meet (each component of the
         free space of both orientations' C-obstacles together, located in each): a superset
-        of the turns, exactly. Within ``EXACT_SHARE`` of ``time``; else the cells.
+        of the turns, exactly. Within ``EXACT_SHARE`` of ``time``; else the cells. Where the
+        free spaces would take non-convex sums as triangle pairs, after the cells, with the
+        time they leave.
     """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
@@ -558,7 +560,11 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
     b = np.asarray(tcs.bounds, dtype=np.float64).reshape(2, 3)
     slices = tcs.slices
     n = len(slices)
-    if exact and not getattr(tcs, "robot_hull", False):
+    exact = exact and not getattr(tcs, "robot_hull", False)
+    # as in decide: non-convex sums united as triangle pairs (seconds a slice) wait for the
+    # cells, which often decide such scenes faster; the exact free spaces then get what is left
+    deferred = exact and unites_sums_as_pairs(tcs.slice(0), b)
+    if exact and not deferred:
         td = _turning_exact(tcs, start, goal, b, t0, t0 + EXACT_SHARE * float(time))
         if td is not None:
             return td
@@ -619,6 +625,10 @@ def decide_turning(tcs, start, goal, *, depth: int = 6, time: float = 10.0,
         clearance += 0.0 if F is None else F.rho  # the turned corners' rounding
     else:
         answer, reason = "unknown", f"start and goal may be joined at depth {depth}"
+        if deferred and _time.perf_counter() < deadline:
+            td = _turning_exact(tcs, start, goal, b, t0, deadline)
+            if td is not None:
+                return td
     return TurningDecision(answer, reason, clearance, depth, counts, links,
                            _time.perf_counter() - t0)
 
