@@ -612,7 +612,12 @@ def _free_space(args: argparse.Namespace) -> int:
     out = _out(args.output, MESH_FORMATS, "-o")
     scene = load_scene(args.scene)
     cache = None if args.no_cache else (args.cache_dir or True)
-    fs = free_space(model_scene(scene, cache=cache).cspace(), scene.bounds)
+    try:
+        fs = free_space(model_scene(scene, cache=cache).cspace(), scene.bounds, time=args.time,
+                        memory=args.memory)
+    except TimeoutError as e:  # unknown within the budget, as cspace plan's exit status 1
+        print(f"{scene.name}: {e}")
+        return 1
     print(f"{scene.name}: {fs!r}")
     a, b = fs.component_of(scene.start), fs.component_of(scene.goal)
     print(f"  start in component {a}, goal in component {b} (None: not strictly free)")
@@ -815,6 +820,11 @@ def main(argv: Sequence[str] | None = None) -> int:
                            "cspace free-space scenes/cage.toml -o cage_union.stl"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="write the union's surface (any format trimesh exports)")
+    p.add_argument("--time", type=_positive, default=None, metavar="SECONDS",
+                   help="give up after this long (exit status 1); default: no limit")
+    p.add_argument("--memory", type=_size, default=None, metavar="SIZE",
+                   help="memory budget of the union, e.g. 6G (default $CSPACE_MEMORY, else half "
+                        f"of the memory available); past it, exit status {EXIT_MEMORY}")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
     p.set_defaults(func=_free_space)

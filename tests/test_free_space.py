@@ -461,6 +461,27 @@ def test_too_many_pieces_are_declined_before_any_is_made(tmp_path):
     assert d.answer == "no path" and d.separation is None and d.free_space is None
 
 
+def test_too_many_triangle_pairs_are_declined_share_by_share(tmp_path, monkeypatch):
+    """The candidate triangle pairs are counted share by share of the box sweep, before all
+    are made: over ``max_pairs``, declined by name (decide goes on with its cells); shares
+    give the cuts one sweep gives."""
+    import cspace.minkowski.intersections as inter
+    from cspace.minkowski.union import UnionCells
+
+    scene, cs = _cage(tmp_path, slot=0.2, offset=FAR, turn=TURN)
+    with pytest.raises(UnsupportedError, match="more than 100 candidate triangle pairs"):
+        free_space(cs, scene.bounds, max_pairs=100)
+    d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30)
+    assert d.answer == "no path"
+    fs = free_space(cs, scene.bounds)
+    ints, faces = fs.cells.planes.ints, fs.cells.planes.faces
+    one = UnionCells(ints, faces)
+    monkeypatch.setattr(inter, "_SHARE_OVERLAPS", 1000)  # many shares
+    shared = UnionCells(ints, faces)
+    assert shared.cx.points == one.cx.points and shared.n_cells == one.n_cells
+    assert (shared.winding == one.winding).all()
+
+
 def test_the_free_space_keeps_its_time_budget(tmp_path):
     scene, cs = _cage(tmp_path, slot=0.2)
     with pytest.raises(TimeoutError):

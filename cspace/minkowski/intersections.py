@@ -14,6 +14,7 @@ import numpy as np
 
 from ..geometry.boxes import BoxSweep
 from ..geometry.endpoints import endpoint_coordinates
+from ..errors import UnsupportedError
 from ..geometry.tritri import POINT, SEGMENT, TriTriResult, intersect_pairs
 from ..workers import can_fork, forked_map
 from .planes import _Planes
@@ -56,7 +57,16 @@ def _cut_pieces(ints: np.ndarray, faces: np.ndarray, pairs: np.ndarray) -> tuple
 _PARALLEL_OVERLAPS = 100_000_000
 
 
-def _cuts(ints: np.ndarray, planes: _Planes, workers: int = 1) -> _Cuts:
+# Serially, the sweep's work is expanded in shares of at most this many one-axis overlaps
+# (each share's candidate pairs, at most that many, are intersected before the next is made),
+# so that memory follows the share, not the whole: every benchmark sum is one share.
+_SHARE_OVERLAPS = 50_000_000
+
+
+def _cuts(ints: np.ndarray, planes: _Planes, workers: int = 1,
+          max_pairs: int | None = None) -> _Cuts:
+    """The cuts; with ``max_pairs``, :class:`~cspace.errors.UnsupportedError` as soon as the
+    candidate pairs (boxes meeting, on different planes) are more (before the rest is made)."""
     corners = ints[planes.faces]
     sweep = BoxSweep(corners.min(axis=1), corners.max(axis=1))
 
@@ -65,12 +75,19 @@ def _cuts(ints: np.ndarray, planes: _Planes, workers: int = 1) -> _Cuts:
         pairs = pairs[planes.plane[pairs[:, 0]] != planes.plane[pairs[:, 1]]]
         return (len(pairs), *_cut_pieces(ints, planes.faces, pairs))
 
-    if workers > 1 and sweep.overlaps >= _PARALLEL_OVERLAPS and can_fork():
+    if workers > 1 and sweep.overlaps >= _PARALLEL_OVERLAPS and can_fork() and not max_pairs:
         n = 2 * workers
         pieces = [r for _, r in forked_map(lambda k: share(k, n), list(range(n)), workers)]
         processes = workers
     else:
-        pieces, processes = [share(0, 1)], 1
+        n = max(1, -(-sweep.overlaps // _SHARE_OVERLAPS))
+        pieces, processes, found = [], 1, 0
+        for k in range(n):
+            pieces.append(share(k, n))
+            found += pieces[-1][0]
+            if max_pairs is not None and found > max_pairs:
+                raise UnsupportedError(f"more than {max_pairs:,} candidate triangle pairs "
+                                       f"({sweep.overlaps:,} box overlaps)")
     segments: list = [[] for _ in planes.keys]
     n_pairs = n_cut = 0
     for count, hit_pairs, ex in pieces:

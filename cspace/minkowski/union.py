@@ -170,6 +170,10 @@ class UnionCells:
         Triangles with one number are the fan of one convex polygon (a facet of a convex
         piece): a plane holding only those is arranged whole, in one compiled call (as the
         trimming's planes of one superset facet). Default: each triangle on its own.
+    max_pairs : int, optional
+        The most candidate triangle pairs (boxes meeting, on different planes) it goes on
+        with: beyond, :class:`~cspace.errors.UnsupportedError`, found share by share before
+        they are all made (their cuts take some microseconds each, their arrays memory).
 
     Attributes
     ----------
@@ -182,7 +186,7 @@ class UnionCells:
     """
 
     def __init__(self, ints: np.ndarray, faces: np.ndarray, *, workers: int = 1, check=None,
-                 facet: np.ndarray | None = None):
+                 facet: np.ndarray | None = None, max_pairs: int | None = None):
         ints = np.asarray(ints, dtype=np.int64).reshape(-1, 3)
         faces = np.asarray(faces, dtype=np.int64).reshape(-1, 3)
         if len(ints) and np.abs(ints).max() >= MAX_COORDINATE:
@@ -196,7 +200,7 @@ class UnionCells:
                  else np.asarray(facet, dtype=np.int64).reshape(len(faces)))
         S = _Cycle(ints, faces, facet)
         planes = _plane_groups(S)
-        cuts = _cuts(ints, planes, workers)
+        cuts = _cuts(ints, planes, workers, max_pairs)
         check("intersections")
         cx, _ = _complex(ints, planes, cuts, lambda *a: None, workers, check)
         check("arrangements")

@@ -87,7 +87,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ExactnessError, InvalidArgumentError, UnsupportedError
+from ..errors import ExactnessError, InvalidArgumentError, MemoryBudgetError, UnsupportedError
 from ..scene.model import CSpace
 from .cells import (BLOCKED, FREE, MIXED, NEAR, _CORNERS, _choose_frame, _components, _Frame,
                     _free_leaf_graph, _Grid, _labels, _OutOfTime, _polyline, _setup, _shift)
@@ -331,7 +331,7 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
             got = free_space(cspace, b, time=EXACT_SHARE * left)
             sep = got.separation(q0, q1)
             return got, sep, sep is None and got.joined(q0, q1)
-        except (UnsupportedError, TimeoutError):
+        except (UnsupportedError, TimeoutError, MemoryBudgetError):
             return None, None, False  # too many pieces, or too large: the cells alone
         except ExactnessError:  # pragma: no cover - the lines' joins and the windings differ
             return None, None, False  # no proof from it: the cells decide
@@ -672,7 +672,7 @@ def _turning_exact(tcs, start, goal, b: np.ndarray, t0: float, deadline: float):
                         raise ExactnessError("a component free at both orientations is not")
                     A.append(offset[i] + a)
                     B.append(offset[j] + c)
-    except (UnsupportedError, TimeoutError, ExactnessError):
+    except (UnsupportedError, TimeoutError, ExactnessError, MemoryBudgetError):
         return None
     k0 = spaces[0].component_of(start)
     k1 = spaces[slices.goal].component_of(goal)

@@ -45,12 +45,18 @@ import numpy as np
 from ..errors import DegenerateError, ExactnessError, InvalidArgumentError, UnsupportedError
 from ..geometry.exact import Grid
 from ..geometry.polygon import convex_patches
+from ..memory import MemoryGuard
 from ..mesh.convex import ConvexPolytope
 from ..minkowski.output import _to_float_compiled
 from ..minkowski.union import UnionCells
 
 #: Default largest number of convex pieces :func:`free_space` unites.
 MAX_PIECES = 4000
+
+#: Default largest number of candidate pairs of their triangles (boxes meeting) it goes on
+#: with: some 4 us each from the intersections to the cells (the turned bottle: 1.1 million
+#: pairs in 4 s), so about 20 s; a 2481-piece bug trap makes 160 million (and took 24 GB).
+MAX_PAIRS = 5_000_000
 
 # Pieces whose vertices reach this far from G's origin (grid steps; the outer box reaches
 # 2**26) are clipped to the frame's outer box; nearer ones are taken whole (grown by two steps
@@ -188,26 +194,43 @@ def _frame_of(b: np.ndarray) -> tuple:
 
 
 def unites_sums_as_pairs(cspace, bounds=None) -> bool:
-    """Whether :func:`free_space` would take a non-convex sum of ``cspace`` as its scene's
+    """Whether :func:`free_space` would take non-convex sums of ``cspace`` as its scene's
     triangle pairs (:func:`_operands`): a union of many overlapping pieces, slower than
     certified cells' octree, which often decides such scenes at once (so
     :func:`cspace.planning.decide.decide` asks the cells' octree first then). Builds nothing
     new."""
-    from ..scene.model import LazyCSpace
-
     b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
-    if isinstance(cspace, LazyCSpace):
-        return cspace.has_sums()
     G, _, _, inner = _frame_of(b)
-    return getattr(cspace, "scene", None) is not None and any(
-        _off_grid_sum(co, inner, G) for co in cspace.obstacles)
+    return _pairs_model(cspace, inner, G) is not None
 
 
-def _off_grid_sum(co, inner: np.ndarray, G: Grid) -> bool:
-    """``co`` is a non-convex sum meeting the box ``inner`` whose vertices are off ``G``."""
+def _pairs_model(cspace, inner: np.ndarray, G: Grid):
+    """The scene model whose triangle pairs :func:`free_space` unites instead of the
+    C-space's non-convex sums, or None: a lazy C-space's model when it would build a sum (a
+    solid body against a convex robot part); a C-space's scene's, modelled again (made once,
+    kept on it), when one of its closed meshes meeting ``inner`` is off ``G`` and the scene
+    has such a pair (a sum read from the cache, too)."""
+    from ..cobstacle.pairs import pair_construction
+    from ..scene.model import LazyCSpace, model_scene
+
+    if isinstance(cspace, LazyCSpace):
+        return cspace.model if cspace.has_sums() else None
+    scene = getattr(cspace, "scene", None)
+    if scene is None or not any(_off_grid_mesh(co, inner, G) for co in cspace.obstacles):
+        return None
+    model = getattr(cspace, "_pairs_model", None)
+    if model is None:
+        model = model_scene(scene, build=False, robot_hull=cspace.robot_hull)
+        cspace._pairs_model = model  # modelling again is steps 1-5 of a build: once
+    solid = any(pair_construction(b.kind, p.kind) == "NCC-CVMS"
+                for b in model.bodies if b.kind != "dropped" for p in model.robot_parts)
+    return model if solid else None
+
+
+def _off_grid_mesh(co, inner: np.ndarray, G: Grid) -> bool:
+    """``co`` is a closed mesh meeting the box ``inner`` whose vertices are off ``G``."""
     B = np.asarray(co.bounds, dtype=np.float64)
-    return (co.kind == "mesh" and getattr(co, "sum", None) is not None
-            and not ((B[1] < inner[0]).any() or (B[0] > inner[1]).any())
+    return (co.kind == "mesh" and not ((B[1] < inner[0]).any() or (B[0] > inner[1]).any())
             and _on_grid(co, G) is None)
 
 
@@ -215,24 +238,18 @@ def _operands(cspace, inner: np.ndarray, G: Grid) -> tuple:
     """The C-obstacles of ``cspace`` :func:`free_space` unites in the box ``inner`` (a lazy
     C-space's built there now): its own, or, where a solid body's C-obstacle is a non-convex
     sum (NCC-CVMS, kind ``'mesh'``) off ``G``, those of the same scene modelled with
-    ``sums=False``: each solid body against a convex robot part as triangle pairs, the same
-    set, with nothing to build (one convex piece per patch of coplanar triangles here:
-    :func:`_pair_plan`). A lazy C-space goes to pairs before building any sum. This needs the
-    C-space's scene (a C-space made from one has it); without it a sum off ``G`` stays, and
-    is declined."""
-    from ..scene.model import LazyCSpace, model_scene
+    ``sums=False`` (:func:`_pairs_model`): each solid body against a convex robot part as
+    triangle pairs, the same set, with nothing to build (one convex piece per patch of
+    coplanar triangles here: :func:`_pair_plan`). A lazy C-space goes to pairs before
+    building any sum. This needs the C-space's scene (a C-space made from one has it);
+    without it a sum off ``G`` stays, and is declined."""
+    from ..scene.model import LazyCSpace
 
-    model = getattr(cspace, "model", None)
-    if isinstance(cspace, LazyCSpace):
-        if not cspace.has_sums():
+    model = _pairs_model(cspace, inner, G)
+    if model is None:
+        if isinstance(cspace, LazyCSpace):
             cspace.build(inner[0], inner[1])
-            return cspace.obstacles
-    else:
-        cos = cspace.obstacles
-        scene = getattr(cspace, "scene", None)
-        if scene is None or not any(_off_grid_sum(co, inner, G) for co in cos):
-            return cos
-        model = model_scene(scene, build=False, robot_hull=cspace.robot_hull)
+        return cspace.obstacles
     pairs = LazyCSpace(model, sums=False)
     pairs.build(inner[0], inner[1])
     return pairs.obstacles
@@ -479,7 +496,8 @@ class FreeSpace:
 
 
 def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
-               time: float | None = None) -> FreeSpace:
+               max_pairs: int = MAX_PAIRS, time: float | None = None,
+               memory=None) -> FreeSpace:
     """The exact free space of ``cspace`` (a :class:`~cspace.CSpace` at one orientation)
     inside ``bounds`` (default ``cspace.bounds``).
 
@@ -490,9 +508,15 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         Scene units; a flat axis (``lo == hi``: a planar problem) is widened by a step.
     max_pieces : int
         The most convex pieces it unites.
+    max_pairs : int
+        The most candidate pairs of their triangles (boxes meeting) it goes on with, counted
+        before they are intersected: a few microseconds and some hundred bytes each.
     time : float, optional
         Wall seconds; past them :class:`TimeoutError` (a union too large to decide in
         the time given).
+    memory : int or str, optional
+        The memory budget (default ``$CSPACE_MEMORY``, else half of the memory available:
+        :mod:`cspace.memory`), watched between stages and every few dozen planes.
 
     Raises
     ------
@@ -500,14 +524,18 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         Past ``time``.
     UnsupportedError
         A C-obstacle that meets the bounds is not made of convex pieces, or they number more
-        than ``max_pieces``.
+        than ``max_pieces``, or their triangles make more than ``max_pairs`` candidate pairs.
+    MemoryBudgetError
+        The union grew past the memory budget (stopped before the system kills it).
     """
     t0 = _time.perf_counter()
     deadline = t0 + time if time is not None else math.inf
+    guard = MemoryGuard("free_space", memory)
 
     def check(stage: str, detail: str = "") -> None:
         if _time.perf_counter() > deadline:
             raise TimeoutError(f"free_space: out of time ({time} s) at {stage}{detail}")
+        guard.check(stage, detail)
 
     b = np.asarray(cspace.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
     if not (np.isfinite(b).all() and (b[0] <= b[1]).all()):
@@ -604,8 +632,11 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         facets.append(np.arange(12, dtype=np.int64) // 2 + n_facets)  # _BOX: a face's two
         n += 8
         n_facets += 6
-    cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check,
-                       facet=np.concatenate(facets))
+    try:
+        cells = UnionCells(np.vstack(ints), np.vstack(faces), check=check,
+                           facet=np.concatenate(facets), max_pairs=max_pairs)
+    except UnsupportedError as e:
+        raise UnsupportedError(f"free_space: a union too large: {e}") from None
     return FreeSpace(cells, G, b, err + widened * math.sqrt(3.0) * G.step, len(pieces),
                      _time.perf_counter() - t0, planes=planes,
                      inner=(s_lo.tolist(), s_hi.tolist()), meshes=meshes,
