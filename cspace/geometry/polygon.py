@@ -133,37 +133,28 @@ def convex_patches(ints: np.ndarray, faces: np.ndarray,
 
 def _convex_join(ring: list, runs: list, i: int, w: int, left, near_chord):
     """``ring`` with ``w`` inserted after position ``i``, kept convex by dropping reflex
-    vertices next to it whose dropped runs stay near the new chord: ``(ring, runs, dropped)``,
-    or None."""
-    ring = ring[: i + 1] + [w] + ring[i + 1:]
-    runs = runs[:i] + [[], []] + runs[i + 1:]
+    vertices next to it whose dropped runs stay near the new chord: ``(ring, runs, dropped)``
+    (the cycle read from ``w``), or None. ``runs[e]``: the vertices dropped between
+    ``ring[e]`` and ``ring[e + 1]``."""
+    n = len(ring)
+    order = [(i + 1 + j) % n for j in range(n)]  # v = ring[i + 1], ..., u = ring[i]
+    ring = [w] + [ring[j] for j in order]  # w, v, ..., u: the edge u -> v split at w
+    runs = [[]] + [runs[j] for j in order[:-1]] + [[]]
     dropped = False
-    k = i + 1  # w's position
-    while len(ring) > 3:  # before w: ring[k - 1] reflex?
-        p, u = ring[k - 2], ring[k - 1]
-        if left(p, u, w) >= 0:
-            break
-        run = runs[k - 2] + [u] + runs[k - 1]
-        if not near_chord(p, w, run):
+    while len(ring) > 3 and left(w, ring[1], ring[2]) < 0:  # reflex after w
+        run = runs[0] + [ring[1]] + runs[1]
+        if not near_chord(w, ring[2], run):
             return None
-        del ring[k - 1]
-        runs[k - 2: k] = [run]
-        k -= 1
+        del ring[1]
+        runs[0:2] = [run]
         dropped = True
-    while len(ring) > 3:  # after w: ring[k + 1] reflex?
-        v, q = ring[(k + 1) % len(ring)], ring[(k + 2) % len(ring)]
-        if left(w, v, q) >= 0:
-            break
-        j = (k + 1) % len(ring)
-        run = runs[k] + [v] + runs[j]
-        if not near_chord(w, q, run):
+    while len(ring) > 3 and left(ring[-2], ring[-1], w) < 0:  # reflex before w
+        run = runs[-2] + [ring[-1]] + runs[-1]
+        if not near_chord(ring[-2], w, run):
             return None
-        del ring[j]
-        if j > k:
-            runs[k: k + 2] = [run]
-        else:  # the cycle wrapped: v was its first vertex
-            runs[k] = run
-            del runs[0]
-            k -= 1
+        del ring[-1]
+        runs[-2:] = [run]
         dropped = True
+    if dropped and left(ring[-1], w, ring[1]) < 0:  # w itself turned reflex
+        return None
     return ring, runs, dropped
