@@ -117,11 +117,13 @@ def _pair_plan(co, b: np.ndarray) -> tuple:
         # union of theirs (a sum distributes over a union), and a wall's pieces, one per
         # triangle, would overlap their neighbours on shared planes, the union's costliest
         # arrangements (the pieces of a shell of 400 squares: 140 s, 11 000 planes).
-        # Snapping leaves a flat face coplanar only within a step or so: a patch may hold
-        # vertices up to PATCH_TOLERANCE steps off its plane, its hull then within
-        # 2 sqrt(3) of that of its triangles (convex_patches), which the bound states.
+        # Snapping leaves a flat face flat only within a step or so: a patch may reach
+        # PATCH_TOLERANCE steps beyond its triangles, its hull then within 6 times that of
+        # them (convex_patches), which the bound states. Only triangles near the box count.
         T = np.unique(T.reshape(-1, 3), axis=0)[None]
-        V, F = np.unique(S.reshape(-1, 3), axis=0, return_inverse=True)
+        near = ((S.min(axis=1) + T.min(axis=1) - g <= bg[1])
+                & (S.max(axis=1) + T.max(axis=1) + g >= bg[0])).all(axis=1)
+        V, F = np.unique(S[near].reshape(-1, 3), axis=0, return_inverse=True)  # only those
         patches, _, off = convex_patches(V, F.reshape(-1, 3), PATCH_TOLERANCE)
         S = [V[k] for k in patches]
         extra = off * 6.0 * PATCH_TOLERANCE * co.grid.step
