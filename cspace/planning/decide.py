@@ -339,9 +339,9 @@ def decide(cspace, start, goal, *, bounds=None, depth: int = DEPTH, time: float 
     # A non-convex sum the free space would unite as triangle pairs (many overlapping
     # pieces: seconds) waits for the octree, which decides most such scenes in milliseconds;
     # otherwise the exact free space comes first (milliseconds for convex pieces).
-    deferred = exact and not getattr(cspace, "robot_hull", False)
-    if deferred and not unites_sums_as_pairs(cspace, b):
-        deferred = False
+    exact = exact and not getattr(cspace, "robot_hull", False)
+    deferred = exact and unites_sums_as_pairs(cspace, b)
+    if exact and not deferred:
         fs, sep, one = exact_first()
         if sep is not None:
             return _separated(fs, sep, b, t0)
