@@ -462,15 +462,18 @@ def test_too_many_pieces_are_declined_before_any_is_made(tmp_path):
 
 
 def test_too_many_triangle_pairs_are_declined_share_by_share(tmp_path, monkeypatch):
-    """The candidate triangle pairs are counted share by share of the box sweep, before all
-    are made: over ``max_pairs``, declined by name (decide goes on with its cells); shares
-    give the cuts one sweep gives."""
+    """A union too large is declined by name before its work: over ``max_pairs / 100`` pairs
+    of pieces overlapping, before any piece is made; over ``max_pairs`` candidate triangle
+    pairs, counted share by share of the box sweep before all are made. decide goes on with
+    its cells; shares give the cuts one sweep gives."""
     import cspace.minkowski.intersections as inter
     from cspace.minkowski.union import UnionCells
 
     scene, cs = _cage(tmp_path, slot=0.2, offset=FAR, turn=TURN)
-    with pytest.raises(UnsupportedError, match="more than 100 candidate triangle pairs"):
+    with pytest.raises(UnsupportedError, match="20 pairs of its pieces overlap, more than 1 "):
         free_space(cs, scene.bounds, max_pairs=100)
+    with pytest.raises(UnsupportedError, match="more than 2,000 candidate triangle pairs"):
+        free_space(cs, scene.bounds, max_pairs=2000)
     d = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=30)
     assert d.answer == "no path"
     fs = free_space(cs, scene.bounds)
@@ -576,3 +579,24 @@ def test_cspace_plan_proves_the_bottle_shut_without_flags(tmp_path, move):
                          timeout=120)
     assert run.returncode == 3, run.stdout + run.stderr
     assert "no path, proved" in run.stdout and "not a proof over all rotations" in run.stdout
+
+
+def test_a_real_union_too_large_is_declined_at_once(shared_data, monkeypatch):
+    """The Parasol bug trap against its robot's hull (3212 triangles of a solid trap: its sum,
+    then taken as 2481 patches' pieces): their union would make 160 million candidate
+    triangle pairs, and once grew to 24 GB until the system killed it (after 370 s of
+    pieces). It is declined by name from the pieces' boxes, before any piece is made."""
+    import warnings
+
+    fs_module = sys.modules["cspace.planning.free_space"]
+
+    def no_piece(*args, **kwargs):
+        raise AssertionError("a piece was made")
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # the robot's hull is warned about
+        scene = cspace.load_scene(shared_data / "parasol_open_ppl_env/bug_trap1.0/bug-trap.env")
+    cs = cspace.model_scene(scene, robot_hull=True).cspace()
+    monkeypatch.setattr(fs_module, "_pair_pieces", no_piece)
+    with pytest.raises(UnsupportedError, match="589,889 pairs of its pieces overlap"):
+        free_space(cs, scene.bounds)
