@@ -569,14 +569,14 @@ def _view(args: argparse.Namespace) -> int:
     view = SceneView(live=args.live)
     cache = None if args.no_cache else (args.cache_dir or True)
     fs = None
-    if args.free_space:  # the exact free space's components (convex C-obstacle pieces only)
-        from .errors import UnsupportedError
+    if args.free_space:  # the exact free space's components (where it takes the scene)
+        from .errors import MemoryBudgetError, UnsupportedError
         from .planning.free_space import free_space
         from .scene.model import model_scene
 
         try:
             fs = free_space(model_scene(scene, cache=cache).cspace(), scene.bounds)
-        except UnsupportedError as e:
+        except (UnsupportedError, MemoryBudgetError) as e:  # the scene is drawn all the same
             print(f"free space: not drawn: {e}")
     report = draw_scene(view, scene, path=path, superset=args.superset, cache=cache,
                         free_space=fs)
@@ -837,7 +837,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("--superset", action="store_true",
                    help="draw the superset of a body whose C-obstacle could not be built")
     p.add_argument("--free-space", action="store_true",
-                   help="draw the exact free space's components (C-obstacles of convex pieces)")
+                   help="draw the exact free space's components (where it takes the scene: "
+                        "convex pieces, triangle pairs, solid bodies against a convex robot)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
     p.add_argument("--screenshot", metavar="PNG", help="also render the HTML with headless Chromium")
