@@ -478,7 +478,7 @@ def decide_section() -> list[str]:
              "RRTConnect (FCL) solved | FCL wrong |",
              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     with tempfile.TemporaryDirectory() as tmp:
-        for name, scene, truth in decide_scenes(Path(tmp)) + bottle_scenes(Path(tmp)):
+        for name, scene, truth in decide_scenes(Path(tmp)):
             cs = cspace.CSpace.from_scene(scene)
             alone = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=DECIDE_TIME,
                            refine=False, exact=False)
