@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import math
 import time as _time
+import weakref
 from dataclasses import dataclass
 from fractions import Fraction
 
@@ -99,12 +100,27 @@ def _pieces(co, name: str, b: np.ndarray) -> tuple[list, list, list]:
         "closed meshes on its grid ('mesh')")
 
 
-def _pair_plan(co, b: np.ndarray) -> tuple:
-    """The pieces ``S[i] ⊕ T[j] ⊕ box`` of a triangle-pair C-obstacle whose boxes meet ``b``
-    (flat ones left out when an operand is closed, as the C-obstacle leaves them):
-    ``(co, S, T, i, j, extra)``. With a closed convex robot part, one piece per convex
-    patch of (nearly) coplanar obstacle triangles (:func:`cspace.geometry.polygon.convex_patches`),
-    which may hold points up to ``extra`` (scene units) beyond the C-obstacle."""
+@dataclass
+class _PairPlan:
+    """The pieces ``S[i] ⊕ T[j] ⊕ box`` of a triangle-pair C-obstacle ``co`` to make, for
+    ``(i, j)`` in ``zip(i, j)`` (grid integers of ``co.grid``), their boxes ``lo, hi``, and
+    ``extra`` (scene units): how far beyond the C-obstacle a piece may reach."""
+
+    co: object
+    S: list
+    T: np.ndarray
+    i: np.ndarray
+    j: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    extra: float
+
+
+def _pair_plan(co, b: np.ndarray) -> _PairPlan:
+    """The pieces of a triangle-pair C-obstacle whose boxes meet ``b`` (flat ones left out
+    when an operand is closed, as the C-obstacle leaves them), counted before any is made.
+    With a closed convex robot part, one piece per convex patch of (nearly) coplanar
+    obstacle triangles (:func:`cspace.geometry.polygon.convex_patches`)."""
     from ..cobstacle.pairs import TrianglePairs, _flat
 
     S, T, g = co.S, co.T, np.asarray(co._impl.g, dtype=np.int64).reshape(3)
@@ -146,7 +162,8 @@ def _pair_plan(co, b: np.ndarray) -> tuple:
             ii, jj = ii[keep], jj[keep]
         I.append(ii)
         J.append(jj)
-    return co, S, T, np.concatenate(I), np.concatenate(J), extra
+    I, J = np.concatenate(I), np.concatenate(J)
+    return _PairPlan(co, S, T, I, J, s_lo[I] + t_lo[J] - g, s_hi[I] + t_hi[J] + g, extra)
 
 
 def _piece_pairs(found: list, G: Grid) -> int:
@@ -158,12 +175,9 @@ def _piece_pairs(found: list, G: Grid) -> int:
             V = p.vertices if isinstance(p, ConvexPolytope) else p
             lo.append(V.min(axis=0))
             hi.append(V.max(axis=0))
-        for co, S, T, I, J, _ in plans:
-            g = np.asarray(co._impl.g, dtype=np.int64).reshape(3)
-            s_lo = np.array([x.min(axis=0) for x in S]).reshape(-1, 3)
-            s_hi = np.array([x.max(axis=0) for x in S]).reshape(-1, 3)
-            lo += list(co.grid.to_float(s_lo[I] + T.min(axis=1)[J] - g))
-            hi += list(co.grid.to_float(s_hi[I] + T.max(axis=1)[J] + g))
+        for plan in plans:
+            lo += list(plan.co.grid.to_float(plan.lo))
+            hi += list(plan.co.grid.to_float(plan.hi))
     if len(lo) < 2:
         return 0
     e = G.exponent
@@ -171,15 +185,15 @@ def _piece_pairs(found: list, G: Grid) -> int:
                          np.ceil(np.ldexp(np.array(hi), -e)).astype(np.int64)))
 
 
-def _pair_pieces(plan: tuple, name: str, far) -> list:
+def _pair_pieces(plan: _PairPlan, name: str, far) -> list:
     """The pieces of :func:`_pair_plan` as float64 points (exact: grid points of the
     C-obstacle's grid), or, where ``far(points)`` (beyond the union's range), as their hull."""
     from ..geometry.snapping import grow_points
 
-    co, S, T, I, J, _ = plan
+    co, S, T = plan.co, plan.S, plan.T
     g = np.asarray(co._impl.g, dtype=np.int64).reshape(3)
     out = []
-    for i, j in zip(I.tolist(), J.tolist()):
+    for i, j in zip(plan.i.tolist(), plan.j.tolist()):
         pts = grow_points((S[i][:, None] + T[j][None]).reshape(-1, 3), g)
         V = co.grid.to_float(pts)
         out.append(ConvexPolytope.from_ints(pts, grid=co.grid, name=name) if far(V) else V)
@@ -229,12 +243,16 @@ def unites_sums_as_pairs(cspace, bounds=None) -> bool:
     return _pairs_model(cspace, inner, G) is not None
 
 
+# A C-space's scene modelled again for its triangle pairs (_pairs_model), while it lives.
+_REMODELLED: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+
 def _pairs_model(cspace, inner: np.ndarray, G: Grid):
     """The scene model whose triangle pairs :func:`free_space` unites instead of the
     C-space's non-convex sums, or None: a lazy C-space's model when it would build a sum (a
-    solid body against a convex robot part); a C-space's scene's, modelled again (made once,
-    kept on it), when one of its closed meshes meeting ``inner`` is off ``G`` and the scene
-    has such a pair (a sum read from the cache, too)."""
+    solid body against a convex robot part); a C-space's scene's, modelled again (once per
+    C-space, kept while it lives), when one of its closed meshes meeting ``inner`` is off
+    ``G`` and the scene has such a pair (a sum read from the cache, too)."""
     from ..cobstacle.pairs import pair_construction
     from ..scene.model import LazyCSpace, model_scene
 
@@ -243,10 +261,10 @@ def _pairs_model(cspace, inner: np.ndarray, G: Grid):
     scene = getattr(cspace, "scene", None)
     if scene is None or not any(_off_grid_mesh(co, inner, G) for co in cspace.obstacles):
         return None
-    model = getattr(cspace, "_pairs_model", None)
-    if model is None:
-        model = model_scene(scene, build=False, robot_hull=cspace.robot_hull)
-        cspace._pairs_model = model  # modelling again is steps 1-5 of a build: once
+    model = _REMODELLED.get(cspace)
+    if model is None:  # modelling again is steps 1-5 of a build: once per C-space
+        model = _REMODELLED[cspace] = model_scene(scene, build=False,
+                                                  robot_hull=cspace.robot_hull)
     solid = any(pair_construction(b.kind, p.kind) == "NCC-CVMS"
                 for b in model.bodies if b.kind != "dropped" for p in model.robot_parts)
     return model if solid else None
@@ -577,14 +595,14 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
         name = f"#{i}" + (f" ({co.name})" if getattr(co, "name", None) else "")
         got, closed, plans = _pieces(co, name, inner)
         found.append((name, got, plans))
-        count += len(got) + sum(len(p[3]) for p in plans)
+        count += len(got) + sum(len(p.i) for p in plans)
         if count > max_pieces:
             raise UnsupportedError(
                 f"free_space: more than {max_pieces} convex pieces meet the bounds (at "
                 f"C-obstacle {name})")
         meshes += closed
         # a patch of nearly coplanar triangles adds its flatness (_pair_plan)
-        err = max(err, float(co.error_bound) + max([p[5] for p in plans], default=0.0))
+        err = max(err, float(co.error_bound) + max([p.extra for p in plans], default=0.0))
         check("pieces")
     # Before any piece is made: pairs of pieces whose boxes meet each make some hundreds of
     # candidate triangle pairs (the turned bottle: 430), so over max_pairs / 100 of them the
