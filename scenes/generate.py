@@ -133,8 +133,13 @@ def comb() -> str:
                       start=(-2.0, 0.0, 1.3), goal=(2.0, 0.0, 1.3), boxes=boxes)
 
 
-def maze() -> str:
-    """A 3 x 3 x 2 maze of cubic cells; the passages form one long path through all cells."""
+def maze(slot: float | None = None, offset=(0.0, 0.0, 0.0)) -> str:
+    """A 3 x 3 x 2 maze of cubic cells; the passages form one long path through all cells.
+
+    ``slot``: the first passage (from the start's cell along x) is not open but a wall with a
+    vertical slot ``slot`` wide (along y) at the cell's centre line, so the only route passes
+    a gap of that width against the robot's 0.5 (the tests' tight maze); ``offset`` moves the
+    whole scene. The shipped file uses neither."""
     s, t = 1.2, 0.1  # cell size, wall thickness
     nx, ny, nz = 3, 3, 2
     # Passages between cells (i, j, k): a serpentine along x rows on level 0, up at (2, 2),
@@ -144,6 +149,7 @@ def maze() -> str:
     path = [(i, j, 0) for i, j in level0] + [(i, j, 1) for i, j in level1]
     open_faces = {frozenset(pair) for pair in zip(path, path[1:])}
     assert len(open_faces) == nx * ny * nz - 1  # a spanning tree: every cell reachable
+    first = frozenset(path[:2])  # along x: the slot's panels split the wall along y
 
     boxes = []
     size = (nx * s, ny * s, nz * s)
@@ -163,12 +169,20 @@ def maze() -> str:
                     cell[axis], cell[u], cell[v] = i, p, q
                     before = list(cell)
                     before[axis] -= 1
-                    if frozenset((tuple(before), tuple(cell))) in open_faces:
+                    passage = frozenset((tuple(before), tuple(cell)))
+                    if passage in open_faces and not (slot and passage == first):
                         continue
                     lo, hi = [0.0] * 3, [0.0] * 3
                     lo[axis], hi[axis] = i * s - t / 2, i * s + t / 2
                     lo[u], hi[u] = p * s - t / 2, (p + 1) * s + t / 2
                     lo[v], hi[v] = q * s - t / 2, (q + 1) * s + t / 2
+                    if passage in open_faces:  # the slot: two panels beside it, along u (y)
+                        mid = (p + 0.5) * s
+                        boxes.append(box(f"slot-{label}{i}-{p}{q}-lo", lo,
+                                         [hi[0], mid - slot / 2, hi[2]]))
+                        lo[u] = mid + slot / 2
+                        boxes.append(box(f"slot-{label}{i}-{p}{q}-hi", lo, hi))
+                        continue
                     boxes.append(box(f"wall-{label}{i}-{p}{q}", lo, hi))
     robot = (1.0, 0.5, 0.5)
     clearance = (s - t - robot[0]) / 2
@@ -185,6 +199,17 @@ def maze() -> str:
         f"Narrowest clearance: {_num(clearance)} per side (the robot's length in a cell or "
         "passage).",
     ]
+    if slot:
+        header.append(f"Its first passage is a slot {slot!r} wide (along y) for the robot's "
+                      f"{robot[1]}.")
+    if any(offset):
+        def move(p):
+            return [a + b for a, b in zip(p, offset)]
+
+        boxes = [box(b["name"], move(b["lo"]), move(b["hi"])) for b in boxes]
+        header.append(f"Moved by {_vec(offset)}.")
+        return scene_toml("maze", header, {"box": robot}, bounds=(move((0.0, 0.0, 0.0)),
+                          move(size)), start=move(centre), goal=move(goal), boxes=boxes)
     return scene_toml("maze", header, {"box": robot},
                       bounds=((0.0, 0.0, 0.0), size), start=centre, goal=goal, boxes=boxes)
 

@@ -92,6 +92,42 @@ def test_a_slot_a_few_grid_steps_wider_than_the_robot_is_found(tmp_path, wider, 
     assert _fcl_clean(scene, cs, d.path)
 
 
+def tight_maze(tmp_path, slot: float, offset=FAR):
+    """The shipped maze (scenes/generate.py) with its first passage a slot ``slot`` wide for
+    the robot's 0.5, moved by ``offset``: the only route passes it."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(
+        "scene_generate", __import__("pathlib").Path(__file__).parents[1] / "scenes" /
+        "generate.py")
+    generate = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(generate)
+    path = tmp_path / f"maze-{slot!r}.toml"
+    path.write_text(generate.maze(slot=slot, offset=offset))
+    scene = cspace.load_scene(path)
+    return scene, cspace.model_scene(scene).cspace()
+
+
+def test_a_maze_whose_only_route_passes_a_gap_ten_grid_steps_wider_is_solved_every_time(
+        tmp_path):
+    """Issue #31's maze: a serpentine through 18 cells whose first passage is 6e-7 wider
+    than the robot (ten steps of its grid at (250, 150, -300)). ``plan`` without flags but
+    ``turns=False`` returns a path for every seed, re-proved exactly and clean by FCL on the
+    raw meshes; the slot exactly the robot's width is proved closed."""
+    from cspace.planning.plan import plan
+
+    scene, cs = tight_maze(tmp_path, 0.5 + 6e-7)
+    for seed in (1, 2, 3):
+        r = plan(cs, scene.start, scene.goal, bounds=scene.bounds, planner="auto", time=10,
+                 seed=seed, turns=False)
+        assert r.solved, (seed, r.decision and r.decision.reason)
+        assert verify_path(cs, r.path, scene.bounds)["valid"]
+        assert _fcl_clean(scene, cs, r.path)
+    scene, cs = tight_maze(tmp_path, 0.5)
+    d = decide_module.decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=10)
+    assert d.answer == "no path", d.reason
+
+
 TURN = (17.0, -31.0, 52.0)
 
 
