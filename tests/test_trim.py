@@ -515,3 +515,35 @@ def test_volume_sign_filter_is_the_exact_sign(scale):
     tf = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     assert polyhedron._six_volume(tet, tf) == 1
     assert polyhedron._volume_sign(tet, tf) == 1 and polyhedron._volume_sign(tet, tf[:, ::-1]) == -1
+
+
+REDUCED_CASES = ["comb+box", "cup+box", "stairs+box", "hollow_box+small_box",
+                 "l_shape+rotated_cube", "twisted_prism+box", "one_hole", "two_holes",
+                 "genus_change", "genus_kept", "coplanar_conjoint", "opposite_conjoint",
+                 "tangent_facets", "double_vertex"]
+
+
+@pytest.mark.parametrize("offset", [0.0, 1.0])
+@pytest.mark.parametrize("name", REDUCED_CASES)
+def test_the_reduced_superset_trims_to_the_same_sum(name, offset):
+    """The trimming arranges the reduced superset (no reflex-edge or unsupported corner
+    facets; a cell behind a facet is inside) and gives the sum the whole superset gives
+    (its cells' winding numbers): the same exact volume, holes and shells, at the origin
+    and moved to (250, 150, -300); and fewer cutting pairs where A has a reflex edge."""
+    import time
+
+    from cspace.memory import MemoryGuard
+    from cspace.minkowski.ncc_cvms import _trim
+
+    build, _, _ = CASES[name]
+    v, f, b, _ = build()
+    v = v + offset * np.array([250.0, 150.0, -300.0])
+    grid = Grid.for_points(v, b)
+    A = ClosedMesh.from_arrays(v, f, grid=grid, name=name)
+    B = ConvexPolytope.from_points(b, grid=grid, name="B")
+    got = {r: _trim(A, B, time.perf_counter(), None, 1, MemoryGuard("test", None), reduced=r)
+           for r in (True, False)}
+    assert got[True].volume_exact == got[False].volume_exact
+    assert np.array_equal(np.sort(got[True].shell_is_hole), np.sort(got[False].shell_is_hole))
+    assert got[True].stats["cut_pairs"] <= got[False].stats["cut_pairs"]
+    assert got[True].stats["reduced_facets"] < got[True].stats["superset_facets"]

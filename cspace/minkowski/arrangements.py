@@ -86,14 +86,17 @@ def _projected_segments(segs3: list, ax: int) -> list:
 
 def _pinned_edges(planes: _Planes) -> np.ndarray:
     """``pinned[3 t + j]``: edge ``j`` (corners ``j -> j + 1``) of triangle ``t`` is, by its
-    labels, also an edge of a triangle of another plane. Such a pair is SHARED_EDGE for
-    :func:`cspace.geometry.tritri.intersect_pairs`, so no cut marks the edge: it must stay in its plane's
-    arrangement."""
+    labels, also an edge of a triangle of another plane, or its uses (with their directions
+    and weights) do not cancel. The first kind is SHARED_EDGE for
+    :func:`cspace.geometry.tritri.intersect_pairs`, so no cut marks the edge; along the second
+    (a rim of the reduced superset, which is not a cycle) the coverage changes. Either must
+    stay in its plane's arrangement."""
     F = planes.faces
     u = F.reshape(-1)
     v = F[:, [1, 2, 0]].reshape(-1)
     lo, hi = np.minimum(u, v), np.maximum(u, v)
     pl = np.repeat(planes.plane, 3)
+    use = np.where(u < v, 1, -1) * np.repeat(planes.weight, 3)
     order = np.lexsort((pl, hi, lo))
     lo_s, hi_s, pl_s = lo[order], hi[order], pl[order]
     new = np.ones(len(order), dtype=bool)
@@ -102,6 +105,7 @@ def _pinned_edges(planes: _Planes) -> np.ndarray:
     first = np.nonzero(new)[0]
     last = np.append(first[1:], len(order)) - 1
     mixed = pl_s[first] != pl_s[last]  # sorted by plane inside each group
+    mixed |= np.add.reduceat(use[order], first) != 0
     pinned = np.zeros(len(order), dtype=bool)
     pinned[order] = mixed[group]
     return pinned

@@ -32,17 +32,23 @@ from ..mesh.convex import ConvexPolytope
 from ..memory import MemoryGuard
 from .arrangements import _complex
 from .intersections import _cuts
-from .membership import _classify
+from .membership import _classify, _classify_reduced
 from .output import _Output, _nonmanifold, _output, _to_float_compiled
 from .planes import _plane_groups
 from .polyhedron import SumPolyhedron
 from .rounding import _rounding_check
-from .superset import Superset, minkowski_superset, on_common_step
+from .superset import Superset, minkowski_superset, on_common_step, reduced_superset
 from .traversal import _shells
 
 
 # --------------------------------------------------------------------------------------------
 # NCC-CVMS trimming
+#
+# Reduction. The superset's facets that cannot hold a point of the sum's boundary (edge
+# facets of reflex edges of A, corner facets that B's facet cannot support at their vertex)
+# are dropped (superset.reduced_superset): they are the folds of A's concave features, most
+# of the arrangement's work where B is larger than those. What is left faces out of convex
+# pieces of the sum and is not a cycle. ``reduced=False`` trims the whole superset (tests).
 #
 # Sub-facets. Superset triangles are grouped by exact supporting plane. Each plane gets ONE
 # exact 2D arrangement (cspace.minkowski.plane_arrangement) of its triangles' edges and of the segments where the
@@ -61,7 +67,9 @@ from .traversal import _shells
 # followed separately).
 #
 # Membership. Each shell bounds one cell. The unbounded cell is found exactly (the supporting
-# plane of the sum in the direction of a facet normal of B). The winding number w of the
+# plane of the sum in the direction of a facet normal of B). Of the reduced superset, a cell
+# behind a sub-facet is inside; the others are tested exactly, as below, and also for q - B
+# inside A. Of the whole superset, the winding number w of the
 # superset is propagated across sub-facets (it jumps by the coverage). w != 0 means inside:
 # w is the Euler characteristic of A ∩ (q - B) (tests/test_superset.py), which is 0 for the
 # empty set. w == 0 on a bounded cell is either a polyhedral hole or a "ring" cell inside the
@@ -90,7 +98,7 @@ def _stage_reporter(progress):
 
 
 def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int,
-          guard: MemoryGuard) -> SumPolyhedron:
+          guard: MemoryGuard, reduced: bool = True) -> SumPolyhedron:
     stats: dict = {}
     report = _stage_reporter(progress)
     names = list(_STAGES)
@@ -106,8 +114,11 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int,
     t = time.perf_counter()
     S = minkowski_superset(A, B)
     A, B = on_common_step(A, B)  # the operands as the superset snapped them
-    t = lap("superset", t)
     stats["superset_facets"] = S.n_facets
+    if reduced:  # without the facets that cannot hold a point of the sum's boundary
+        S = reduced_superset(S, A, B)
+    t = lap("superset", t)
+    stats["reduced_facets"] = S.n_facets
 
     planes = _plane_groups(S)
     t = lap("planes", t)
@@ -132,7 +143,8 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int,
     stats["shells"] = int(shells.n)
     check("traversal", f" ({int(shells.n):,} shells)")
 
-    inside, n_tested, anchor = _classify(cx, shells, planes, S, A, B)
+    inside, n_tested, anchor = (_classify_reduced if reduced else _classify)(
+        cx, shells, planes, S, A, B)
     t = lap("membership", t)
     stats["membership_tests"] = n_tested
 
