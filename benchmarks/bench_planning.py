@@ -427,6 +427,14 @@ def decide_scenes(tmp: Path) -> list:
         out.append((name, load(path), truth))
     out.append(("two C-obstacles touching along an edge, between start and goal",
                 touching_edge(tmp), "no path"))
+    from test_corridor import tight_maze
+
+    for name, slot, truth in (("maze at (250, 150, -300), its first passage a slot = robot + "
+                               "6e-7 (10 grid steps)", 0.5 + 6e-7, "path"),
+                              ("that maze, slot = robot (C-obstacles touch)", 0.5, "no path")):
+        where = tmp / f"maze{len(out)}"
+        where.mkdir()
+        out.append((name, tight_maze(where, slot)[0], truth))
     for path in sorted((ROOT / "scenes").glob("*.toml")):
         out.append((path.stem + (" (no turns)" if path.stem == "piano" else ""), load(path),
                     "no path" if path.stem in ("piano", "cage") else "path"))
@@ -467,7 +475,8 @@ def decide_section() -> list[str]:
              "orientation: RRTConnect and PRM on our exact checker, RRTConnect on an FCL "
              "checker with discrete motions (*wrong*: paths exact `segment_free` rejects). A "
              "planner can only say 'not solved' (it runs out the clock); 'no path' is ours "
-             "alone. *truth*: by construction (the cages' slot against the robot's width; "
+             "alone. *truth*: by construction (the cages' and the tight maze's slot against "
+             "the robot's width; "
              "the other shipped scenes have a path, the piano only if it turns); of the real "
              "scenes, FCL's has a path (the planners find one), and the bug trap has none "
              "at its start orientation (the *decide* column's proof; with a longer budget "
