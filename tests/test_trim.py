@@ -547,3 +547,48 @@ def test_the_reduced_superset_trims_to_the_same_sum(name, offset):
     assert np.array_equal(np.sort(got[True].shell_is_hole), np.sort(got[False].shell_is_hole))
     assert got[True].stats["cut_pairs"] <= got[False].stats["cut_pairs"]
     assert got[True].stats["reduced_facets"] < got[True].stats["superset_facets"]
+
+
+def _random_solid(seed: int):
+    """A random voxel solid (3 x 3 x 3 cells, about half filled, one 2-manifold body), turned
+    by a random rotation and moved to (250, 150, -300); None when the draw is not one."""
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        occ = rng.random((3, 3, 3)) < 0.55
+        if occ.sum() < 4:
+            continue
+        try:
+            v, f = zoo.voxel_solid(occ, size=0.5)
+        except ValueError:
+            continue  # a checkerboard edge or vertex: not a 2-manifold surface
+        import trimesh
+
+        if len(trimesh.Trimesh(v, f, process=True).split(only_watertight=False)) != 1:
+            continue
+        return zoo.random_rotation(v, seed) + np.array([250.0, 150.0, -300.0]), f
+    return None
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("seed", range(24))
+def test_the_reduced_superset_on_random_turned_solids(seed):
+    """Random voxel solids (reflex edges, saddle and concave vertices) turned generically, far
+    from the origin, against a box, a 20-facet hull or an 80-facet sphere: the reduced
+    superset's sum has the whole superset's exact volume and holes."""
+    import time
+
+    from cspace.memory import MemoryGuard
+    from cspace.minkowski.ncc_cvms import _trim
+
+    got = _random_solid(seed)
+    assert got is not None
+    v, f = got
+    b = [zoo.box_points(0.4, 0.3, 0.25), zoo.hull20(seed, scale=(0.4, 0.3, 0.2)),
+         zoo.icosphere_points(1, radius=0.3)][seed % 3]
+    grid = Grid.for_points(v, b)
+    A = ClosedMesh.from_arrays(v, f, grid=grid, name=f"solid{seed}")
+    B = ConvexPolytope.from_points(b, grid=grid, name="B")
+    red, whole = (_trim(A, B, time.perf_counter(), None, 1, MemoryGuard("test", None), reduced=r)
+                  for r in (True, False))
+    assert red.volume_exact == whole.volume_exact
+    assert np.array_equal(np.sort(red.shell_is_hole), np.sort(whole.shell_is_hole))
