@@ -198,7 +198,8 @@ def test_held_out_benchmark_meshes_are_the_listed_closed_bodies():
 
     rows = [line.split("|")[1:-1] for line in (HELD_OUT / "SOURCES.md").read_text().splitlines()
             if line.startswith("| ") and line.split("|")[1].strip().endswith(".off")]
-    assert len(rows) == 4
+    assert sorted(c[0].strip() for c in rows) == sorted(p.name for p in HELD_OUT.glob("*.off"))
+    assert len(rows) == 6
     for cells in rows:
         name, _, size, digest, T, V, chi = (c.strip() for c in cells[:7])
         data = (HELD_OUT / name).read_bytes()
