@@ -592,3 +592,16 @@ def test_the_reduced_superset_on_random_turned_solids(seed):
                   for r in (True, False))
     assert red.volume_exact == whole.volume_exact
     assert np.array_equal(np.sort(red.shell_is_hole), np.sort(whole.shell_is_hole))
+
+
+def test_an_open_output_surface_is_refused():
+    """The output's last check: a surface whose directed edges do not cancel (here a
+    tetrahedron missing a face, or with one face turned) raises rather than being returned."""
+    from cspace.errors import ExactnessError
+    from cspace.minkowski.output import _check_closed
+
+    tet = np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+    _check_closed(tet)
+    for bad in (tet[:3], np.vstack([tet[:3], tet[3, ::-1]])):
+        with pytest.raises(ExactnessError, match="not closed"):
+            _check_closed(bad)

@@ -170,9 +170,9 @@ class _PlaneJobs:
         polys = [[(q[a], q[b], 1) for q in self.corners[t]] for t in tl]
         cut3 = self.cuts.segments[p]
         segs = _planar.projected_segments(cut3, ax) if compiled else _projected_segments(cut3, ax)
-        # The net coverage changes only where another plane's sheet meets this one
-        # (closedness of the superset): along the cuts and the edges shared by label with
-        # other planes' triangles. Where the net coverage is 0, the sheets of one orientation
+        # The net coverage changes only where another plane's sheet meets this one or a
+        # sheet ends: along the cuts, the edges shared by label with other planes' triangles
+        # and the edges whose uses do not cancel (the pinned edges). Where the net coverage is 0, the sheets of one orientation
         # cover exactly where those of the other do, so the edges of the less frequent
         # orientation bound the kept (support != 0) part. Other triangle edges stay out.
         sg = [self.sign[t] for t in tl]

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import ExactnessError
 from ..geometry._kernels import load
 from ..geometry.exact import Grid
 from ..geometry.graphs import component_labels
@@ -63,6 +64,7 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
         facet_src.append(int(cx.face_src[f]))
         outside_cell.append(find(int(sh.of[2 * f + (0 if flip else 1)])))
     T = np.array(tris, dtype=np.int64).reshape(-1, 3)
+    _check_closed(T)
     used, T = np.unique(T, return_inverse=True)
     T = T.reshape(-1, 3)
     points = [cx.points[i] for i in used.tolist()]
@@ -86,6 +88,20 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
         shell=tri_shell if tri_shell is not None else np.zeros(0, np.int64),
         shell_is_hole=shell_is_hole,
     )
+
+
+def _check_closed(T: np.ndarray) -> None:
+    """Raise ExactnessError unless the oriented triangles ``T`` (exact point ids) are a
+    closed 2-cycle: every directed edge is cancelled by its reverse, counted with
+    multiplicity. The sum's boundary is one; a flaw upstream (a missed cut, a cell given the
+    wrong side) would show as an open surface, which is refused rather than returned."""
+    if not len(T):
+        return
+    u, v = T.reshape(-1), T[:, [1, 2, 0]].reshape(-1)
+    n = int(T.max()) + 1
+    if not np.array_equal(np.sort(u * n + v), np.sort(v * n + u)):
+        raise ExactnessError(f"the sum's surface is not closed: of its {len(T)} triangles' "
+                             "directed edges, some are not cancelled by their reverse")
 
 
 def _to_float(points: list, grid: Grid) -> np.ndarray:

@@ -72,8 +72,10 @@ class SumPolyhedron:
     stats : dict
         Seconds per stage (``superset``, ``planes``, ``intersections``, ``arrangements``,
         ``traversal``, ``membership``, ``output``, ``rounding_check``, ``total``) and sizes
-        (``superset_facets``, ``superset_triangles``, ``n_planes``, ``candidate_pairs``,
-        ``cut_pairs``, ``subfacets``, ``shells``, ``membership_tests``, ``output_triangles``).
+        (``superset_facets``: the convolution's; ``reduced_facets``: those the trimming keeps,
+        :func:`~cspace.minkowski.superset.reduced_superset`; ``superset_triangles``: the kept
+        ones' triangles; ``n_planes``, ``candidate_pairs``, ``cut_pairs``, ``subfacets``,
+        ``shells``, ``membership_tests``, ``output_triangles``).
     """
 
     vertices: np.ndarray
