@@ -104,10 +104,10 @@ def _pinned_edges(planes: _Planes) -> np.ndarray:
     group = np.cumsum(new) - 1
     first = np.nonzero(new)[0]
     last = np.append(first[1:], len(order)) - 1
-    mixed = pl_s[first] != pl_s[last]  # sorted by plane inside each group
-    mixed |= np.add.reduceat(use[order], first) != 0
+    pin = pl_s[first] != pl_s[last]  # sorted by plane inside each group: on two planes
+    pin |= np.add.reduceat(use[order], first) != 0  # or its uses do not cancel
     pinned = np.zeros(len(order), dtype=bool)
-    pinned[order] = mixed[group]
+    pinned[order] = pin[group]
     return pinned
 
 
@@ -172,9 +172,10 @@ class _PlaneJobs:
         segs = _planar.projected_segments(cut3, ax) if compiled else _projected_segments(cut3, ax)
         # The net coverage changes only where another plane's sheet meets this one or a
         # sheet ends: along the cuts, the edges shared by label with other planes' triangles
-        # and the edges whose uses do not cancel (the pinned edges). Where the net coverage is 0, the sheets of one orientation
-        # cover exactly where those of the other do, so the edges of the less frequent
-        # orientation bound the kept (support != 0) part. Other triangle edges stay out.
+        # and the edges whose uses do not cancel (the pinned edges). Where the net coverage
+        # is 0, the sheets of one orientation cover exactly where those of the other do, so
+        # the edges of the less frequent orientation bound the kept (support != 0) part.
+        # Other triangle edges stay out.
         sg = [self.sign[t] for t in tl]
         minority = -1 if sg.count(1) >= sg.count(-1) else 1
         pinned = self.pinned

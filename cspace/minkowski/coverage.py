@@ -215,8 +215,9 @@ def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: boo
     Unlike :func:`polygon_coverage` the polygon edges are not in the arrangement, so its faces
     are not cut by them. The result is right only when the coverage is constant on every
     face, i.e. when ``segments`` contain every point where the net or the unsigned coverage
-    changes: the caller's invariant (:class:`cspace.minkowski.arrangements._PlaneJobs` passes the cuts
-    and every edge shared with another plane or whose uses do not cancel). It is certified in part: the integral of the coverage over the faces must equal
+    changes: the caller's invariant (:class:`cspace.minkowski.arrangements._PlaneJobs` passes
+    the cuts and every edge shared with another plane or whose uses do not cancel). It is
+    certified in part: the integral of the coverage over the faces must equal
     ``sum_i weights[i] * signed_area(polygon_i)``, else :class:`ValueError`.
 
     Parameters
