@@ -215,6 +215,23 @@ def folded_box():
     return V, F
 
 
+@pytest.mark.parametrize("shift", [(0.0, 0.0, 96.0), (250.0, 150.0, -300.0), (0.0, 0.0, 0.0)])
+def test_self_intersections_are_found_far_from_the_origin(shift):
+    """The exact self-intersection test boxes triangles in grid units of their absolute
+    coordinates. Moved to z = 96 the folded box's units straddle 3 * 2**31, where a cast of
+    those boxes to int32 wrapped and every crossing was missed: the same crossings must be
+    found wherever the mesh lies."""
+    from cspace.mesh.self_intersection import self_intersections
+
+    V, F = folded_box()
+    here = cspace.as_mesh((V, F))
+    moved = cspace.as_mesh((V + np.array(shift), F))
+    if shift[2] == 96.0:
+        k = np.ldexp(moved.vertices[:, 2], -moved.grid.exponent)
+        assert k.min() < 3 * 2**31 < k.max()  # the case this test is for
+    assert len(self_intersections(moved)) == len(self_intersections(here)) > 0
+
+
 def test_self_intersecting_obstacle_is_named_not_built(tmp_path):
     from cspace.errors import SelfIntersectionError
     from cspace.scene.scene import Body, Scene

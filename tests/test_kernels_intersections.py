@@ -231,6 +231,32 @@ def test_box_sweep_is_identical(seed):
         assert np.array_equal(boxes.box_pairs(lo, hi), sweep._pairs_reference())
 
 
+def _overlapping_pairs(lo, hi):
+    """Every pair of boxes that meet, by brute force over all pairs (nothing of the sweep)."""
+    meet = ((lo[:, None] <= hi[None]) & (lo[None] <= hi[:, None])).all(axis=2)
+    i, j = np.nonzero(np.triu(meet, 1))
+    return np.stack([i, j], axis=1).astype(np.int64)
+
+
+@pytest.mark.parametrize("centre", [0, 3 * 2**31, -(2**33) + 5, 2**45],
+                         ids=["origin", "3*2^31", "-2^33", "2^45"])
+@pytest.mark.parametrize("span", [2**20, 2**33], ids=["narrow", "wide"])
+def test_box_pairs_far_from_the_origin(centre, span):
+    """Boxes in grid units of absolute coordinates lie far beyond int32 (a scene at
+    (250, 150, -300) on a fine grid): every meeting pair is found wherever they lie, also
+    where they straddle a multiple of 2**31 (an int32 cast wrapped there and lost pairs) and
+    when they span more than 2**31 (the numpy sweep)."""
+    rng = np.random.default_rng(span % 97 + centre % 89)
+    lo = centre + rng.integers(-span // 2, span // 2, size=(400, 3))
+    hi = lo + rng.integers(0, span // 8, size=(400, 3))
+    want = _overlapping_pairs(lo, hi)
+    assert len(want) > 100
+    sweep = boxes.BoxSweep(lo, hi)
+    assert sweep.wide == (span > 2**31)
+    assert np.array_equal(boxes.box_pairs(lo, hi), want)
+    assert np.array_equal(sweep._pairs_reference(chunk=97), want)
+
+
 def test_empty_inputs():
     ints = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]])
     faces = np.array([[0, 1, 2]])

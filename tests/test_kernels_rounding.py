@@ -183,7 +183,7 @@ def test_improper_pairs_are_every_improper_pair(seed, monkeypatch):
     triangles) finds exactly the improper pairs with a moved vertex among all pairs, each
     tested on all vertices' integers; in pair order; forked over two processes alike."""
     V, T, moved = _soup(seed)
-    grid = Grid(-20, (0, 0, 0))  # box_pairs takes |k| < 2**29
+    grid = Grid(-20, (0, 0, 0))
     Vi, Tl = self_intersection._common_integers(V), T.tolist()
     want = [(a, b) for a in range(len(T)) for b in range(a + 1, len(T))
             if moved[T[[a, b]]].any() and self_intersection._improper(Vi, Tl[a], Tl[b])]

@@ -87,6 +87,19 @@ def test_moved_scene_has_no_false_free(name, move):
         assert got == EXPECTED[name], got
 
 
+#: Move 134 of the randomized sweep of "folded closed body" (300 moves): the folded L's grid
+#: units straddle 3 * 2**31 on z. The self-intersection test's boxes wrapped there in int32,
+#: the fold went unseen, and the body was built by NCC-CVMS, which refused it.
+STRADDLING = Move("scale 128, grid units straddling 3 * 2^31", scale=128.0,
+                  shift=np.array([-24418.37019111, -14049.52924925, 49226.05797939]),
+                  permute=1820536878)
+
+
+def test_folded_body_whose_grid_units_straddle_an_int32_wrap():
+    m, _ = _check(CASES["folded closed body"], STRADDLING)
+    assert {p.construction for b in m.bodies for p in b.pairs} == EXPECTED["folded closed body"]
+
+
 def test_the_check_catches_a_shifted_piece_box():
     # The bug this file exists for: triangle-pair boxes shifted by the grid's origin. With
     # it re-introduced the moved scene must fail the oracle (and only the moved one).

@@ -62,15 +62,24 @@ def candidate_pairs(ints, faces, *, chunk: int = _CHUNK) -> np.ndarray:
 
 def box_pairs(lo, hi, *, chunk: int = _CHUNK) -> np.ndarray:
     """All pairs of closed integer boxes ``[lo_i, hi_i]`` that intersect (the sweep of
-    :func:`candidate_pairs`); ``lo, hi (t, 3)`` int64 with ``|k| < 2**29``. Rows ``(i, j)``,
-    ``i < j``, sorted, each unordered pair once."""
+    :func:`candidate_pairs`); ``lo, hi (t, 3)`` int64, any values (boxes far from the origin
+    included: see :class:`BoxSweep`). Rows ``(i, j)``, ``i < j``, sorted, each unordered pair
+    once."""
     return BoxSweep(lo, hi).pairs(chunk=chunk)
 
 
 class BoxSweep:
     """The sweep of :func:`box_pairs`, set up once (three sorts), so that its work can be
     split: :meth:`pairs` expands one share of it. ``overlaps`` is its work, the number of
-    one-axis overlaps along the sweep axis."""
+    one-axis overlaps along the sweep axis.
+
+    The boxes are translated to start at 0 on every axis first: overlaps do not change, and
+    the two filter axes are then held in int32 whenever the boxes span less than 2**31 grid
+    units, wherever they lie. Callers box triangles in grid units of their absolute
+    coordinates (a scene at (250, 150, -300) on a fine grid: beyond 2**32), where a plain
+    int32 cast wrapped and lost pairs. Spans of 2**31 or more keep int64 and are swept by
+    :meth:`_pairs_reference`.
+    """
 
     def __init__(self, lo, hi):
         lo, hi = np.asarray(lo, dtype=np.int64), np.asarray(hi, dtype=np.int64)
@@ -78,6 +87,11 @@ class BoxSweep:
         self.overlaps = 0
         if t < 2:
             return
+        base = lo.min(axis=0)
+        # Grid units of float64 coordinates are below 2**53 (a step is never under 2 ulps of
+        # the coordinates), so the differences cannot overflow int64.
+        lo, hi = lo - base, hi - base
+        self.wide = bool(hi.max() >= 2**31)
         first = np.arange(1, t + 1)
         sweeps = []
         for ax in range(3):
@@ -88,10 +102,12 @@ class BoxSweep:
         # Sweep along the most selective axis, filter by the next most selective first.
         sweeps.sort(key=lambda s: s[0])
         (self.overlaps, _, self.order, count), others = sweeps[0], [s[1] for s in sweeps[1:]]
-        # Coordinates fit int32 (|k| < 2**29): half the memory traffic of the gathers below.
+        # Translated coordinates fit int32 unless ``wide``: half the memory traffic of the
+        # gathers below.
         self.itype = np.int32 if t < 2**31 else np.int64
-        self.los = [np.ascontiguousarray(lo[self.order, a], dtype=np.int32) for a in others]
-        self.his = [np.ascontiguousarray(hi[self.order, a], dtype=np.int32) for a in others]
+        ctype = np.int64 if self.wide else np.int32
+        self.los = [np.ascontiguousarray(lo[self.order, a], dtype=ctype) for a in others]
+        self.his = [np.ascontiguousarray(hi[self.order, a], dtype=ctype) for a in others]
         self.count = count.astype(self.itype)
         self.cum = np.cumsum(self.count, dtype=np.int64)
         # Position of the first partner of each row, minus where its run starts in the chunk.
@@ -114,6 +130,8 @@ class BoxSweep:
         memory bound) is not used."""
         if self.overlaps == 0:
             return np.zeros((0, 2), dtype=np.int64)
+        if self.wide:  # the compiled sweep holds int32 coordinates
+            return self._pairs_reference(share, shares, chunk=chunk)
         start, end = self._rows(share, shares)
         (lo1, lo2), (hi1, hi2) = self.los, self.his
         return _compiled.sweep_pairs(start, end, self.t, self.order, self.cum, lo1, hi1, lo2, hi2)
