@@ -15,6 +15,7 @@ from ..errors import ExactnessError
 from ..geometry._kernels import load
 from ..geometry.exact import Grid
 from ..geometry.graphs import component_labels
+from ..mesh.query import unbalanced_edge
 from .arrangements import _Complex
 from .membership import _face_tris
 from .planes import _Planes
@@ -92,16 +93,16 @@ def _output(cx: _Complex, sh: _Shells, inside: np.ndarray, anchor: int, planes: 
 
 def _check_closed(T: np.ndarray) -> None:
     """Raise ExactnessError unless the oriented triangles ``T`` (exact point ids) are a
-    closed 2-cycle: every directed edge is cancelled by its reverse, counted with
-    multiplicity. The sum's boundary is one; a flaw upstream (a missed cut, a cell given the
-    wrong side) would show as an open surface, which is refused rather than returned."""
+    closed 2-cycle (:func:`cspace.mesh.query.unbalanced_edge`). The sum's boundary is one; a
+    flaw upstream (a missed cut, a cell given the wrong side) would show as an open surface,
+    which is refused rather than returned."""
     if not len(T):
         return
-    u, v = T.reshape(-1), T[:, [1, 2, 0]].reshape(-1)
-    n = int(T.max()) + 1
-    if not np.array_equal(np.sort(u * n + v), np.sort(v * n + u)):
-        raise ExactnessError(f"the sum's surface is not closed: of its {len(T)} triangles' "
-                             "directed edges, some are not cancelled by their reverse")
+    edge = unbalanced_edge(T, int(T.max()) + 1)
+    if edge is not None:
+        raise ExactnessError(f"the sum's surface of {len(T)} triangles is not closed: its "
+                             f"directed edge {edge[0]} -> {edge[1]} is not cancelled by its "
+                             "reverse")
 
 
 def _to_float(points: list, grid: Grid) -> np.ndarray:

@@ -189,6 +189,16 @@ def _mesh_edges(F: np.ndarray, n_vertices: int):
     return edges, face[keep], face[twin[keep]]
 
 
+def _edge_convexity(V: np.ndarray, F: np.ndarray):
+    """A's face normals and edges: ``(nA, edges, left, right, sigma)``, the primitive
+    integer normals, :func:`_mesh_edges`, and each edge's exact convexity ``sigma`` (+1
+    convex, -1 reflex, 0 flat or knife)."""
+    nA = exact.primitive(exact.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]))
+    edges, left, right = _mesh_edges(F, len(V))
+    sigma = exact.triple_sign(nA[left], nA[right], V[edges[:, 1]] - V[edges[:, 0]])
+    return nA, edges, left, right, sigma
+
+
 def minkowski_superset(A, B) -> Superset:
     """The NCC-CVMS superset (convolution) of a closed mesh A and a convex polytope B.
 
@@ -226,11 +236,9 @@ def minkowski_superset(A, B) -> Superset:
     nV, nB = len(V), len(B.ints)
 
     # ---- A's face normals and edges -----------------------------------------------------
-    nA = exact.primitive(exact.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]))
-    edges, left, right = _mesh_edges(F, nV)
+    nA, edges, left, right, sigma = _edge_convexity(V, F)
     n1, n2 = nA[left], nA[right]
     d = V[edges[:, 1]] - V[edges[:, 0]]
-    sigma = exact.triple_sign(n1, n2, d)  # +1 convex edge, -1 reflex, 0 flat or knife
     flat = sigma == 0
     if flat.any():
         knife = flat & (exact.dot_sign(n1, n2) < 0)
@@ -370,11 +378,10 @@ def reduced_superset(S: Superset, A, B) -> Superset:
         multiplicities kept; every corner facet kept has multiplicity 1, checked).
     """
     V, F = A.ints, A.faces
-    edges, left, right = _mesh_edges(F, len(V))
+    _, edges, _, _, sigma = _edge_convexity(V, F)
     if not np.array_equal(edges, S.a_edges):
         raise ValueError("reduced_superset: A is not the mesh S was made of")
-    nA = exact.primitive(exact.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]))
-    reflex = exact.triple_sign(nA[left], nA[right], V[edges[:, 1]] - V[edges[:, 0]]) < 0
+    reflex = sigma < 0
     keep = np.ones(S.n_facets, dtype=bool)
     edge = S.kind == EDGE
     keep[edge] = ~reflex[S.source_a[edge, 1]]
