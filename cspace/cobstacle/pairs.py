@@ -48,7 +48,10 @@ Flat pieces: ``s ⊕ (c - t)`` of two parallel triangles is a flat polygon. When
 is closed such a piece adds nothing: a contact of two coplanar faces reaches the edge of the
 coplanar face region of the closed operand, where a non-parallel neighbour triangle meets the
 other operand too (or a containment term holds). Those pairs are left out. When both are open
-surfaces the flat piece is needed and kept, exactly.
+surfaces the flat piece is needed and kept, exactly. A degenerate triangle (a segment or a point
+that a feature thinner than the grid step snapped to:
+:func:`cspace.mesh.components.snapping_losses`) has no normal and is never left out as flat
+(:func:`_parallel`).
 
 No pair is enumerated (:class:`PairObstacle`): each piece is the intersection of 17 slabs
 whose normals come from the two triangles alone (:func:`pair_planes`), so no hull is built, and
@@ -167,14 +170,21 @@ def _meets(lo: np.ndarray, hi: np.ndarray, blo: np.ndarray, bhi: np.ndarray) -> 
 
 
 def _flat(tp: "TrianglePairs", i: np.ndarray, j: np.ndarray) -> np.ndarray:
-    """Exact: are the pieces of pairs ``(i, j)`` flat (parallel triangles, or a degenerate
-    one)? The rule :func:`triangle_pairs` and the compiled engine apply."""
+    """Exact: are the pieces of pairs ``(i, j)`` flat pieces of two parallel triangles? The
+    rule :func:`triangle_pairs` and the compiled engine apply."""
     return _parallel(_primitive_normals(tp.S)[i], _primitive_normals(-tp.T)[j])
 
 
 def _parallel(ns: np.ndarray, nt: np.ndarray) -> np.ndarray:
-    """Rows of canonical primitive normals that are equal (parallel triangles) or zero."""
-    return (ns == nt).all(axis=1) | ~ns.any(axis=1) | ~nt.any(axis=1)
+    """Rows of canonical primitive normals that are equal and not zero: parallel triangles.
+
+    A degenerate triangle (a segment or a point: a feature thinner than the grid step that
+    snapping collapsed, or collinear corners) has a zero normal and is never called flat here:
+    its piece ``s ⊕ t`` is a prism, not a polygon, unless the segment lies parallel to ``t``,
+    and the rule that leaves flat pieces out (a neighbour's contact holds the same
+    translations) speaks of two faces, not of a segment, which has no neighbours. Keeping a
+    piece that happens to be flat is only redundant, never wrong."""
+    return (ns == nt).all(axis=1) & ns.any(axis=1) & nt.any(axis=1)
 
 
 _OCTAHEDRON = np.array([[0, 0, 0], [1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1],
@@ -309,7 +319,9 @@ def component_points(ints: np.ndarray, faces: np.ndarray, fits_in=None) -> np.nd
     kept. A component can lie inside a solid only if it fits in the solid's box, so the
     containment terms of larger ones (walls, floors) can never hold and are not built.
     """
-    F = np.asarray(faces, np.int64)
+    F = np.asarray(faces, np.int64).reshape(-1, 3)
+    if not len(F):
+        return np.asarray(ints)[:0]
     n = len(ints)
     a, b = F.reshape(-1), np.repeat(F[:, 0], 3)
     _, label = component_labels(n, a, b)

@@ -416,12 +416,15 @@ cdef class PairSet:
                 out_hi[k] = hi1[k]
 
     cdef inline bint _flat_skipped(self, Py_ssize_t i, Py_ssize_t j) noexcept nogil:
+        # Parallel triangles only: a degenerate one (zero normal: a segment or a point, a
+        # feature thinner than the grid step) is a prism's edge, never skipped
+        # (pairs._parallel, its reference).
         if not self.closed:
             return False
         if self.ns[i, 0] == 0 and self.ns[i, 1] == 0 and self.ns[i, 2] == 0:
-            return True
+            return False
         if self.nt[j, 0] == 0 and self.nt[j, 1] == 0 and self.nt[j, 2] == 0:
-            return True
+            return False
         return (self.ns[i, 0] == self.nt[j, 0] and self.ns[i, 1] == self.nt[j, 1]
                 and self.ns[i, 2] == self.nt[j, 2])
 
