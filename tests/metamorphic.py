@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 from test_robot_parts import _box, _open, _u_robot
-from zoo import l_shape, torus
+from zoo import l_shape, pierced_box, torus
 
 from cspace.scene.scene import Body, Scene
 
@@ -52,6 +52,10 @@ class Case:
 
 def _shifted(mesh: Mesh, by) -> Mesh:
     return np.asarray(mesh[0], float) + np.asarray(by, float), np.asarray(mesh[1], np.int64)
+
+
+def _scaled(mesh: Mesh, by: float) -> Mesh:
+    return np.asarray(mesh[0], float) * by, np.asarray(mesh[1], np.int64)
 
 
 def _two_part_robot() -> Mesh:
@@ -100,6 +104,12 @@ CASES = {c.name: c for c in [
     Case("folded closed robot", (L_BRACKET, _shifted(POST, (-1.5, 1.5, 0.0))), _folded_l(0.4)),
     Case("several bodies", (L_BRACKET, _shifted(OPEN_BOX, (1.2, 1.2, 0.0)),
                             _shifted(POST, (-1.5, 1.5, 0.0))), _u_robot(0.4)),
+    # Features thinner than the grid step (issue #51): a needle through a box snaps to
+    # segments, a box cut through by a sheet to open halves whose inside must stay, and a
+    # robot's needle is the robot's too.
+    Case("needle through a box", (pierced_box("needle", 1e-9),), SMALL_BOX),
+    Case("box cut by a sheet", (pierced_box("cut", 1e-9),), SMALL_BOX),
+    Case("robot with a needle", (POST,), _scaled(pierced_box("needle", 1e-9), 0.3)),
 ]}
 
 

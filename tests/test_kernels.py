@@ -707,9 +707,9 @@ def test_weld_split_shortcut_is_weld_dedupe_then_split_parts(monkeypatch):
                                faces=np.asarray(F, dtype=np.int64))
         grid = Grid.for_points(body.vertices)
         got = weld_split(body, grid)
-        ints, G, counts, two_sided = weld_dedupe(body, grid)
-        want = (ints, G, counts, two_sided, split_parts(ints, G, two_sided))
-        for g, w in zip(got[:2] + got[3:4], want[:2] + want[3:4]):
+        ints, G, counts, two_sided, welded = weld_dedupe(body, grid)
+        want = (ints, G, counts, two_sided, split_parts(ints, G, two_sided), welded)
+        for g, w in zip(got[:2] + got[3:4] + got[5:], want[:2] + want[3:4] + want[5:]):
             assert np.array_equal(g, w), name
         assert got[2] == want[2], name
         assert len(got[4]) == len(want[4]) and all(

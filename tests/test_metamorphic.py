@@ -40,6 +40,9 @@ EXPECTED = {
     "folded closed body": {"triangle pairs"},
     "folded closed robot": {"triangle pairs"},
     "several bodies": {"triangle pairs"},
+    "needle through a box": {"CVMS", "triangle pairs"},  # the box; the needle's segments
+    "box cut by a sheet": {"triangle pairs"},
+    "robot with a needle": {"CVMS", "triangle pairs"},  # its box part; its needle
 }
 
 

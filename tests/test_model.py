@@ -86,12 +86,18 @@ def test_collapsed_triangles_are_dropped_and_counted():
     assert m.sources["b"]["collapsed"] == 1 and m.bodies[0].kind == "convex"
 
 
-def test_a_body_of_collapsed_triangles_is_dropped_as_empty():
-    V = np.array([[0.0, 0, 0], [1e-12, 0, 0], [0, 1e-12, 0]])
+def test_a_body_of_collapsed_triangles_is_kept_as_a_point():
+    """A triangle thinner than the step collapses to a point; the point is still an obstacle
+    (issue #51: it was dropped as empty, and the robot passed through it)."""
+    V = np.array([[2.0, 0, 0], [2 + 1e-12, 0, 0], [2, 1e-12, 0]])
     m = model_scene(make_scene([Body("dust", V, [[0, 1, 2]], "test"), box_body("box")]))
-    assert [b.kind for b in m.bodies] == ["dropped", "convex"]
-    assert m.bodies[0].reason.startswith("empty: all 1 triangles collapse")
-    assert len(m.cspace()) == 1
+    assert [(b.name, b.kind) for b in m.bodies] == [("dust (snapped)", "surface"),
+                                                     ("box", "convex")]
+    assert "1 segments" not in m.bodies[0].reason and "0 segments and 1 points" in \
+        m.bodies[0].reason
+    # the robot (a 0.25 cube about its centre) over the point, and just beside it
+    hit = m.cspace().contains(np.array([[2.1, 0.1, -0.1], [2.2, 0.0, 0.0]]))
+    assert hit.tolist() == [True, False]
 
 
 def test_split_into_bodies_and_cavity_stays_with_its_solid():

@@ -22,7 +22,7 @@ from cspace.scene.scene import Body, Scene
 from cspace.scene import snapshot
 from cspace.scene.snapshot import snapshot_key
 
-from zoo import l_shape, random_rotation
+from zoo import l_shape, pierced_box, random_rotation
 
 AT = np.array([250.0, 150.0, -300.0])
 
@@ -44,9 +44,12 @@ def _bodies():
     world = Body("world", np.vstack([near.vertices, far.vertices]),
                  np.vstack([near.faces, far.faces + 8]), "test")
     dust = Body("dust", AT + [[0.0, 0, 0], [1e-12, 0, 0], [0, 1e-12, 0]], [[0, 1, 2]], "test")
+    # a box cut through by a sheet thinner than the step: what snapping took is its inside
+    V, F = pierced_box("cut", 1e-9)
+    cut = Body("cut", V * 0.5 + AT + [2.0, -2.0, -1.5], F, "test")
     return [_box("a", (1.0, 0.0, 0.0)), _box("b", (-1.0, -1.0, 0.5), (0.5, 2.0, 0.3)),
             _box("turned", (0.0, 2.0, -1.0), (0.7, 0.4, 0.9), turn=3), L, sheet, two_sided,
-            world, dust, _box("out", (40.0, 0.0, 0.0))]
+            world, dust, cut, _box("out", (40.0, 0.0, 0.0))]
 
 
 def _scene(robot: Body, bodies=None) -> Scene:
@@ -94,6 +97,10 @@ def _same_model(m, r):
         what = f"body {a.name}"
         assert (a.source, a.kind, a.reason, a.changed, a.pieces, a._sheet, a.error) == \
                (b.source, b.kind, b.reason, b.changed, b.pieces, b._sheet, b.error), what
+        assert (a._encloses is None) == (b._encloses is None), what
+        if a._encloses is not None:
+            _same_arrays(a._encloses.ints, b._encloses.ints, f"{what}: enclosed ints")
+            _same_arrays(a._encloses.faces, b._encloses.faces, f"{what}: enclosed faces")
         for f in ("vertices", "faces", "_ints", "_keep"):
             _same_arrays(getattr(a, f), getattr(b, f), f"{what}: {f}")
         if a.kind == "convex":

@@ -28,6 +28,8 @@ __all__ = [
     "genus3",
     "cup",
     "hollow_box",
+    "thin_feature",
+    "pierced_box",
     "stairs",
     "torus",
     "star",
@@ -337,6 +339,58 @@ def stairs(steps: int = 5, width: int = 3) -> Mesh:
 
 # --------------------------------------------------------------------------------------
 # smooth and star-shaped meshes
+
+
+def thin_feature(kind: str, t: float):
+    """A trimesh of a feature ``t`` thick, about a unit box at the origin: needle (a
+    triangular prism along x), plate (y thin, out through two faces), cut (a plate through
+    the whole box: it parts the box in two halves joined only through the plate), fin (z
+    thin), wedge (a ridge of height t). For :func:`pierced_box` and issue #51's tests."""
+    import trimesh
+
+    if kind == "needle":
+        sec = np.array([[0, 0, 0], [0, t, 0], [0, 0.5 * t, 0.8 * t]]) + [0, 0.05, 0.1]
+        V = np.vstack([sec - [1, 0, 0], sec + [1, 0, 0]])
+        F = [[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4], [2, 0, 3],
+             [2, 3, 5]]
+        m = trimesh.Trimesh(V, F, process=False)
+        m.fix_normals()
+        return m
+    if kind == "plate":
+        return trimesh.creation.box((2, t, 0.5))
+    if kind == "cut":
+        return trimesh.creation.box((2, t, 1.6))
+    if kind == "fin":
+        return trimesh.creation.box((2, 0.3, t)).apply_translation([0, 0, 0.2])
+    if kind == "wedge":
+        V = np.array([[-1, 0, 0], [1, 0, 0], [1, 0.4, 0], [-1, 0.4, 0], [-1, 0.2, t],
+                      [1, 0.2, t]], dtype=float)
+        F = [[0, 2, 1], [0, 3, 2], [0, 1, 5], [0, 5, 4], [3, 4, 5], [3, 5, 2], [0, 4, 3],
+             [1, 2, 5]]
+        m = trimesh.Trimesh(V, F, process=False)
+        m.fix_normals()
+        return m
+    raise ValueError(kind)
+
+
+def pierced_box(kind: str, t: float) -> Mesh:
+    """A unit box united with :func:`thin_feature` ``kind``, ``t`` thick: a feature 1e-3 thick
+    united by manifold (whose float32 output would drop a thinner one), then the feature's own
+    vertices squeezed towards its mid-plane or axis to ``t``, so that the box's faces keep the
+    (now tiny) holes it pierces. A closed, oriented 2-manifold in floats; on a grid coarser
+    than ``t`` it snaps to a box with segments, sheets or parted halves (issue #51)."""
+    import trimesh
+
+    f = thin_feature(kind, 1e-3)
+    A = trimesh.boolean.union([trimesh.creation.box((1, 1, 1)), f], engine="manifold")
+    V = np.asarray(A.vertices, dtype=np.float64).copy()
+    lo, hi = f.bounds
+    near = ((V >= lo - 1e-6) & (V <= hi + 1e-6)).all(axis=1)  # manifold's output is float32
+    axes = {"needle": [1, 2], "plate": [1], "cut": [1], "fin": [2], "wedge": [2]}[kind]
+    mid = lo if kind == "wedge" else (lo + hi) / 2
+    for a in axes:
+        V[near, a] = mid[a] + (V[near, a] - mid[a]) * (t / 1e-3)
+    return V, np.asarray(A.faces, dtype=np.int64)
 
 
 def torus(major: float = 1.0, minor: float = 0.35, sections: int = 48, ring: int = 24) -> Mesh:

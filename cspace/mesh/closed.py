@@ -520,6 +520,18 @@ def _repaired(ints, F, collapsed, flat, rep, grid, name, message):
     G, why = _repair_degenerate(ints, F, collapsed, flat)
     if G is None or not len(G):
         raise fail(f"not repairable: {why or 'every face collapses'}")
+    # The repair keeps the point set only where each collapsed face's segment or point lies on
+    # a face left: a needle or a fin thinner than the step collapses to segments no face holds,
+    # and dropping them would lose an obstacle (issue #51). Such a body has no solid here.
+    from .components import snapping_losses
+
+    thin, _ = snapping_losses(len(ints), F, G)
+    if len(thin):
+        n_seg = int((thin[:, 0] != thin[:, 1]).sum())
+        raise fail(f"not repairable: {n_seg} segments and {len(thin) - n_seg} points of "
+                   "features thinner than the step (the first between input vertices "
+                   f"{_fmt(rep[thin[0, :2]])}) lie on no face left, so dropping the collapsed "
+                   "faces would lose them")
     used = np.unique(G)
     if len(used) < len(ints):  # vertices only collapsed faces used
         G = np.searchsorted(used, G)

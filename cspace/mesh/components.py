@@ -4,7 +4,9 @@ Steps 1-3 of :func:`cspace.scene.model.model_scene` (see there), shared with
 :meth:`cspace.CSpaceObstacle.build`, which splits a non-manifold obstacle the same way:
 
 - :func:`weld_dedupe`: vertices welded by exact snapped position, collapsed triangles dropped,
-  repeated triangles (same three welded vertices) kept once, counted by winding.
+  repeated triangles (same three welded vertices) kept once, counted by winding;
+  :func:`snapping_losses`: what that took (segments and points thinner than the step, the
+  closed 2-cycle of a closed body), for a model to keep.
 - :func:`split_parts`: connected parts across manifold edges (a non-manifold edge or vertex
   separates the pieces meeting there); a closed part with a vertex inside another closed
   part's solid (decided exactly) stays with it as a cavity.
@@ -19,7 +21,8 @@ from ..geometry._kernels import load
 from ..geometry.exact import Grid
 from ..geometry.graphs import component_labels
 
-__all__ = ["unique_rows", "weld_dedupe", "weld_split", "edge_uses", "split_parts", "split_mesh", "nested_pairs"]
+__all__ = ["unique_rows", "weld_dedupe", "weld_split", "snapping_losses", "edge_uses",
+           "split_parts", "split_mesh", "nested_pairs"]
 
 
 def _parity(F: np.ndarray) -> np.ndarray:
@@ -47,11 +50,13 @@ def unique_rows(a: np.ndarray):
 
 
 def weld_dedupe(body, grid: Grid):
-    """Welded grid ints, deduplicated faces, the counts of steps 1-2, and per kept face
-    whether it was also listed with the opposite winding (double-sided)."""
+    """Welded grid ints, deduplicated faces, the counts of steps 1-2, per kept face whether it
+    was also listed with the opposite winding (double-sided), and every input triangle welded
+    (collapsed and repeated ones included, in input order: what :func:`snapping_losses`
+    reads)."""
     ints, _, inverse = unique_rows(grid.snap(body.vertices))
-    F = inverse[body.faces]
-    collapsed = (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
+    F = welded = inverse[body.faces]
+    collapsed = _collapsed(F)
     F = F[~collapsed]
     _, first, which = unique_rows(np.sort(F, axis=1))
     keep = np.zeros(len(F), dtype=bool)
@@ -63,11 +68,70 @@ def weld_dedupe(body, grid: Grid):
     reversed_copy = np.zeros(len(first), dtype=bool)
     reversed_copy[which[~same]] = True
     order = np.sort(first)
-    return ints, F[order], counts, reversed_copy[which[order]]
+    return ints, F[order], counts, reversed_copy[which[order]], welded
+
+
+def _collapsed(F: np.ndarray) -> np.ndarray:
+    """Rows of welded triangles with a repeated corner (a segment or a point)."""
+    return (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])
+
+
+def snapping_losses(n: int, welded: np.ndarray, F: np.ndarray):
+    """What welding on the grid took from a body, so that a model can keep it: ``(thin,
+    chain)``.
+
+    Parameters
+    ----------
+    n : int
+        Number of welded vertices.
+    welded : (m, 3) int64
+        Every input triangle welded (:func:`weld_dedupe`'s last value).
+    F : (k, 3) int64
+        The triangles kept (deduplicated, none collapsed).
+
+    Returns
+    -------
+    thin : (p, 3) int64
+        Features thinner than the grid step: each triangle that collapsed to a segment
+        ``(a, b, b)`` or a point ``(a, a, a)``, once, unless a kept triangle holds it (the
+        segment is one of its edges, the point one of its corners or of a kept segment's
+        ends). A segment or a point is still an obstacle: its sum with ``-R`` is a convex
+        piece like any triangle's, never nothing.
+    chain : (q, 3) int64 or None
+        The welded triangles that did not collapse, each as often as the input lists it,
+        when they form a closed 2-cycle (every directed edge balanced by its reverse), else
+        None. Snapping is a simplicial map, so the input's cycle stays one (a collapsed
+        triangle's boundary cancels), and its winding number off the surface is the input's:
+        the region a closed body encloses, even where de-duplication (the two faces of a plate
+        thinner than the step, snapped onto one another) or splitting at non-manifold edges
+        leaves parts that enclose nothing on their own.
+    """
+    from .query import unbalanced_edge
+
+    welded = np.asarray(welded, dtype=np.int64).reshape(-1, 3)
+    F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
+    gone = _collapsed(welded)
+    whole = welded[~gone]
+    chain = whole if len(whole) and unbalanced_edge(whole, n) is None else None
+    if not gone.any():
+        return np.zeros((0, 3), dtype=np.int64), chain
+    ends = np.sort(welded[gone], axis=1)
+    a, b = ends[:, 0], ends[:, 2]
+    n64 = np.int64(n)
+    edges = np.sort(np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1)
+    seg = a != b
+    key = np.unique(a[seg] * n64 + b[seg])
+    key = key[~np.isin(key, edges[:, 0] * n64 + edges[:, 1])]
+    sa, sb = key // n64, key % n64
+    pts = np.unique(a[~seg])
+    pts = pts[~np.isin(pts, np.concatenate([F.reshape(-1), sa, sb]))]
+    thin = np.concatenate([np.stack([sa, sb, sb], axis=1), np.stack([pts, pts, pts], axis=1)])
+    return thin.astype(np.int64), chain
 
 
 def weld_split(body, grid: Grid):
-    """:func:`weld_dedupe` then :func:`split_parts`: ``(ints, F, counts, two_sided, parts)``.
+    """:func:`weld_dedupe` then :func:`split_parts`: ``(ints, F, counts, two_sided, parts,
+    welded)``.
 
     A body whose snapped vertices are distinct and all used, and whose triangles one compiled
     call proves an exactly convex closed mesh (most bodies of a scene: boxes, hulls) is one
@@ -81,9 +145,10 @@ def weld_split(body, grid: Grid):
         F = inverse[faces]
         if load("convex").polytope_of_mesh(ints, np.ascontiguousarray(F)) is not None:
             counts = {"triangles": len(faces), "collapsed": 0, "double_sided": 0, "repeated": 0}
-            return ints, F, counts, np.zeros(len(F), dtype=bool), [np.arange(len(F))]
-    ints, F, counts, two_sided = weld_dedupe(body, grid)
-    return ints, F, counts, two_sided, split_parts(ints, F, two_sided) if len(F) else []
+            return ints, F, counts, np.zeros(len(F), dtype=bool), [np.arange(len(F))], F
+    ints, F, counts, two_sided, welded = weld_dedupe(body, grid)
+    return (ints, F, counts, two_sided, split_parts(ints, F, two_sided) if len(F) else [],
+            welded)
 
 
 def edge_uses(F: np.ndarray, n: int):
@@ -136,7 +201,7 @@ def split_mesh(vertices, faces, grid: Grid) -> list[tuple[np.ndarray, np.ndarray
     mesh as the union of its parts."""
     from types import SimpleNamespace
 
-    ints, F, _, _ = weld_dedupe(SimpleNamespace(vertices=vertices, faces=faces), grid)
+    ints, F, _, _, _ = weld_dedupe(SimpleNamespace(vertices=vertices, faces=faces), grid)
     out = []
     for part in split_parts(ints, F) if len(F) else []:
         used, local = np.unique(F[part], return_inverse=True)

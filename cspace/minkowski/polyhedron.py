@@ -146,7 +146,9 @@ class SumPolyhedron:
 @dataclass(frozen=True, eq=False)
 class SumUnion:
     """``A ⊕ B`` for an A made of closed pieces that meet at non-manifold edges or vertices
-    (two boxes sharing an edge or a corner): the union of the pieces' sums, each exact, not
+    (two boxes sharing an edge or a corner), or with features thinner than the grid step (a
+    needle through a box: the sum of its other faces, and of each segment or point the
+    feature snaps to, grown by a step): the union of the pieces' sums, each exact, not
     merged into one surface. ``(P1 ∪ P2) ⊕ B = (P1 ⊕ B) ∪ (P2 ⊕ B)``.
 
     Attributes
@@ -155,7 +157,8 @@ class SumUnion:
         The sum of each piece (``A`` split exactly as scenes split a body:
         :func:`cspace.mesh.components.split_mesh`), each closed and oriented outwards.
     pieces : tuple of (vertices, faces)
-        The pieces of A (float64 vertices on the grid, faces).
+        The pieces of A (float64 vertices on the grid, faces; a thin feature's: its segment's
+        two ends, or a point twice, and one degenerate face).
     grid : Grid
     stats : dict
         ``parts`` (how many), ``total`` seconds, and the largest ``thickened_operands`` and

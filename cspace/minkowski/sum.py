@@ -152,7 +152,11 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
         When A is closed pieces meeting at non-manifold edges or vertices (two boxes sharing
         an edge), a :class:`SumUnion`: A split there exactly, as scenes and
         :meth:`cspace.CSpaceObstacle.build` split it, and the sum of each piece (their union
-        is the sum; its surfaces overlap, see :class:`SumUnion`).
+        is the sum; its surfaces overlap, see :class:`SumUnion`). When A has features thinner
+        than the grid step that snap to segments or points no other face holds (a needle
+        through a box), a :class:`SumUnion` too: the sum of A's other faces, and each
+        feature's sum with B, the feature grown by one grid step (``stats['thin_features']``;
+        within ``error_bound``: a feature is never lost to snapping).
 
     Raises
     ------
@@ -172,10 +176,75 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
     Bc, thick_b = _convex_or_thickened(B, "B", grid_b)
     if Bc is None:
         raise NotConvexError("B must be convex (the robot of a translational C-obstacle)")
+    A, thin, grid_a = _thin_features(A, grid_a)
     try:
-        return _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0, guard)
+        out = _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0, guard)
     except NonManifoldError as exc:  # closed pieces meeting at edges or vertices?
-        return _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, exc, guard)
+        out = _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, exc, guard)
+    return _with_thin_features(out, A, thin, Bc, thick_b, grid_a, t0) if len(thin) else out
+
+
+def _thin_features(A, grid_a):
+    """``(A, thin, grid)``: a mesh operand with features thinner than the grid step (faces
+    that collapse to segments or points no other face holds: a needle through a box) as the
+    mesh of its other faces, and those segments and points ``(k, 2, 3)`` grid integers;
+    anything else unchanged with no thin feature. The grid is A's (decided here when the
+    operands did not decide it, as :func:`cspace.mesh.closed.as_mesh` would)."""
+    from types import SimpleNamespace
+
+    from ..mesh.components import snapping_losses, weld_dedupe
+    from ..mesh.operands import _is_mesh, _mesh_arrays
+
+    none = np.zeros((0, 2, 3), dtype=np.int64)
+    if isinstance(A, (ClosedMesh, ConvexPolytope)) or not _is_mesh(A):
+        return A, none, grid_a
+    V, F = _mesh_arrays(A)
+    if (F.ndim != 2 or F.shape[1:] != (3,) or not len(F) or F.min() < 0 or F.max() >= len(V)
+            or not np.isfinite(V[np.unique(F)]).all()):
+        return A, none, grid_a  # malformed: as_mesh names what is wrong
+    grid = grid_a if grid_a is not None else Grid.for_points(V[np.unique(F)])
+    ints, kept, counts, _, welded = weld_dedupe(SimpleNamespace(vertices=V, faces=F), grid)
+    if not counts["collapsed"]:
+        return A, none, grid_a
+    thin, _ = snapping_losses(len(ints), welded, kept)
+    if not len(thin) or not len(kept):
+        return A, none, grid_a  # nothing lost, or nothing else: the operand's own answer
+    # the other faces, as given (a repeated face stays: validation names it)
+    rest = np.asarray(F)[~((welded[:, 0] == welded[:, 1]) | (welded[:, 1] == welded[:, 2])
+                           | (welded[:, 0] == welded[:, 2]))]
+    return (V, rest), ints[thin[:, :2]], grid
+
+
+def _with_thin_features(out, A, thin, Bc: ConvexPolytope, thick_b: bool, grid: Grid,
+                        t0: float) -> SumUnion:
+    """``out`` (the sum of A's other faces) and the sum of each thin feature with B: a
+    segment or point grown by one grid step on every axis (the flat operand's rule of
+    :func:`_convex_or_thickened`, within ``sqrt(3)`` steps, in each part's ``error_bound``),
+    as one :class:`SumUnion`."""
+    from ..geometry.snapping import grow_points
+
+    parts = list(out.parts) if isinstance(out, SumUnion) else [out]
+    pieces = list(out.pieces) if isinstance(out, SumUnion) else [_mesh_pieces(A)]
+    for k, seg in enumerate(thin):
+        piece = ConvexPolytope.from_ints(grow_points(np.unique(seg, axis=0), (1, 1, 1)),
+                                         grid=grid, name=f"thin feature {k}")
+        s = _from_convex(piece, Bc, time.perf_counter())
+        s.stats["thickened_operands"] = 1 + int(thick_b)
+        s.stats["hull_excess"] = Bc.excess
+        parts.append(s)
+        pieces.append((grid.to_float(seg), np.array([[0, 1, 1]], dtype=np.int64)))
+    stats = {"parts": len(parts), "thin_features": len(thin),
+             "total": time.perf_counter() - t0,
+             "thickened_operands": max(p.stats.get("thickened_operands", 0) for p in parts),
+             "hull_excess": max(p.stats.get("hull_excess", 0.0) for p in parts)}
+    return SumUnion(tuple(parts), tuple(pieces), grid, stats)
+
+
+def _mesh_pieces(A) -> tuple:
+    """``(vertices, faces)`` of a mesh operand, as given."""
+    from ..mesh.operands import _mesh_arrays
+
+    return _mesh_arrays(A)
 
 
 def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard) -> SumUnion:

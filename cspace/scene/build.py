@@ -213,6 +213,8 @@ def _build_pair_arrays(construction, body: BodyModel, part: RobotPart, c_ints, g
 def _in_reach(S, T, g, bounds_g) -> tuple[np.ndarray, np.ndarray]:
     """Exact: the obstacle triangles whose pieces ``s ⊕ T ⊕ box`` can meet the bounds (with
     some robot triangle), and the robot triangles likewise: the others never hold a query."""
+    if not len(S) or not len(T):  # a body of what snapping took may hold no triangle
+        return np.zeros(len(S), dtype=bool), np.zeros(len(T), dtype=bool)
     s_lo, s_hi = S.min(axis=1) - g, S.max(axis=1) + g
     t_lo, t_hi = T.min(axis=1), T.max(axis=1)
     s_keep = _meets(s_lo + t_lo.min(axis=0), s_hi + t_hi.max(axis=0), *bounds_g)

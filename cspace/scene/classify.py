@@ -88,6 +88,7 @@ class BodyModel:
     _keep: np.ndarray | None = field(default=None, repr=False)
     _encloses: object = field(default=None, repr=False)  # Enclosing of a closed surface
     _sheet: bool = field(default=False, repr=False)  # every triangle listed with both windings
+    _kept: bool = field(default=False, repr=False)  # what snapping took, kept (_snapped_body)
 
     @property
     def cos(self) -> list:
@@ -329,6 +330,75 @@ def _classify(name, source, ints, F, minus_r_box, bounds_g, grid,
         body.reason = (f"{why}: surface semantics (FCL's mesh collision), "
                        f"{int(keep.sum())} triangles can reach the bounds" + inside)
     return body
+
+
+def _lost_inside(parts: list) -> bool:
+    """Whether a part of a body is modelled as a bare surface (its inside would count as free)
+    though it is neither open by itself nor a double-sided sheet: a closed body that
+    de-duplication or splitting left without an inside of its own."""
+    return any(b.kind == "surface" and b._encloses is None and not b._sheet for b in parts)
+
+
+def _kept_from_snapping(ints, thin, chain, grid: Grid):
+    """``(P, T, enclosing, why)``: the grid points, the thin features as degenerate triangles
+    ``T`` (indices into ``P``), the :class:`Enclosing` of ``chain`` (or None) and the words for
+    what snapping took (:func:`cspace.mesh.components.snapping_losses`), for a body or a robot
+    part that keeps it."""
+    rows = [thin] + ([chain] if chain is not None else [])
+    used, local = np.unique(np.concatenate(rows), return_inverse=True)
+    local = local.reshape(-1, 3)
+    P = ints[used]
+    n_seg = int((thin[:, 0] != thin[:, 1]).sum())
+    said = []
+    if len(thin):
+        said.append(f"{n_seg} segments and {len(thin) - n_seg} points left by triangles that "
+                    f"collapse on the grid (features thinner than its step 2**{grid.exponent}),"
+                    " kept as segments and points")
+    if chain is not None:
+        said.append(f"the region its {len(chain)} welded triangles enclose (non-zero winding "
+                    "number of a closed 2-cycle), which de-duplication or splitting left "
+                    "without an inside of its own")
+    enclosing = None if chain is None else Enclosing(P, local[len(thin):])
+    return P, local[:len(thin)], enclosing, "kept from snapping: " + "; and ".join(said)
+
+
+def _snapped_body(source: str, ints, welded, F, parts: list, minus_r_box, bounds_g,
+                  grid: Grid) -> BodyModel | None:
+    """What snapping took from the scene body ``source``, as one more surface body: its
+    features thinner than the grid step (segments and points, each summed with ``-R`` as any
+    triangle is) and, when a part lost its inside (:func:`_lost_inside`) and the body's
+    welded triangles are a closed 2-cycle, the region that cycle encloses (a containment
+    term, non-zero winding number). None when snapping took nothing (most bodies).
+
+    ``ints``, ``welded``, ``F``: the body's welded grid integers, every input triangle
+    welded, and the triangles kept (:func:`cspace.mesh.components.weld_dedupe`); ``parts``:
+    the body's modelled parts. The segments' and points' pieces are grown by the scene's
+    margin like every piece, so they hold the thin feature of the float input
+    (:mod:`cspace.cobstacle.margin`).
+    """
+    from ..mesh.components import snapping_losses
+
+    thin, chain = snapping_losses(len(ints), welded, F)
+    if not _lost_inside(parts):
+        chain = None
+    if not len(thin) and chain is None:
+        return None
+    P, T, enclosing, why = _kept_from_snapping(ints, thin, chain, grid)
+    return _snapped_model(source, P, T, enclosing, why, minus_r_box, bounds_g, grid)
+
+
+def _snapped_model(source: str, P, T, enclosing, why: str, minus_r_box, bounds_g,
+                   grid: Grid) -> BodyModel:
+    """The body of :func:`_snapped_body` from its parts (grid points ``P``, degenerate
+    triangles ``T``, the :class:`Enclosing` or None, the reason), as a build makes it and a
+    snapshot restores it: its pieces are those that can meet the bounds."""
+    r_lo, r_hi = minus_r_box
+    tri = P[T].reshape(-1, 3, 3)
+    keep = _meets(tri.min(axis=1) + r_lo, tri.max(axis=1) + r_hi, *bounds_g)
+    return BodyModel(f"{source} (snapped)", source, "surface", why, grid.to_float(P), T,
+                     pieces=int(keep.sum()), changed=why.replace("kept from snapping",
+                                                                 "what snapping took, kept"),
+                     _ints=P, _keep=keep, _kept=True, _encloses=enclosing)
 
 
 def _without_far_parts(scene):

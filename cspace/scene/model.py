@@ -58,7 +58,7 @@ from ..errors import BuildError, InvalidArgumentError, InvalidMeshError, MemoryB
 from ..geometry.exact import Grid
 from ..geometry.snapping import snap_deviation
 from ..memory import budget_and_source, format_size
-from ..mesh.components import weld_split
+from ..mesh.components import snapping_losses, weld_split
 from ..mesh.convex import ConvexPolytope
 from .build import (
     _Context,
@@ -83,7 +83,10 @@ from .classify import (
     RobotPart,
     _classify,
     _closed_kind,
+    _kept_from_snapping,
+    _lost_inside,
     _sheet_kind,
+    _snapped_body,
     _far_body,
     _without_far_parts,
 )
@@ -231,21 +234,29 @@ def _model_robot(scene, grid: Grid, hull: ConvexPolytope, robot_hull: bool) -> l
         return [RobotPart(scene.robot.name, "convex", "the convex hull of its vertices "
                           "(robot_hull: an approximation that can only add collisions)",
                           hull.ints, hull.faces, grid, hull)]
-    ints, F, _, two_sided, parts = weld_split(scene.robot, grid)
-    if not parts:
-        raise BuildError(f"scene {scene.name!r}: robot {scene.robot.name!r}: all "
-                         f"{len(scene.robot.faces)} triangles collapse when welded on the grid "
-                         f"(step 2**{grid.exponent})")
-    out = []
+    ints, F, _, two_sided, parts, welded = weld_split(scene.robot, grid)
+    # (a robot whose every triangle collapses is its segments and points: nothing is empty)
+    thin, chain = snapping_losses(len(ints), welded, F)
+    out, lost = [], False
     for k, faces in enumerate(parts):
         name = scene.robot.name if len(parts) == 1 else f"{scene.robot.name}#{k}"
         used, local = np.unique(F[faces], return_inverse=True)
         P, Fk = ints[used], local.reshape(-1, 3)
-        kind, why, operand = (_sheet_kind(P, Fk) if two_sided[faces].all() else None) or \
+        sheet = bool(two_sided[faces].all())
+        kind, why, operand = (_sheet_kind(P, Fk) if sheet else None) or \
             _closed_kind(name, P, Fk, grid)
         if kind == "solid":  # the validated mesh: oriented outwards
             P, Fk = operand.ints, operand.faces
+        lost |= kind == "surface" and operand is None and not sheet
         out.append(RobotPart(name, kind, why, P, Fk, grid, operand))
+    # What snapping took from the robot, as one more part (as for an obstacle body:
+    # classify._snapped_body): its segments and points, and the region its closed 2-cycle
+    # encloses when a part lost its inside.
+    chain = chain if lost else None
+    if len(thin) or chain is not None:
+        P, T, enclosing, why = _kept_from_snapping(ints, thin, chain, grid)
+        out.append(RobotPart(f"{scene.robot.name} (snapped)", "surface", why, P, T, grid,
+                             enclosing))
     return out
 
 
@@ -380,27 +391,29 @@ def model_scene(scene, *, build: bool = True, cache=None, progress=None,
         welded = None if memo is None else memo.get(
             ("weld", id(sb), grid.exponent, grid.bits, tuple(int(x) for x in grid.origin)))
         if welded is None:  # steps 1-3 depend only on the body and the grid
-            ints, F, counts, two_sided, split = weld_split(sb, grid)
+            ints, F, counts, two_sided, split, all_welded = weld_split(sb, grid)
             if memo is not None:  # the body is kept in the value: its id stays its own
                 memo[("weld", id(sb), grid.exponent, grid.bits,
                       tuple(int(x) for x in grid.origin))] = (sb, ints, F, counts, split,
-                                                               two_sided)
+                                                               two_sided, all_welded)
         else:
-            _, ints, F, counts, split, two_sided = welded
+            _, ints, F, counts, split, two_sided, all_welded = welded
         counts = dict(counts)
         counts["parts"] = len(split)
         sources[sb.name] = counts
+        modelled_parts = []
         for k, faces in enumerate(split):
             name = sb.name if len(split) == 1 else f"{sb.name}#{k}"
-            bodies.append(_classify(name, sb.name, ints, F[faces], minus_r_box, bounds_g, grid,
-                                    convex_robot, memo, sheet=bool(two_sided[faces].all())))
+            modelled_parts.append(_classify(name, sb.name, ints, F[faces], minus_r_box,
+                                            bounds_g, grid, convex_robot, memo,
+                                            sheet=bool(two_sided[faces].all())))
+        # what snapping took (features thinner than the step, a closed body's inside)
+        snapped = (_snapped_body(sb.name, ints, all_welded, F, modelled_parts, minus_r_box,
+                                 bounds_g, grid)
+                   if counts["collapsed"] or _lost_inside(modelled_parts) else None)
+        bodies += modelled_parts + ([snapped] if snapped is not None else [])
         if sb.name in far:
             bodies.append(_far_body(sb.name, *far[sb.name]))
-        if not split and sb.name not in far:
-            bodies.append(BodyModel(sb.name, sb.name, "dropped",
-                                    f"empty: all {len(sb.faces)} triangles collapse when welded "
-                                    f"on the grid (step 2**{grid.exponent})",
-                                    np.zeros((0, 3)), np.zeros((0, 3), dtype=np.int64)))
     t1 = time.perf_counter()
     held = 0
     if build:

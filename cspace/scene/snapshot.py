@@ -23,7 +23,11 @@ What a snapshot holds, per modelled body in :func:`cspace.scene.model.model_scen
   a double-sided sheet; :func:`cspace.scene.classify._classify` decides it again on restore
   and its C-obstacles come through their per-pair entries (such bodies are few, and their
   builds dear);
-- **dropped before classification** (far parts; every triangle collapsed): name and reason.
+- **what snapping took** (a ``<body> (snapped)`` body: segments and points thinner than the
+  step, and the region a closed body's 2-cycle encloses when a part lost its inside): its
+  grid integers, degenerate triangles, reason and the enclosed region's triangles, restored by
+  :func:`cspace.scene.classify._snapped_model` as the build made it;
+- **dropped before classification** (far parts): name and reason.
 
 Also: the grid, the scene's margin and per scene body what welding dropped. The key covers
 everything these depend on (the bodies' names, float64 vertices and triangles, the robot,
@@ -50,14 +54,14 @@ from ..geometry.exact import Grid
 from ..mesh.closed import ClosedMesh
 from ..mesh.convex import ConvexPolytope
 from .cache import _POLYTOPE, FORMAT
-from .classify import BodyModel, _classify
+from .classify import BodyModel, Enclosing, _classify, _snapped_model
 
 __all__ = ["snapshot_key", "snapshot_arrays", "Snapshot"]
 
 # Bump when what a snapshot holds, or how it is read, changes.
 SNAPSHOT = 2
 
-_RESTORED, _CLASSIFY, _DROPPED, _SOLID = 0, 1, 2, 3
+_RESTORED, _CLASSIFY, _DROPPED, _SOLID, _SNAPPED = 0, 1, 2, 3, 4
 
 
 def snapshot_key(scene, grid: Grid | None, robot_hull: bool, conservative: bool,
@@ -131,8 +135,10 @@ def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
     if any(b.error for b in bodies):
         return None
     codes = np.array([_RESTORED if _restorable(b) else _SOLID if _a_solid(b)
+                      else _SNAPPED if b._kept
                       else _CLASSIFY if len(b.faces) else _DROPPED
                       for b in bodies], dtype=np.int8)
+    snapped = [b for b, c in zip(bodies, codes) if c == _SNAPPED]
     solids = [b._solid for b, c in zip(bodies, codes) if c == _SOLID]
     restored = [b for b, c in zip(bodies, codes) if c == _RESTORED]
     # the convex C-obstacles, when every restored body has its one (one convex robot part),
@@ -165,6 +171,12 @@ def snapshot_arrays(bodies: list, sources: dict, grid: Grid, margin: Margin,
             "solid_components": _joined([m.components for m in solids], 0),
             "solid_sizes": np.array([(len(m.ints), len(m.faces)) for m in solids],
                                     dtype=np.int64).reshape(-1, 2)}
+    # what snapping took (its segments and points are the shaped arrays): the enclosed
+    # region's triangles, -1 where it has none
+    out |= {"kept_faces": _joined([b._encloses.faces for b in snapped
+                                   if b._encloses is not None], 3),
+            "kept_sizes": np.array([-1 if b._encloses is None else len(b._encloses.faces)
+                                    for b in snapped], dtype=np.int64)}
     if with_cos:
         out |= _packed("co", [b.co.polytope for b in restored])
     return out
@@ -229,7 +241,7 @@ class Snapshot:
         a, bodies = self.arrays, self.meta.get("bodies")
         need = ("codes", "sheet", "ints", "faces", "sizes", "poly_rows",
                 *(f"poly_{f}" for f, _ in _POLYTOPE), "solid_ints", "solid_faces",
-                "solid_components", "solid_sizes")
+                "solid_components", "solid_sizes", "kept_faces", "kept_sizes")
         if not isinstance(bodies, list) or any(k not in a for k in need):
             return False
         codes = a["codes"]
@@ -241,6 +253,8 @@ class Snapshot:
                 and int(solid[:, 1].sum()) == len(a["solid_faces"])
                 == len(a["solid_components"])
                 and len(a["sheet"]) == shaped
+                and len(a["kept_sizes"]) == int((codes == _SNAPPED).sum())
+                and int(a["kept_sizes"][a["kept_sizes"] > 0].sum()) == len(a["kept_faces"])
                 and int(sizes[:, 0].sum()) == len(a["ints"])
                 and int(sizes[:, 1].sum()) == len(a["faces"])
                 and all(self._table(p, restored) for p in ("poly", "co")
@@ -278,15 +292,24 @@ class Snapshot:
         m_ints, m_faces = a["solid_ints"].astype(np.int64), a["solid_faces"].astype(np.int64)
         m_comp = a["solid_components"].astype(np.int64)
         mv_at, mf_at = _slices(a["solid_sizes"][:, 0]), _slices(a["solid_sizes"][:, 1])
+        kept_faces = a["kept_faces"].astype(np.int64)
+        kept_sizes = a["kept_sizes"].tolist()
+        kf_at = _slices([max(n, 0) for n in kept_sizes])
         out, co_arrays = [], {}
-        k = r = m = 0  # shaped body, restored body, solid
+        k = r = m = s = 0  # shaped body, restored body, solid, what snapping took
         for code, (name, source, why) in zip(a["codes"].tolist(), self.meta["bodies"]):
             if code == _DROPPED:
                 out.append(BodyModel(name, source, "dropped", reasons[why], np.zeros((0, 3)),
                                      np.zeros((0, 3), dtype=np.int64)))
                 continue
             P, F = ints[v_at[k]:v_at[k + 1]], faces[f_at[k]:f_at[k + 1]]
-            if code == _CLASSIFY:
+            if code == _SNAPPED:
+                enclosing = (None if kept_sizes[s] < 0 else
+                             Enclosing(P, kept_faces[kf_at[s]:kf_at[s + 1]]))
+                out.append(_snapped_model(source, P, F, enclosing, reasons[why], minus_r_box,
+                                          bounds_g, grid))
+                s += 1
+            elif code == _CLASSIFY:
                 out.append(_classify(name, source, P, F, minus_r_box, bounds_g, grid,
                                      convex_robot, memo, sheet=sheet[k]))
             elif code == _SOLID:  # validated when the snapshot was written (its key: the code)
