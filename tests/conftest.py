@@ -22,10 +22,34 @@ SHARED_DATA = Path(__file__).resolve().parents[2] / "shared" / "data"
 
 @pytest.fixture(scope="session")
 def shared_data() -> Path:
-    """The shared real-mesh folder; tests using it skip (with the reason) if it is absent."""
+    """The shared real-mesh folder; tests using it skip (with the reason) if it is absent.
+    Only tests of real meshes take it: a synthetic case never depends on it."""
     if not SHARED_DATA.is_dir():
         pytest.skip(f"shared data folder not found at {SHARED_DATA}")
     return SHARED_DATA
+
+
+def shared_file(rel: str) -> Path:
+    """The file ``rel`` of the shared data folder; the calling test skips, naming the file,
+    when it is absent (and so fails on CI, see :func:`pytest_sessionfinish`)."""
+    path = SHARED_DATA / rel
+    if not path.exists():
+        pytest.skip(f"real mesh {rel} not found under {SHARED_DATA}")
+    return path
+
+
+def pytest_sessionfinish(session, exitstatus):
+    """On CI (``$CI`` set, as ``.ci/run`` has it) a skipped test fails the run: CI has
+    ``../shared`` and everything else a test needs, so a skip there hides a regression."""
+    reporter = session.config.pluginmanager.get_plugin("terminalreporter")
+    skipped = reporter.stats.get("skipped", []) if reporter is not None else []
+    if os.environ.get("CI") and skipped and exitstatus == 0:
+        reporter.write_line(f"CI: {len(skipped)} tests skipped; on CI nothing may skip:",
+                            red=True)
+        for report in skipped[:20]:
+            why = report.longrepr[-1] if isinstance(report.longrepr, tuple) else report.longrepr
+            reporter.write_line(f"  {report.nodeid}: {why}")
+        session.exitstatus = 1
 
 
 def pytest_collection_modifyitems(session, config, items):

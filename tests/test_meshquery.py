@@ -27,6 +27,7 @@ import numpy as np
 import pytest
 
 import zoo
+from conftest import shared_file
 from cspace.mesh.convex import ConvexPolytope
 from cspace.errors import InvalidMeshError, NonFiniteError, NotConvexError, OpenMeshError
 from cspace.check.fcl import FclOracle, winding_number
@@ -54,26 +55,16 @@ def _as_co(V, F) -> CSpaceObstacle:
 
 
 @functools.lru_cache(maxsize=None)
-def _meshes(root) -> dict:
-    out = dict(zoo.zoo_meshes())
-    for name, path in zoo.shared_closed_meshes(root).items():
-        if path.exists():
-            m = ClosedMesh.load(path)
-            out[name] = (m.vertices, m.faces)
-    return out
+def _mesh(name: str):
+    """A zoo mesh, or a shared real one (the test skips, naming the file, when it is absent)."""
+    if name in zoo.ZOO:
+        return zoo.ZOO[name][0]()
+    m = ClosedMesh.load(shared_file(zoo.SHARED_CLOSED_MESHES[name]))
+    return m.vertices, m.faces
 
 
 ZOO_NAMES = sorted(zoo.ZOO)
 SHARED_NAMES = sorted(zoo.SHARED_CLOSED_MESHES)
-
-
-def _mesh(name, shared_data):
-    if name in zoo.ZOO:
-        return zoo.ZOO[name][0]()
-    meshes = _meshes(shared_data)
-    if name not in meshes:
-        pytest.skip(f"shared mesh {name} not found under {shared_data}")
-    return meshes[name]
 
 
 # --------------------------------------------------------------------------------------
@@ -358,15 +349,15 @@ def _check_against_fcl(V, F, n, seed):
 
 
 @pytest.mark.parametrize("name", ZOO_NAMES + SHARED_NAMES)
-def test_mesh_membership_and_distance_against_fcl(name, shared_data):
-    V, F = _mesh(name, shared_data)
+def test_mesh_membership_and_distance_against_fcl(name):
+    V, F = _mesh(name)
     _check_against_fcl(V, F, 10_000, seed=1)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ZOO_NAMES + SHARED_NAMES)
-def test_mesh_membership_and_distance_against_fcl_1e5(name, shared_data):
-    V, F = _mesh(name, shared_data)
+def test_mesh_membership_and_distance_against_fcl_1e5(name):
+    V, F = _mesh(name)
     _check_against_fcl(V, F, 100_000, seed=2)
 
 
@@ -405,15 +396,15 @@ def _segments_against_sampling(V, F, n, samples, seed):
 
 
 @pytest.mark.parametrize("name", ["comb", "star", "bunny-128"])
-def test_segment_free_against_dense_fcl_sampling(name, shared_data):
-    V, F = _mesh(name, shared_data)
+def test_segment_free_against_dense_fcl_sampling(name):
+    V, F = _mesh(name)
     _segments_against_sampling(V, F, 1000, 128, seed=3)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("name", ZOO_NAMES + SHARED_NAMES)
-def test_segment_free_against_dense_fcl_sampling_1e4(name, shared_data):
-    V, F = _mesh(name, shared_data)
+def test_segment_free_against_dense_fcl_sampling_1e4(name):
+    V, F = _mesh(name)
     _segments_against_sampling(V, F, 10_000, 128, seed=4)
 
 
@@ -471,21 +462,17 @@ def _robots(size: float) -> dict:
 
 
 @functools.lru_cache(maxsize=None)
-def _built(name: str, robot: str, root) -> CSpaceObstacle:
-    V, F = _mesh(name, root)
+def _built(name: str, robot: str) -> CSpaceObstacle:
+    V, F = _mesh(name)
     size = float(np.linalg.norm(np.ptp(V, axis=0)))
     R = _robots(size)[robot]
-    c = R.mean(axis=0)
-    try:
-        return CSpaceObstacle.build((V, F), R, c)
-    except NotImplementedError as exc:
-        pytest.skip(f"non-convex minkowski_sum not available yet (NotImplementedError: {exc})")
+    return CSpaceObstacle.build((V, F), R, R.mean(axis=0))
 
 
-def _raw(name: str, robot: str, root):
+def _raw(name: str, robot: str):
     """The raw float input :func:`_built` gave ``CSpaceObstacle.build``: ``(V, F)``, the
     robot as an outward hull mesh ``(RV, RF)`` (float, not snapped) and the reference point."""
-    V, F = _mesh(name, root)
+    V, F = _mesh(name)
     R = _robots(float(np.linalg.norm(np.ptp(V, axis=0))))[robot]
     return (np.asarray(V, np.float64), np.asarray(F, np.int64)), raw_mesh(R), R.mean(axis=0)
 
@@ -521,9 +508,9 @@ def _fcl_meshes(raw, q: np.ndarray):
     return meet, dist
 
 
-def _check_sum_against_fcl(name, robot, shared_data, n, seed):
-    co = _built(name, robot, shared_data)
-    raw = _raw(name, robot, shared_data)
+def _check_sum_against_fcl(name, robot, n, seed):
+    co = _built(name, robot)
+    raw = _raw(name, robot)
     assert co.kind == "mesh" and co.sum is not None
     # The verdict: FCL on the raw float operands (SceneOracle of a scene of them), never the
     # C-obstacle's snapped copies; false collisions within co.error_bound are in_margin.
@@ -596,31 +583,28 @@ def _sum_cases():
 
 
 @pytest.mark.parametrize("name, robot", list(_sum_cases()))
-def test_minkowski_sum_cobstacle_against_fcl(name, robot, shared_data):
-    _check_sum_against_fcl(name, robot, shared_data, 10_000, seed=5)
+def test_minkowski_sum_cobstacle_against_fcl(name, robot):
+    _check_sum_against_fcl(name, robot, 10_000, seed=5)
 
 
 @pytest.mark.slow  # minkowski_sum of the shared meshes takes seconds to minutes each
 @pytest.mark.parametrize("robot", ["box", "hull"])
 @pytest.mark.parametrize("name", SHARED_NAMES)
-def test_minkowski_sum_shared_cobstacle_against_fcl(name, robot, shared_data):
-    _check_sum_against_fcl(name, robot, shared_data, 10_000, seed=5)
+def test_minkowski_sum_shared_cobstacle_against_fcl(name, robot):
+    _check_sum_against_fcl(name, robot, 10_000, seed=5)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("robot", ["box", "hull"])
 @pytest.mark.parametrize("name", ZOO_NAMES + SHARED_NAMES)
-def test_minkowski_sum_cobstacle_against_fcl_1e5(name, robot, shared_data):
-    _check_sum_against_fcl(name, robot, shared_data, 100_000, seed=6)
+def test_minkowski_sum_cobstacle_against_fcl_1e5(name, robot):
+    _check_sum_against_fcl(name, robot, 100_000, seed=6)
 
 
 def test_build_takes_the_mesh_path_for_a_non_convex_obstacle():
     V, F = zoo.comb()
     robot = zoo.box_points(0.5, 0.5, 0.5)
-    try:
-        co = CSpaceObstacle.build((V, F), robot)
-    except NotImplementedError as exc:
-        pytest.skip(f"non-convex minkowski_sum not available yet (NotImplementedError: {exc})")
+    co = CSpaceObstacle.build((V, F), robot)
     assert co.kind == "mesh" and isinstance(co.obstacle, ClosedMesh) and co.sum is not None
     assert co.polytope is None and co.n_facets == int(co.sum.face_facet.max()) + 1
     np.testing.assert_array_equal(co.faces, co.sum.faces)

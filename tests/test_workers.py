@@ -7,7 +7,21 @@ import pytest
 
 from cspace.workers import can_fork, forked_map, worker_count
 
-pytestmark = pytest.mark.skipif(not can_fork(), reason="needs fork and no other thread")
+
+
+@pytest.fixture(autouse=True)
+def _forkable():
+    """Forking must be possible when each test runs (checked then, not at import: a thread
+    alive while tests are collected said nothing of the tests). A thread of an earlier test
+    still shutting down is waited for, a little; one that stays is a leak to name."""
+    import threading
+
+    for _ in range(100):
+        if can_fork():
+            return
+        time.sleep(0.05)
+    pytest.fail("cspace cannot fork here: other threads alive "
+                f"{[t.name for t in threading.enumerate() if t is not threading.main_thread()]}")
 
 PARENT = os.getpid()
 
