@@ -82,10 +82,12 @@ def test_write_atomic_leaves_nothing_half_written(tmp_path):
 
 
 def test_unsolved_plan_writes_no_path_and_says_so(tmp_path):
-    # The cavity's goal is behind a narrow entrance: RRTConnect for 0.05 s does not get there.
+    # The cage's goal is shut in: RRTConnect (no decision, so no proof) never gets there,
+    # however fast the machine.
     path, result = tmp_path / "p.txt", tmp_path / "r.json"
-    r = cspace("plan", SCENES / "cavity.toml", "--seed", "1", "--time", "0.05", "-q",
-               "-o", path, "--result", result, "--html", tmp_path / "v.html")
+    r = cspace("plan", SCENES / "cage.toml", "--planner", "RRTConnect", "--seed", "1",
+               "--time", "0.2", "-q", "-o", path, "--result", result,
+               "--html", tmp_path / "v.html")
     assert r.returncode == 1 and "Traceback" not in r.stderr
     assert "NOT solved" in r.stdout and "no path written" in r.stderr
     assert not path.exists()
