@@ -242,6 +242,22 @@ def judge(ours: np.ndarray, Q: np.ndarray, oracle, error_bound: float) -> Verdic
 
 
 @contextlib.contextmanager
+def without_what_snapping_took():
+    """Re-introduce the bug of issue #51 while inside: what snapping takes from a body or the
+    robot (segments and points thinner than the step, a closed body's inside) is dropped again,
+    as it was before ``classify._snapped_body``."""
+    import cspace.scene.model as model
+
+    body, robot = model._snapped_body, model.snapping_losses
+    model._snapped_body = lambda *a, **k: None  # the bodies'
+    model.snapping_losses = lambda n, welded, F: (np.zeros((0, 3), np.int64), None)  # robot's
+    try:
+        yield
+    finally:
+        model._snapped_body, model.snapping_losses = body, robot
+
+
+@contextlib.contextmanager
 def shifted_piece_boxes():
     """Re-introduce the bug of issue #27 while inside: triangle-pair boxes (the obstacle's box
     tree's k-DOPs) shifted by the grid's origin (added twice). A check that passes with it is a check that cannot fail."""
