@@ -395,15 +395,32 @@ def _outward_hull(points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return points[used], inv.reshape(-1, 3).astype(np.int64)
 
 
+def _sub(a, b):
+    return [x - y for x, y in zip(a, b)]
+
+
+def _cross(a, b):
+    return [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+
+
+def _dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def _orient2d(a, b, c) -> int:
+    """Sign of the turn a -> b -> c (Python integers: exact)."""
+    d = (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])
+    return (d > 0) - (d < 0)
+
+
 def _convex_quads(ints: np.ndarray, faces: np.ndarray) -> list[np.ndarray]:
     """Vertex index sets of convex planar patches covering the faces: pairs of triangles
     sharing an edge, exactly coplanar, whose union is a convex quadrilateral; the rest alone.
 
-    Exact (cspace.geometry.exact predicates on the grid integers). Each patch's convex hull equals
-    the union of its triangles, so ``hull(patch ⊕ B)`` is ``∪ (t ⊕ B)`` over its triangles.
+    Exact: the oracle's own predicates in Python integers on the grid integers (nothing of
+    cspace's kernel). Each patch's convex hull equals the union of its triangles, so
+    ``hull(patch ⊕ B)`` is ``∪ (t ⊕ B)`` over its triangles.
     """
-    from cspace.geometry import exact
-
     m = len(faces)
     # Directed edge (u, v) of face f at corner k; its twin is (v, u).
     u = faces.reshape(-1)
@@ -425,17 +442,17 @@ def _convex_quads(ints: np.ndarray, faces: np.ndarray) -> list[np.ndarray]:
                 continue
             x = int(faces[g, (c + 2) % 3])  # apex of g opposite edge (a, b)
             y = int(faces[h, (hc + 2) % 3])  # apex of h opposite edge (b, a)
-            P = ints[[a, b, x, y]]
-            if exact.orient3d(P[0], P[1], P[2], P[3]) != 0:
+            P = [[int(c) for c in ints[i]] for i in (a, b, x, y)]
+            n = _cross(_sub(P[1], P[0]), _sub(P[2], P[0]))
+            if _dot(n, _sub(P[3], P[0])) != 0:  # not coplanar
                 continue
             # Quad a-y-b-x (counter-clockwise about g's normal n): convex iff the corners
             # at a and b turn the same way as n: (x, a, y) and (y, b, x).
-            n = exact.cross(P[1] - P[0], P[2] - P[0])
-            ax = int(np.argmax(np.abs(n)))
+            ax = max(range(3), key=lambda i: abs(n[i]))
             keep = [i for i in range(3) if i != ax]
             s = 1 if n[ax] > 0 else -1
-            q = P[:, keep]
-            if s * exact.orient2d(q[2], q[0], q[3]) >= 0 and s * exact.orient2d(q[3], q[1], q[2]) >= 0:
+            q = [[p[i] for i in keep] for p in P]
+            if s * _orient2d(q[2], q[0], q[3]) >= 0 and s * _orient2d(q[3], q[1], q[2]) >= 0:
                 best = h
                 patch = np.array([a, b, x, y])
                 break

@@ -159,6 +159,61 @@ def winding_number(vertices, faces, points, *, weights=None, chunk: int = 1 << 1
     return out / (2 * np.pi)
 
 
+def _welded(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Faces re-indexed so that vertices with bit-identical coordinates (-0.0 = 0.0) share an
+    index, the first such vertex's (so the faces still index ``V``): the topology of the
+    float mesh as its file gives it, nothing snapped."""
+    _, first, inv = np.unique(V + 0.0, axis=0, return_index=True, return_inverse=True)
+    return first[inv.reshape(-1)][F]
+
+
+def _components(W: np.ndarray, n: int) -> np.ndarray:
+    """(m,) component label of each face: faces sharing a (welded) vertex are connected."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    a = np.concatenate([W[:, 0], W[:, 1]])
+    b = np.concatenate([W[:, 1], W[:, 2]])
+    g = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n, n))
+    _, labels = connected_components(g, directed=False)
+    _, comp = np.unique(labels[W[:, 0]], return_inverse=True)
+    return comp.reshape(-1)
+
+
+def _component_points(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """(k, 3): the first vertex of each connected component of the float mesh (faces sharing
+    a bit-identical vertex are connected)."""
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
+    if not len(F):
+        return np.zeros((0, 3))
+    W = _welded(V, F)
+    comp = _components(W, len(V))
+    _, first = np.unique(comp, return_index=True)
+    return V[W[first, 0]]
+
+
+def _convex_mesh(V: np.ndarray, F: np.ndarray) -> bool:
+    """Whether a closed float mesh bounds a convex solid, the oracle's own way: Qhull's hull
+    of its vertices has the mesh's volume (within 1e-9 of it: a float judgement for choosing
+    FCL's solid ``Convex`` over a hollow BVH, never one of cspace's decisions)."""
+    from scipy.spatial import ConvexHull, QhullError
+
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
+    if len(F) < 4:
+        return False
+    used = V[np.unique(F)]
+    c = used.mean(axis=0)
+    P = V[F] - c
+    volume = float(np.einsum("ij,ij->i", P[:, 0], np.cross(P[:, 1], P[:, 2])).sum()) / 6.0
+    try:
+        hull = ConvexHull(used - c)
+    except QhullError:  # flat or degenerate: no solid
+        return False
+    return volume > 0 and abs(hull.volume - volume) <= 1e-9 * hull.volume
+
+
 class FclOracle:
     """FCL collision and distance for a convex robot translating against one solid obstacle.
 
@@ -173,8 +228,9 @@ class FclOracle:
     reference_point : (3,) float64
         The robot with its reference point at ``q`` occupies ``robot - reference_point + q``.
     convex : bool, optional
-        Whether the obstacle is convex (then an ``fcl.Convex``, solid); default: decided by
-        :meth:`cspace.ConvexPolytope.from_mesh`.
+        Whether the obstacle is convex (then an ``fcl.Convex``, solid); default: decided here
+        in floats, independently of cspace's model (:func:`_convex_mesh`: Qhull's hull holds
+        every vertex and has the mesh's volume).
     surface : bool, default False
         Surface semantics instead (an open mesh, ``kind='surface'`` C-obstacles): FCL's plain
         mesh collision, no containment of the robot in the obstacle.
@@ -198,22 +254,14 @@ class FclOracle:
         if self.surface:
             convex = False
         if convex is None:
-            from ..mesh.convex import ConvexPolytope
-            from ..errors import InvalidMeshError
-
-            try:
-                ConvexPolytope.from_mesh((self.obstacle_vertices, self.obstacle_faces))
-                convex = True
-            except InvalidMeshError:
-                convex = False
+            convex = _convex_mesh(self.obstacle_vertices, self.obstacle_faces)
         if robot_kind not in ("convex", "solid", "surface"):
             raise InvalidArgumentError(f"robot_kind must be 'convex', 'solid' or 'surface', got {robot_kind!r}")
         self.robot_kind = robot_kind
-        # Containment points: one vertex of each connected component of either mesh.
-        from ..cobstacle.pairs import component_points
-
-        self._obstacle_points = component_points(self.obstacle_vertices, self.obstacle_faces)
-        self._robot_points = component_points(self.robot_vertices, self.robot_faces)
+        # Containment points: one vertex of each connected component of either mesh (the
+        # oracle's own components, of the float mesh as given: nothing of cspace's model).
+        self._obstacle_points = _component_points(self.obstacle_vertices, self.obstacle_faces)
+        self._robot_points = _component_points(self.robot_vertices, self.robot_faces)
         self.convex = bool(convex) and robot_kind == "convex"
         if self.convex:
             self._geom = fcl_convex(self.obstacle_vertices, self.obstacle_faces)

@@ -11,34 +11,13 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InvalidArgumentError, InvalidMeshError
-from .fcl import FclOracle, _fcl, winding_number
+from .fcl import FclOracle, _components, _fcl, _welded, winding_number
 
 __all__ = ["SceneOracle"]
 
 
 # --------------------------------------------------------------------------------------
 # the independent scene oracle: raw meshes, FCL's broad phase, its own solid semantics
-
-
-def _welded(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Faces re-indexed so that vertices with bit-identical coordinates (-0.0 = 0.0) share an
-    index, the first such vertex's (so the faces still index ``V``): the topology of the
-    float mesh as its file gives it, nothing snapped."""
-    _, first, inv = np.unique(V + 0.0, axis=0, return_index=True, return_inverse=True)
-    return first[inv.reshape(-1)][F]
-
-
-def _components(W: np.ndarray, n: int) -> np.ndarray:
-    """(m,) component label of each face: faces sharing a (welded) vertex are connected."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    a = np.concatenate([W[:, 0], W[:, 1]])
-    b = np.concatenate([W[:, 1], W[:, 2]])
-    g = coo_matrix((np.ones(len(a), dtype=np.int8), (a, b)), shape=(n, n))
-    _, labels = connected_components(g, directed=False)
-    _, comp = np.unique(labels[W[:, 0]], return_inverse=True)
-    return comp.reshape(-1)
 
 
 def _balanced(W: np.ndarray, comp: np.ndarray, n_comp: int) -> np.ndarray:
