@@ -10,6 +10,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 import cspace
+from oracles import winding_number
 from cspace.cli import main
 from cspace.errors import (
     CspaceError,
@@ -106,12 +107,26 @@ API_CALLS = {
 
 
 def _named_error_or_result(mesh, call) -> None:
-    """The API call on a malformed mesh ends in a CspaceError or a result, nothing else."""
+    """The API call on a malformed mesh ends in a CspaceError or a result, nothing else; a
+    result keeps what the input holds (no silent wrong answer): the C-obstacle holds each
+    vertex a triangle uses (the robot, a box about its reference point, placed there covers
+    it), and the sum holds each such vertex (``v + 0``, 0 inside B)."""
     V, F = mesh
     try:
-        API_CALLS[call](V, F)
+        out = API_CALLS[call](V, F)
     except CspaceError:
-        pass
+        return
+    if call not in ("co", "minkowski_sum"):
+        return  # (from_points ignores the faces; as_mesh's result is checked elsewhere)
+    used = V[np.unique(F)] if F.size else np.zeros((0, 3))
+    if call == "co":
+        assert np.all(out.contains(used)), used[~out.contains(used)][:3]
+    if call == "minkowski_sum":
+        parts = out.parts if isinstance(out, cspace.SumUnion) else [out]
+        inside = np.zeros(len(used), dtype=bool)
+        for part in parts:  # closed and outward: winding number 1 inside (tests' oracle)
+            inside |= winding_number(part.vertices, part.faces, used) > 0.5
+        assert inside.all(), used[~inside][:3]
 
 
 # 4000 + 3000 + 3000 malformed inputs in make test; 10^4 more through the API in make test-slow.

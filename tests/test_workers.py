@@ -47,27 +47,38 @@ def test_every_chunk_once_with_its_result(workers):
     assert _no_children_left()
 
 
-def test_this_process_and_a_child_share_the_chunks():
-    """With two workers one chunk queue feeds this process and one forked child: a slow
-    parent leaves most chunks to the child."""
+def _wait_for(path) -> None:
+    """This process waits for the file ``path`` (up to 60 s: a loaded machine is slow,
+    never this slow), so that a child is sure to take a chunk whatever the load."""
+    for _ in range(6000):
+        if path.exists():
+            return
+        time.sleep(0.01)
+
+
+def test_this_process_and_a_child_share_the_chunks(tmp_path):
+    """With two workers one chunk queue feeds this process and one forked child: both take
+    chunks. Each process's task marks that it ran and waits for the other's mark (no sleep
+    decides it: on a busy machine the child could drain the queue before this process took
+    a chunk; with the marks, neither can finish alone)."""
     def task(c):
-        # The child is quicker, but not instant: under load it could otherwise drain the
-        # queue before this process takes its first chunk.
-        time.sleep(0.05 if _in_parent() else 0.01)
+        mine, other = ("parent", "child") if _in_parent() else ("child", "parent")
+        (tmp_path / mine).touch()
+        _wait_for(tmp_path / other)
         return os.getpid()
 
     pids = dict(forked_map(task, list(range(20)), 2))
     assert len(pids) == 20
-    mine = sum(p == PARENT for p in pids.values())
-    assert 1 <= mine < 10 and len(set(pids.values())) == 2
+    assert len(set(pids.values())) == 2 and PARENT in pids.values()
     assert _no_children_left()
 
 
-def test_an_error_in_a_child_is_raised_here():
+def test_an_error_in_a_child_is_raised_here(tmp_path):
     def task(c):
         if _in_parent():
-            time.sleep(0.05)  # leave chunks to the child
+            _wait_for(tmp_path / "child")  # leave chunks to the child
             return c
+        (tmp_path / "child").touch()
         raise ZeroDivisionError(f"chunk {c}")
 
     with pytest.raises(ZeroDivisionError, match="chunk"):
@@ -75,11 +86,12 @@ def test_an_error_in_a_child_is_raised_here():
     assert _no_children_left()
 
 
-def test_a_child_that_dies_is_reported():
+def test_a_child_that_dies_is_reported(tmp_path):
     def task(c):
         if _in_parent():
-            time.sleep(0.05)
+            _wait_for(tmp_path / "child")
             return c
+        (tmp_path / "child").touch()
         os._exit(3)
 
     with pytest.raises(RuntimeError, match="died without a result"):
