@@ -379,9 +379,14 @@ def test_shipped_scene_cross_check(path):
 
 
 def test_cross_check_single_obstacle(random_co):
-    # A bare C-obstacle's cross_check judges on its snapped operands: two-sided exactness of
-    # the construction on its own input (random_co: conservative=False), not safety.
-    report = cross_check(random_co, n=2000, seed=1)
+    # Two-sided exactness of the construction on its own input (random_co:
+    # conservative=False, so the snapped operands are its input), judged by the scene oracle
+    # with its own semantics (Qhull hulls as solids), not by what co.kind says.
+    co = random_co
+    scene = raw_scene((co.obstacle.vertices, co.obstacle.faces),
+                      (co.robot.vertices, co.robot.faces), co.reference_point)
+    report = cross_check(co, n=2000, seed=1, scene=scene)
+    assert report["oracle"] == "scene"
     assert report["ok"] and report["n_disagree"] == 0
     assert report["max_distance_error"] <= 1e-12
     assert report["seconds_per_query_ours"] > 0 and report["seconds_per_query_fcl"] > 0
