@@ -52,6 +52,16 @@ def pytest_sessionfinish(session, exitstatus):
         session.exitstatus = 1
 
 
+def pytest_configure(config):
+    """``$CSPACE_MUTANT``: run the session on a deliberately broken build (tests/mutants.py,
+    for the mutation sweep of benchmarks/bench_mutations.py)."""
+    name = os.environ.get("CSPACE_MUTANT")
+    if name:
+        import mutants
+
+        mutants.apply(name)
+
+
 def pytest_collection_modifyitems(session, config, items):
     """Tests marked ``last`` run after all others: a Dask client leaves a thread in this
     process (so cspace no longer forks its workers) and spawned pools leave a resource

@@ -83,6 +83,29 @@ def test_the_compiled_engine_answers_as_the_reference(offset, closed, margin):
     assert np.allclose(d_new, d_ref, rtol=0, atol=1e-12)
 
 
+@pytest.mark.parametrize("margin", [(0, 0, 0), (1, 1, 1)], ids=["exact", "grown"])
+def test_a_segment_or_a_point_is_never_left_out_as_flat(margin):
+    """Issue #51: a feature thinner than the step snaps to a segment ``(a, b, b)`` or a point
+    ``(a, a, a)``; against a closed robot none of its pairs is left out as flat (the old rule
+    dropped every pair of a zero normal: the obstacle vanished), and the compiled engine and
+    the reference agree on it, far from the origin."""
+    grid = Grid(-12, 26, tuple(int(x) for x in np.round(OFF * 2**12)))
+    seg = grid.snap(np.array([[0.0, 0.0, 0.0], [1.0, 0.3, -0.2], [0.4, -0.5, 0.7]]) + OFF)
+    o_faces = np.array([[0, 1, 1], [2, 2, 2]])  # a segment and a point
+    RV, RF = comb(3, 2)
+    r_ints = grid.vectors.snap(np.asarray(RV, np.float64) * 0.15)
+    c_ints = grid.vectors.snap(np.array([0.05, -0.02, 0.1]))
+    tp = triangle_pairs(seg, o_faces, r_ints, np.asarray(RF, np.int64), c_ints, EVERYWHERE,
+                        closed=True, margin=margin)
+    assert tp.flat_skipped == 0 and len(tp.pairs) == 2 * len(RF)
+    ref = _PairsCO(tp.S, tp.T, tp.pairs, grid, margin)
+    new = _TreePairsCO(tp.S, tp.T, grid, closed=True, margin=margin)
+    q = _queries(ref, grid, np.random.default_rng(4))
+    inside = ref.contains(q)
+    assert 50 < inside.sum() < len(q) - 50
+    assert np.array_equal(new.contains(q), inside)
+
+
 def test_box_tree_nodes_hold_their_boxes():
     rng = np.random.default_rng(2)
     lo = rng.integers(-1000, 1000, (257, 3)).astype(np.float64)

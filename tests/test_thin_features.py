@@ -202,3 +202,24 @@ def test_the_api_keeps_a_needle_through_a_box(offset):
     if wrong.any():
         d = FclSolid(V, F).distance(ROBOT.vertices, ROBOT.faces, q[wrong])
         assert (d <= M.error_bound).all()
+
+
+def test_every_thin_component_is_held_by_a_robot_that_swallows_it():
+    """Three needles 1e-9 thin and 0.02 long in one body snap to three segments, each its own
+    component: a robot (a 0.1 box) placed over one holds it wholly without touching it, so only
+    that component's containment term says so, for every component, not the first alone."""
+    needles = []
+    for k, at in enumerate([(-0.5, 0.0, 0.0), (0.0, 0.3, 0.1), (0.6, -0.2, -0.3)]):
+        sec = np.array([[0, 0, 0], [0, 1e-9, 0], [0, 0.5e-9, 0.8e-9]])
+        V = np.vstack([sec - [0.01, 0, 0], sec + [0.01, 0, 0]]) + at
+        F = np.array([[0, 2, 1], [3, 4, 5], [0, 1, 4], [0, 4, 3], [1, 2, 5], [1, 5, 4],
+                      [2, 0, 3], [2, 3, 5]]) + 6 * k
+        needles.append((V, F))
+    V = np.vstack([v for v, _ in needles])
+    F = np.vstack([f for _, f in needles])
+    sc = _scene(V, F, ROBOT, FAR)
+    M = model_scene(sc)
+    mids = np.array([v.mean(axis=0) for v, _ in needles]) + np.asarray(FAR)
+    assert M.cspace().contains(mids).all()
+    truth = FclSolid(sc.obstacles[0].vertices, F).collides(ROBOT.vertices, ROBOT.faces, mids)
+    assert truth.all()  # the oracle agrees: each needle is inside the robot there
