@@ -44,7 +44,7 @@ def run(name: str | None) -> dict:
         p = subprocess.run([sys.executable, "-m", "pytest", "-x", "-q", "-p", "no:cacheprovider",
                             *SUITE], cwd=ROOT, env=env, capture_output=True, text=True)
         seconds = time.perf_counter() - t
-    first = re.findall(r"^(?:FAILED|ERROR) (\S+)", p.stdout, flags=re.M)
+    first = re.findall(r"^(?:FAILED|ERROR) (.+?)(?: - .*)?$", p.stdout, flags=re.M)
     tail = p.stdout.strip().splitlines()[-1] if p.stdout.strip() else p.stderr[-200:]
     return {"name": name, "killed": p.returncode != 0, "by": first[0] if first else "",
             "summary": tail, "seconds": seconds}
