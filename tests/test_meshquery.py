@@ -31,7 +31,7 @@ from conftest import shared_file
 from cspace.mesh.convex import ConvexPolytope
 from cspace.errors import InvalidMeshError, NonFiniteError, NotConvexError, OpenMeshError
 from cspace.check.fcl import FclOracle, winding_number
-from cspace.check.cross_check import _near_surface, cross_check
+from cspace.check.cross_check import cross_check, near_surface
 from cspace.mesh.closed import ClosedMesh
 from cspace.scene.model import CSpace
 from cspace.cobstacle.obstacle import CSpaceObstacle
@@ -556,7 +556,7 @@ def _check_distances(co: CSpaceObstacle, n: int, seed: int, what: str, *, raw=No
     pad = 0.1 * (hi - lo)
     size = float(np.linalg.norm(hi - lo + 2 * pad))
     q = np.vstack([rng.uniform(lo - pad, hi + pad, (n // 2, 3)),
-                   _near_surface(co, n - n // 2, rng, size)])
+                   near_surface(co, n - n // 2, rng, size)])
     d = co.signed_distance(q)
     orc = FclOracle(OV, OF, RV, RF, c, convex=False)
     out = d > 0

@@ -132,3 +132,27 @@ def test_translations_only_give_the_rest_of_the_budget_to_the_decision(monkeypat
     assert [t["planner"] for t in r.tried] == ["RRTConnect", "decide", "PRM", "decide"]
     assert r.tried[1]["answer"] == "unknown" and r.tried[3]["answer"] == "no path"
     assert not r.solved and r.decision.answer == "no path" and r.time < 10.0
+
+
+def test_an_unused_share_goes_to_the_turning_decision(monkeypatch):
+    """What the attempts at the start's orientation leave of their shares goes to the turning
+    decision after them (it once took 3.04 s of a 3.0 s share with 6 s unused, and the
+    answer went from 'no path' to 'unknown' with the load). The decision at the start's
+    orientation is made beforehand and handed back at once, so its whole share (2 s) is
+    unused, whatever the load."""
+    from cspace.planning.decide import decide
+
+    plan_module = sys.modules["cspace.planning.plan"]
+    scene = cspace.load_scene(SCENES / "cage.toml")
+    cs = cspace.CSpace.from_scene(scene)
+    proof = decide(cs, scene.start, scene.goal, bounds=scene.bounds, time=60.0)
+    assert proof.answer == "no path"
+    budgets = []
+    monkeypatch.setattr(plan_module, "decide", lambda *a, **k: proof)
+    monkeypatch.setattr(plan_module, "_turns_proved_useless",
+                        lambda scene, q0, q1, bounds, budget, *a: budgets.append(budget) or True)
+    r = plan(scene, planner="auto", time=10.0, seed=1)
+    assert r.decision.answer == "no path" and len(budgets) == 1
+    assert [t["planner"] for t in r.tried] == ["RRTConnect", "decide"]
+    # its own share, 3 s, and nearly all of the decision's 2 s
+    assert budgets[0] > plan_module.AUTO_TURN_DECIDE * 10.0 + 1.0, budgets

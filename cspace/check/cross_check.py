@@ -33,10 +33,11 @@ from ..errors import ArgumentTypeError, InvalidArgumentError
 from .fcl import FclOracle
 from .oracle import SceneOracle
 
-__all__ = ["cross_check", "co_collider", "path_collisions", "PoseCollider", "pose_path_collisions"]
+__all__ = ["cross_check", "co_collider", "near_surface", "path_collisions", "PoseCollider",
+           "pose_path_collisions"]
 
 
-def _near_surface(co, n: int, rng, scale: float) -> np.ndarray:
+def near_surface(co, n: int, rng, scale: float) -> np.ndarray:
     """Points on random boundary triangles of a C-obstacle, moved along the normal."""
     # Triangle pairs: the hulls of a few hundred random pieces, not of every piece.
     V, F = co.sample_mesh(rng) if hasattr(co, "sample_mesh") else (co.vertices, co.faces)
@@ -71,7 +72,7 @@ def _samples(cs, n: int, rng) -> np.ndarray:
         for k in range(16):
             if len(near) >= len(idx):
                 break
-            more = _near_surface(o, (1 if k == 0 else 4) * (len(idx) - len(near)), rng, size)
+            more = near_surface(o, (1 if k == 0 else 4) * (len(idx) - len(near)), rng, size)
             near = np.vstack([near, more[((lo <= more) & (more <= hi)).all(axis=1)]])
         if len(near) < len(idx):  # a surface nearly all outside the bounds: uniform points
             near = np.vstack([near, rng.uniform(lo, hi, (len(idx) - len(near), 3))])

@@ -412,7 +412,9 @@ AUTO_SHARES = (("RRTConnect", "uniform", 0.05, 0.5), ("decide", None, 0.2, 2.0),
 #: may need most of the time (the Parasol bug trap's: about 7 s of ``--time 10``).
 AUTO_DECIDE_ALONE = 0.85
 #: ``planner='auto'``: when the start's orientation has no path, the share of the budget for
-#: deciding over :data:`AUTO_SLICES` slices and the turns between them (before planning them).
+#: deciding over :data:`AUTO_SLICES` slices and the turns between them (before planning them),
+#: to which what the attempts before it left of their shares is added (an unused share goes to
+#: the stages after it: a proof that needs a little more than its share is not lost to load).
 AUTO_TURN_DECIDE = 0.3
 
 
@@ -445,6 +447,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
               for q, w in ((start, "start"), (goal, "goal")))
     d, d_budget = None, 0.0
     alone = not (turns and scene is not None)  # translations only: no turns to plan after
+    given = 0.0  # the budgets the attempts at the start's orientation were given
     for n, (planner, sampler, share, cap) in enumerate(AUTO_SHARES):
         budget = (AUTO_DECIDE_ALONE * time if planner == "decide" and alone
                   else min(cap, share * time))
@@ -452,6 +455,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
             budget = min(budget, time - (_time.perf_counter() - t0))
         if budget <= 0:
             break
+        given += budget
         if planner == "decide":
             d, d_budget = decide(cs, q0, q1, bounds=bounds, time=budget), budget
             tried.append({"planner": "decide", "sampler": None, "slices": None, "time": budget,
@@ -478,9 +482,12 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
                       "answer": d.answer, "seconds": d.time, "solved": d.answer == "path"})
         if d.answer == "path":
             r = _decided(cs, d, bounds)
-    left = time - (_time.perf_counter() - t0)
+    elapsed = _time.perf_counter() - t0
+    left = time - elapsed
+    unused = max(0.0, given - elapsed)  # what the attempts before did not use of theirs
     if (d is not None and d.answer == "no path" and turns and scene is not None and left > 0
-            and _turns_proved_useless(scene, q0, q1, bounds, min(left, AUTO_TURN_DECIDE * time),
+            and _turns_proved_useless(scene, q0, q1, bounds,
+                                      min(left, AUTO_TURN_DECIDE * time + unused),
                                       cache, robot_hull or cs.robot_hull, memory, tried)):
         return replace(_decided(cs, d, bounds), tried=tried, time=_time.perf_counter() - t0,
                        decision=d)
