@@ -109,7 +109,7 @@ import zoo  # noqa: E402
 import cspace  # noqa: E402
 from cspace import CSpace, CSpaceObstacle, Grid  # noqa: E402
 from cspace.check.fcl import FclOracle
-from cspace.check.cross_check import _near_surface  # noqa: E402
+from cspace.check.cross_check import near_surface  # noqa: E402
 
 REPORTS = ROOT / "benchmarks" / "reports"
 SHARED = ROOT.parent / "shared" / "data"
@@ -425,7 +425,7 @@ class Truth:
         return out
 
     def states(self, n: int, rng) -> np.ndarray:
-        near = _near_surface(self.fine, n - n // 4, rng, self.size)
+        near = near_surface(self.fine, n - n // 4, rng, self.size)
         lo, hi = self.fine.bounds
         pad = 0.1 * (hi - lo)
         return np.vstack([near, rng.uniform(lo - pad, hi + pad, (n // 4, 3))])
@@ -688,7 +688,7 @@ def near_states(fine: CSpace, n: int, size: float, rng) -> np.ndarray:
     parts, need = [rng.uniform(lo, hi, (n // 4, 3))], n - n // 4
     while need > 0:
         per = need // len(fine.obstacles) + 1
-        p = np.vstack([_near_surface(co, per, rng, size) for co in fine.obstacles])
+        p = np.vstack([near_surface(co, per, rng, size) for co in fine.obstacles])
         p = p[((lo <= p) & (p <= hi)).all(axis=1)][:need]
         parts.append(p)
         need -= len(p)
