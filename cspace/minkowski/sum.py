@@ -222,9 +222,10 @@ def _with_thin_features(out, A, thin, Bc: ConvexPolytope, thick_b: bool, grid: G
     :func:`_convex_or_thickened`, within ``sqrt(3)`` steps, in each part's ``error_bound``),
     as one :class:`SumUnion`."""
     from ..geometry.snapping import grow_points
+    from ..mesh.operands import _mesh_arrays
 
     parts = list(out.parts) if isinstance(out, SumUnion) else [out]
-    pieces = list(out.pieces) if isinstance(out, SumUnion) else [_mesh_pieces(A)]
+    pieces = list(out.pieces) if isinstance(out, SumUnion) else [_mesh_arrays(A)]
     for k, seg in enumerate(thin):
         piece = ConvexPolytope.from_ints(grow_points(np.unique(seg, axis=0), (1, 1, 1)),
                                          grid=grid, name=f"thin feature {k}")
@@ -238,13 +239,6 @@ def _with_thin_features(out, A, thin, Bc: ConvexPolytope, thick_b: bool, grid: G
              "thickened_operands": max(p.stats.get("thickened_operands", 0) for p in parts),
              "hull_excess": max(p.stats.get("hull_excess", 0.0) for p in parts)}
     return SumUnion(tuple(parts), tuple(pieces), grid, stats)
-
-
-def _mesh_pieces(A) -> tuple:
-    """``(vertices, faces)`` of a mesh operand, as given."""
-    from ..mesh.operands import _mesh_arrays
-
-    return _mesh_arrays(A)
 
 
 def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard) -> SumUnion:
