@@ -20,7 +20,7 @@ if sys.platform == "win32":
 else:
     FLAGS = ["-O3", "-ffp-contract=off"] + ([] if PORTABLE else ["-march=native"])
 
-KERNELS = ["arrangement", "boxtree", "convex", "graph", "meshquery", "pairquery", "planar", "trim"]  # cspace/geometry/_kernels/<name>.pyx (see its __init__)
+KERNELS = ["arrangement", "boxtree", "clearance", "convex", "graph", "meshquery", "pairquery", "planar", "trim"]  # cspace/geometry/_kernels/<name>.pyx (see its __init__)
 
 setup(
     ext_modules=cythonize(

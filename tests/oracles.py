@@ -50,6 +50,16 @@ __all__ = [
 # FCL with solid semantics
 
 
+def fcl_bvh(vertices, faces):
+    """FCL's BVH of a raw triangle mesh (a hollow surface)."""
+    bvh = fcl.BVHModel()
+    bvh.beginModel(len(faces), len(vertices))
+    bvh.addSubModel(np.ascontiguousarray(vertices, dtype=np.float64),
+                    np.ascontiguousarray(faces, dtype=np.int64))
+    bvh.endModel()
+    return bvh
+
+
 class FclClassification(NamedTuple):
     """Per-translation result of :meth:`FclSolid.classify`.
 
@@ -99,11 +109,7 @@ class FclSolid:
     def __init__(self, vertices, faces):
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.faces = np.ascontiguousarray(faces, dtype=np.int64)
-        bvh = fcl.BVHModel()
-        bvh.beginModel(len(self.faces), len(self.vertices))
-        bvh.addSubModel(self.vertices, self.faces)
-        bvh.endModel()
-        self._bvh = bvh
+        bvh = self._bvh = fcl_bvh(self.vertices, self.faces)
         self._obstacle = fcl.CollisionObject(bvh, fcl.Transform())
 
     # -- helpers -------------------------------------------------------------------------

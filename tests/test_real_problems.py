@@ -52,6 +52,7 @@ import real_problems as rp
 from cspace import load_scene, model_scene
 from cspace.cli import main as cli_main
 from cspace.check.cross_check import path_collisions, pose_path_collisions
+from oracles import fcl_bvh
 
 fcl = pytest.importorskip("fcl")
 trimesh = pytest.importorskip("trimesh")
@@ -117,12 +118,7 @@ def _closed(V, F) -> bool:
     return bool(trimesh.Trimesh(V, F, process=True).is_watertight)
 
 
-def _bvh(V, F):
-    m = fcl.BVHModel()
-    m.beginModel(len(V), len(F))
-    m.addSubModel(np.ascontiguousarray(V, float), np.ascontiguousarray(F, np.int64))
-    m.endModel()
-    return m
+_bvh = fcl_bvh
 
 
 class RawFcl:

@@ -5,6 +5,9 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
   (exact triangle-pair classes), :mod:`cspace.geometry.endpoints` (their endpoints);
 - ``boxtree`` — :class:`cspace.geometry.boxes.BoxTree` (the median-split build, reference
   ``boxes._tree_reference``; one tree's box queries, the C-space's broad phase);
+- ``clearance`` — :mod:`cspace.geometry.clearance` (a robot at any pose against obstacle
+  triangles: capped distance, certified motions; references ``clearance._pair_distances_reference``
+  and the brute-force ``clearance._distance_reference``, tested in ``tests/test_clearance.py``);
 - ``convex`` — :mod:`cspace.minkowski.cvms` (CVMS in one call; reference
   ``cvms._convex_minkowski_sum_reference``) and :mod:`cspace.mesh.convex` (the polytope of an
   exactly convex closed mesh, ``ConvexPolytope.from_convex_mesh``; reference ``ClosedMesh``

@@ -1,0 +1,561 @@
+# cython: language_level=3, boundscheck=False, wraparound=False, cdivision=True, initializedcheck=False
+"""Compiled kernel of :class:`cspace.geometry.clearance.MeshClearance`: the distance between a
+rigidly moved robot mesh and fixed obstacle triangles, capped (a threshold query that stops
+early), and the certified motion check built on it (adaptive bisection).
+
+The obstacles are a :class:`cspace.geometry.boxes.BoxTree` of their triangles' boxes (world
+frame); the robot is a box tree of its triangles built in its own frame (relative to the
+reference point), whose boxes each query refits to the robot's vertices moved to its pose
+(cheaper than the pairs a looser, rotation-free bound would let through). A node pair's lower
+bound is the gap between their boxes; pairs are visited depth first, the nearer child first,
+and pruned when their bound reaches the least distance found so far (at first the cap).
+
+Per triangle pair (:func:`_tri_tri`, reference ``clearance._pair_distances_reference``): the
+least of the nine edge-edge distances and the six corner-to-interior distances, 0 when an edge
+crosses the other triangle. A sliver (inradius at most ``2**-16`` of its longest edge) is taken
+as its three edges and its inradius subtracted (every point of a triangle is within its inradius
+of its boundary), so an ill-conditioned normal never decides anything. The float error of what
+is returned is bounded in :mod:`cspace.geometry.clearance` (``MeshClearance.error_bound``).
+"""
+
+import numpy as np
+
+from libc.math cimport sqrt, fabs, atan2, sin, INFINITY, fmin as min, fmax as max
+from libc.stdint cimport int64_t
+
+cdef int _STACK = 4096
+
+
+cdef inline double _dot(const double* a, const double* b) noexcept nogil:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+cdef inline void _sub(const double* a, const double* b, double* out) noexcept nogil:
+    out[0] = a[0] - b[0]
+    out[1] = a[1] - b[1]
+    out[2] = a[2] - b[2]
+
+
+cdef inline void _cross(const double* a, const double* b, double* out) noexcept nogil:
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+
+
+cdef inline double _clip01(double x) noexcept nogil:
+    if x < 0.0:
+        return 0.0
+    if x > 1.0:
+        return 1.0
+    return x
+
+
+cdef double _seg_seg_d2(const double* p1, const double* q1, const double* p2,
+                        const double* q2) noexcept nogil:
+    """Squared distance between segments (Ericson, Real-Time Collision Detection 5.1.9), as
+    :func:`cspace.geometry.distance._segment_segment_d2`."""
+    cdef double d1[3]
+    cdef double d2[3]
+    cdef double r[3]
+    cdef double a, e, f, c, b, denom, s, t, x, y, z
+    _sub(q1, p1, d1)
+    _sub(q2, p2, d2)
+    _sub(p1, p2, r)
+    a = _dot(d1, d1)
+    e = _dot(d2, d2)
+    f = _dot(d2, r)
+    c = _dot(d1, r)
+    b = _dot(d1, d2)
+    denom = a * e - b * b
+    s = _clip01((b * f - c * e) / denom) if denom > 0 else 0.0
+    t = (b * s + f) / e if e > 0 else 0.0
+    if t < 0:
+        s = _clip01(-c / a) if a > 0 else 0.0
+    elif t > 1:
+        s = _clip01((b - c) / a) if a > 0 else 0.0
+    t = _clip01(t)
+    x = (p1[0] + s * d1[0]) - (p2[0] + t * d2[0])
+    y = (p1[1] + s * d1[1]) - (p2[1] + t * d2[1])
+    z = (p1[2] + s * d1[2]) - (p2[2] + t * d2[2])
+    return x * x + y * y + z * z
+
+
+cdef inline bint _inside(const double* T, const double* n, const double* x) noexcept nogil:
+    """Whether ``x`` (in the plane of ``T``, or its projection) is on the inner side of all three
+    edges of ``T`` about the normal ``n`` (boundary included)."""
+    cdef double e[3]
+    cdef double w[3]
+    cdef double c[3]
+    cdef int i
+    for i in range(3):
+        _sub(&T[3 * ((i + 1) % 3)], &T[3 * i], e)
+        _sub(x, &T[3 * i], w)
+        _cross(e, w, c)
+        if _dot(c, n) < 0:
+            return False
+    return True
+
+
+cdef inline void _normal(const double* T, double* n) noexcept nogil:
+    """The normal of ``T`` from its two shorter edges (slivers: see the module docstring)."""
+    cdef double e0[3]
+    cdef double e1[3]
+    cdef double e2[3]
+    cdef double l0, l1, l2
+    _sub(&T[3], &T[0], e0)
+    _sub(&T[6], &T[3], e1)
+    _sub(&T[0], &T[6], e2)
+    l0, l1, l2 = _dot(e0, e0), _dot(e1, e1), _dot(e2, e2)
+    if l0 >= l1 and l0 >= l2:
+        _cross(e1, e2, n)
+    elif l1 >= l2:
+        _cross(e2, e0, n)
+    else:
+        _cross(e0, e1, n)
+
+
+cdef double _one_way(const double* A, const double* B, double best2) noexcept nogil:
+    """``A``'s corners against ``B``'s interior and ``A``'s edges crossing ``B`` (``B`` not a
+    sliver): the least squared distance found, below ``best2``, or ``-1`` for a crossing."""
+    cdef double n[3]
+    cdef double w[3]
+    cdef double x[3]
+    cdef double nn, h, sp, sq, f
+    cdef int i, k
+    _normal(B, n)
+    nn = _dot(n, n)
+    if not (nn > 0):
+        return best2
+    for i in range(3):
+        _sub(&A[3 * i], &B[0], w)
+        h = _dot(w, n) / nn
+        for k in range(3):
+            x[k] = A[3 * i + k] - h * n[k]
+        if _inside(B, n, x) and h * h * nn < best2:
+            best2 = h * h * nn
+    for i in range(3):
+        _sub(&A[3 * i], &B[0], w)
+        sp = _dot(w, n)
+        _sub(&A[3 * ((i + 1) % 3)], &B[0], w)
+        sq = _dot(w, n)
+        if (sp > 0 and sq > 0) or (sp < 0 and sq < 0) or (sp == 0 and sq == 0):
+            continue  # no crossing (in-plane contact is found by the edge and corner distances)
+        f = sp / (sp - sq)
+        for k in range(3):
+            x[k] = A[3 * i + k] + f * (A[3 * ((i + 1) % 3) + k] - A[3 * i + k])
+        if _inside(B, n, x):
+            return -1.0
+    return best2
+
+
+cdef double _tri_tri(const double* A, const double* B, double ra, double rb) noexcept nogil:
+    """Distance between triangles ``A`` and ``B`` (9 doubles each); ``ra``, ``rb`` their
+    inradii when slivers (taken as their edges), else -1."""
+    cdef double best2 = INFINITY, d
+    cdef int i, j
+    for i in range(3):
+        for j in range(3):
+            d = _seg_seg_d2(&A[3 * i], &A[3 * ((i + 1) % 3)], &B[3 * j], &B[3 * ((j + 1) % 3)])
+            if d < best2:
+                best2 = d
+    if rb < 0:
+        best2 = _one_way(A, B, best2)
+        if best2 < 0:
+            return 0.0
+    if ra < 0:
+        best2 = _one_way(B, A, best2)
+        if best2 < 0:
+            return 0.0
+    d = sqrt(best2)
+    if ra > 0:
+        d -= ra
+    if rb > 0:
+        d -= rb
+    return d if d > 0 else 0.0
+
+
+def _unit_normals(T):
+    """Unit normals of ``(k, 3, 3)`` triangles from their two shorter edges (as ``_normal``);
+    zero for a degenerate one (a sliver then: its plane is never used)."""
+    E = np.stack([T[:, 1] - T[:, 0], T[:, 2] - T[:, 1], T[:, 0] - T[:, 2]], axis=1)
+    longest = np.einsum("kij,kij->ki", E, E).argmax(axis=1)
+    r = np.arange(len(T))
+    n = np.cross(E[r, (longest + 1) % 3], E[r, (longest + 2) % 3])
+    length = np.linalg.norm(n, axis=1)
+    return np.ascontiguousarray(np.where(length[:, None] > 0, n / np.where(length > 0, length, 1.0)[:, None], 0.0))
+
+
+def pair_distances(const double[:, ::1] A, const double[:, ::1] B, const double[::1] ra,
+                   const double[::1] rb):
+    """Row-wise :func:`_tri_tri` of ``(k, 9)`` triangles (tests against the reference)."""
+    cdef Py_ssize_t k, n = A.shape[0]
+    out = np.empty(n)
+    cdef double[::1] o = out
+    for k in range(n):
+        o[k] = _tri_tri(&A[k, 0], &B[k, 0], ra[k], rb[k])
+    return out
+
+
+cdef class ClearanceKernel:
+    """One robot against one set of obstacles; see the module docstring.
+
+    Parameters (arrays as :class:`cspace.geometry.clearance.MeshClearance` prepares them):
+    ``OT (m, 9)`` obstacle triangles, ``o_r (m,)`` their sliver inradii (-1: not a sliver),
+    the obstacle tree (``order, lo, hi, first, count``); ``RV (v, 3)`` robot vertices minus
+    the reference point, ``RF (k, 3)``, ``r_r (k,)`` and the robot tree's ``order, first,
+    count`` (its boxes are refitted to the moved vertices at each query).
+    """
+
+    cdef const double[:, ::1] OT
+    cdef const double[::1] o_r
+    cdef const int64_t[::1] o_order
+    cdef const double[:, ::1] o_lo
+    cdef const double[:, ::1] o_hi
+    cdef const int64_t[::1] o_first
+    cdef const int64_t[::1] o_count
+    cdef const double[:, ::1] ob_lo   # each obstacle triangle's box
+    cdef const double[:, ::1] ob_hi
+    cdef const double[:, ::1] on      # unit normals of the obstacle triangles (not slivers)
+    cdef const double[::1] od         # and their planes' offsets
+    cdef const double[:, ::1] rn      # unit normals of the robot's triangles, its frame
+    cdef const double[:, ::1] RV
+    cdef const int64_t[:, ::1] RF
+    cdef const double[::1] r_r
+    cdef const int64_t[::1] r_order
+    cdef const int64_t[::1] r_first
+    cdef const int64_t[::1] r_count
+    cdef double[:, ::1] wv      # robot vertices moved to this query's pose
+    cdef double[:, ::1] rlo     # the robot tree's boxes refitted to them
+    cdef double[:, ::1] rhi
+    cdef double R[9]
+    cdef double q[3]
+    cdef public int64_t queries
+    cdef public int64_t pairs
+    cdef object _keep
+    cdef object _boxes
+
+    def __init__(self, OT, o_r, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
+                 r_first, r_count):
+        self._keep = (OT, o_r, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
+                      r_first, r_count)
+        self.OT, self.o_r, self.o_order, self.o_lo, self.o_hi = OT, o_r, o_order, o_lo, o_hi
+        self.o_first, self.o_count = o_first, o_count
+        self._boxes = (np.ascontiguousarray(np.asarray(OT).reshape(-1, 3, 3).min(axis=1)),
+                       np.ascontiguousarray(np.asarray(OT).reshape(-1, 3, 3).max(axis=1)))
+        self.ob_lo, self.ob_hi = self._boxes
+        on = _unit_normals(np.asarray(OT).reshape(-1, 3, 3))
+        self.on, self.od = on, np.einsum("kj,kj->k", on, np.asarray(OT)[:, :3])
+        self.rn = _unit_normals(np.asarray(RV)[np.asarray(RF)])
+        self._boxes = self._boxes + (self.on, self.od, self.rn)
+        self.RV, self.RF, self.r_r, self.r_order = RV, RF, r_r, r_order
+        self.r_first, self.r_count = r_first, r_count
+        self.wv = np.empty((RV.shape[0], 3))
+        self.rlo = np.empty((r_first.shape[0], 3))
+        self.rhi = np.empty((r_first.shape[0], 3))
+        self.queries = 0
+        self.pairs = 0
+
+    cdef inline void _move(self, const double* p, double* out) noexcept nogil:
+        cdef double* R = self.R
+        out[0] = R[0] * p[0] + R[1] * p[1] + R[2] * p[2] + self.q[0]
+        out[1] = R[3] * p[0] + R[4] * p[1] + R[5] * p[2] + self.q[1]
+        out[2] = R[6] * p[0] + R[7] * p[1] + R[8] * p[2] + self.q[2]
+
+    cdef void _refit(self) noexcept nogil:
+        """Move every robot vertex to this query's pose and refit the robot tree's boxes to
+        them (children come after their parent: from the last node up)."""
+        cdef Py_ssize_t v, k, a, t, c, i
+        for v in range(self.RV.shape[0]):
+            self._move(&self.RV[v, 0], &self.wv[v, 0])
+        for k in range(self.r_count.shape[0] - 1, -1, -1):
+            if self.r_count[k] > 0:
+                for c in range(3):
+                    self.rlo[k, c] = INFINITY
+                    self.rhi[k, c] = -INFINITY
+                for a in range(self.r_first[k], self.r_first[k] + self.r_count[k]):
+                    t = self.r_order[a]
+                    for i in range(3):
+                        v = self.RF[t, i]
+                        for c in range(3):
+                            if self.wv[v, c] < self.rlo[k, c]:
+                                self.rlo[k, c] = self.wv[v, c]
+                            if self.wv[v, c] > self.rhi[k, c]:
+                                self.rhi[k, c] = self.wv[v, c]
+            else:
+                a = self.r_first[k]
+                for c in range(3):
+                    self.rlo[k, c] = self.rlo[a, c] if self.rlo[a, c] < self.rlo[a + 1, c] else self.rlo[a + 1, c]
+                    self.rhi[k, c] = self.rhi[a, c] if self.rhi[a, c] > self.rhi[a + 1, c] else self.rhi[a + 1, c]
+
+    cdef inline void _turn(self, const double* p, double* out) noexcept nogil:
+        cdef double* R = self.R
+        out[0] = R[0] * p[0] + R[1] * p[1] + R[2] * p[2]
+        out[1] = R[3] * p[0] + R[4] * p[1] + R[5] * p[2]
+        out[2] = R[6] * p[0] + R[7] * p[1] + R[8] * p[2]
+
+    cdef inline double _bound(self, Py_ssize_t i, Py_ssize_t j) noexcept nogil:
+        """Lower bound of the distance between robot node ``i`` (moved) and obstacle node
+        ``j``: the gap between their boxes (the robot's refitted at this pose)."""
+        cdef double d2 = 0.0, t
+        cdef int c
+        for c in range(3):
+            t = self.o_lo[j, c] - self.rhi[i, c]
+            if t > 0:
+                d2 += t * t
+            else:
+                t = self.rlo[i, c] - self.o_hi[j, c]
+                if t > 0:
+                    d2 += t * t
+        return sqrt(d2)
+
+    cdef double _leaves(self, Py_ssize_t i, Py_ssize_t j, double best) noexcept nogil:
+        cdef double A[9]
+        cdef double lo[3]
+        cdef double hi[3]
+        cdef double n[3]
+        cdef Py_ssize_t a, b, t, o, k, v
+        cdef double d, g, g2, na, s0, s1, s2
+        cdef bint flat_a
+        for a in range(self.r_first[i], self.r_first[i] + self.r_count[i]):
+            t = self.r_order[a]
+            for k in range(3):
+                v = self.RF[t, k]
+                A[3 * k], A[3 * k + 1], A[3 * k + 2] = self.wv[v, 0], self.wv[v, 1], self.wv[v, 2]
+            for k in range(3):
+                lo[k] = min(A[k], min(A[3 + k], A[6 + k]))
+                hi[k] = max(A[k], max(A[3 + k], A[6 + k]))
+            flat_a = self.r_r[t] < 0  # not a sliver: its plane may separate
+            if flat_a:
+                self._turn(&self.rn[t, 0], n)
+                na = _dot(n, A)
+            for b in range(self.o_first[j], self.o_first[j] + self.o_count[j]):
+                o = self.o_order[b]
+                # The gap between the two triangles' boxes first: most pairs end there.
+                g2 = 0.0
+                for k in range(3):
+                    g = self.ob_lo[o, k] - hi[k]
+                    if g > 0:
+                        g2 += g * g
+                    else:
+                        g = lo[k] - self.ob_hi[o, k]
+                        if g > 0:
+                            g2 += g * g
+                if g2 >= best * best:
+                    continue
+                # Then each triangle's plane: all three corners of the other beyond ``best``.
+                if self.o_r[o] < 0:
+                    s0 = _dot(&self.on[o, 0], A) - self.od[o]
+                    s1 = _dot(&self.on[o, 0], &A[3]) - self.od[o]
+                    s2 = _dot(&self.on[o, 0], &A[6]) - self.od[o]
+                    if min(s0, min(s1, s2)) >= best or max(s0, max(s1, s2)) <= -best:
+                        continue
+                if flat_a:
+                    s0 = _dot(n, &self.OT[o, 0]) - na
+                    s1 = _dot(n, &self.OT[o, 3]) - na
+                    s2 = _dot(n, &self.OT[o, 6]) - na
+                    if min(s0, min(s1, s2)) >= best or max(s0, max(s1, s2)) <= -best:
+                        continue
+                self.pairs += 1
+                d = _tri_tri(A, &self.OT[o, 0], self.r_r[t], self.o_r[o])
+                if d < best:
+                    best = d
+                    if best <= 0:
+                        return 0.0
+        return best
+
+    cdef double _query(self, const double* R, const double* q, double cap) noexcept nogil:
+        """Least distance at the pose ``(q, R)`` when below ``cap``, else at least ``cap``."""
+        cdef Py_ssize_t si[4096]
+        cdef Py_ssize_t sj[4096]
+        cdef double sb[4096]
+        cdef int top = 0, k
+        cdef Py_ssize_t i, j, i1, i2, j1, j2
+        cdef double best = cap, b1, b2
+        cdef bint split_robot
+        for k in range(9):
+            self.R[k] = R[k]
+        for k in range(3):
+            self.q[k] = q[k]
+        self.queries += 1
+        self._refit()
+        b1 = self._bound(0, 0)
+        if b1 >= best:
+            return best
+        si[0], sj[0], sb[0] = 0, 0, b1
+        top = 1
+        while top > 0:
+            top -= 1
+            i, j = si[top], sj[top]
+            if sb[top] >= best:
+                continue
+            if self.r_count[i] > 0 and self.o_count[j] > 0:
+                best = self._leaves(i, j, best)
+                if best <= 0:
+                    return 0.0
+                continue
+            # Split the robot node unless it is a leaf or clearly the smaller one.
+            split_robot = self.o_count[j] > 0 or (
+                self.r_count[i] == 0 and _half_diagonal(&self.rlo[i, 0], &self.rhi[i, 0])
+                >= _half_diagonal(&self.o_lo[j, 0], &self.o_hi[j, 0]))
+            if split_robot:
+                i1, i2 = self.r_first[i], self.r_first[i] + 1
+                b1, b2 = self._bound(i1, j), self._bound(i2, j)
+                j1 = j2 = j
+            else:
+                j1, j2 = self.o_first[j], self.o_first[j] + 1
+                b1, b2 = self._bound(i, j1), self._bound(i, j2)
+                i1 = i2 = i
+            if top + 2 > 4096:
+                return -1.0  # never: the trees are far shallower; -1 reads as a collision
+            # The nearer pair on top: visited first, it lowers ``best`` for the farther one.
+            if b1 < b2:
+                i1, j1, b1, i2, j2, b2 = i2, j2, b2, i1, j1, b1
+            if b1 < best:
+                si[top], sj[top], sb[top] = i1, j1, b1
+                top += 1
+            if b2 < best:
+                si[top], sj[top], sb[top] = i2, j2, b2
+                top += 1
+        return best
+
+    def distance(self, const double[:, ::1] R, const double[::1] q, double cap=INFINITY) -> float:
+        """The robot turned by ``R`` about its reference point, which is at ``q``: its least
+        distance to the obstacles if below ``cap``, else a number at least ``cap``."""
+        return self._query(&R[0, 0], &q[0], cap)
+
+    def distances(self, const double[:, :, ::1] R, const double[:, ::1] q, double cap=INFINITY):
+        """:meth:`distance` of each pose ``(R[k], q[k])``."""
+        cdef Py_ssize_t k, n = q.shape[0]
+        out = np.empty(n)
+        cdef double[::1] o = out
+        for k in range(n):
+            o[k] = self._query(&R[k, 0, 0], &q[k, 0], cap)
+        return out
+
+    def motion(self, const double[::1] q0, const double[::1] Q0, const double[::1] q1,
+               const double[::1] Q1, double rho, double delta, int max_depth=40):
+        """Certify the motion from pose ``(q0, Q0)`` to ``(q1, Q1)`` (positions; unit
+        quaternions ``x, y, z, w``): the reference point on the segment, the rotation on the
+        shortest slerp arc, both at constant speed. See
+        :meth:`cspace.geometry.clearance.MeshClearance.motion_free`.
+
+        Returns ``(free, depth, queries)``."""
+        cdef double sa[128]
+        cdef double sb_[128]
+        cdef double la[128]
+        cdef double lb[128]
+        cdef int dep[128]
+        cdef int top, depth = 0, d
+        cdef double D, a, b, m, La, Lb, Lm, need, theta, dq
+        cdef int64_t before = self.queries
+        cdef double p0[4]
+        cdef double p1[4]
+        cdef int k
+        for k in range(4):
+            p0[k], p1[k] = Q0[k], Q1[k]
+        dq = p0[0] * p1[0] + p0[1] * p1[1] + p0[2] * p1[2] + p0[3] * p1[3]
+        if dq < 0:  # the shortest arc, as OMPL's SO(3) interpolation
+            for k in range(4):
+                p1[k] = -p1[k]
+        theta = _angle(p0, p1)
+        D = (sqrt((q1[0] - q0[0]) ** 2 + (q1[1] - q0[1]) ** 2 + (q1[2] - q0[2]) ** 2)
+             + rho * theta)
+        D = D * (1.0 + 1e-12) + 1e-300  # rounded up
+        La = self._at(q0, p0, p1, 0.0, theta, D + delta) - delta
+        if not (La > 0):
+            return False, 0, self.queries - before
+        Lb = self._at(q1, p0, p1, 1.0, theta, D + delta) - delta
+        if not (Lb > 0):
+            return False, 0, self.queries - before
+        sa[0], sb_[0], la[0], lb[0], dep[0] = 0.0, 1.0, La, Lb, 0
+        top = 1
+        while top > 0:
+            top -= 1
+            a, b, La, Lb, d = sa[top], sb_[top], la[top], lb[top], dep[top]
+            if d > depth:
+                depth = d
+            if La + Lb > D * (b - a):
+                continue
+            if d >= max_depth or top + 2 > 128:
+                return False, depth, self.queries - before  # undecided: reported not free
+            m = 0.5 * (a + b)
+            need = D * (m - a) - La
+            if D * (b - m) - Lb > need:
+                need = D * (b - m) - Lb
+            # Ask for twice what the halves need (a margin for the next level) and at least half
+            # this interval's sweep: a capped query stops early once that is certain.
+            if need < 0.25 * D * (b - a):
+                need = 0.25 * D * (b - a)
+            Lm = self._between(q0, q1, p0, p1, m, theta, 2.0 * need + delta) - delta
+            if not (Lm > 0):
+                return False, d + 1, self.queries - before
+            sa[top], sb_[top], la[top], lb[top], dep[top] = m, b, Lm, Lb, d + 1
+            sa[top + 1], sb_[top + 1], la[top + 1], lb[top + 1], dep[top + 1] = a, m, La, Lm, d + 1
+            top += 2
+        return True, depth, self.queries - before
+
+    cdef double _at(self, const double[::1] q, const double* p0, const double* p1, double s,
+                    double theta, double cap):
+        cdef double Q[4]
+        cdef double R[9]
+        _slerp(p0, p1, s, theta, Q)
+        _matrix(Q, R)
+        return self._query(R, &q[0], cap)
+
+    cdef double _between(self, const double[::1] q0, const double[::1] q1, const double* p0,
+                         const double* p1, double s, double theta, double cap):
+        cdef double q[3]
+        cdef double Q[4]
+        cdef double R[9]
+        cdef int k
+        for k in range(3):
+            q[k] = q0[k] + s * (q1[k] - q0[k])
+        _slerp(p0, p1, s, theta, Q)
+        _matrix(Q, R)
+        return self._query(R, q, cap)
+
+
+cdef inline double _half_diagonal(const double* lo, const double* hi) noexcept nogil:
+    cdef double x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2]
+    return 0.5 * sqrt(x * x + y * y + z * z)
+
+
+cdef inline double _angle(const double* p0, const double* p1) noexcept nogil:
+    """Rotation angle between unit quaternions on the same hemisphere: ``2 atan2(|v|, w)`` of
+    ``conj(p0) p1`` (accurate for small angles, unlike ``acos``)."""
+    cdef double w = p0[3] * p1[3] + p0[0] * p1[0] + p0[1] * p1[1] + p0[2] * p1[2]
+    cdef double x = p0[3] * p1[0] - p0[0] * p1[3] - p0[1] * p1[2] + p0[2] * p1[1]
+    cdef double y = p0[3] * p1[1] + p0[0] * p1[2] - p0[1] * p1[3] - p0[2] * p1[0]
+    cdef double z = p0[3] * p1[2] - p0[0] * p1[1] + p0[1] * p1[0] - p0[2] * p1[3]
+    return 2.0 * atan2(sqrt(x * x + y * y + z * z), fabs(w))
+
+
+cdef inline void _slerp(const double* p0, const double* p1, double s, double theta,
+                        double* out) noexcept nogil:
+    """``p0`` turned towards ``p1`` (same hemisphere) by the fraction ``s`` of the arc
+    ``theta / 2`` between them (quaternion angle), normalised."""
+    cdef double h = 0.5 * theta, w0, w1, n
+    cdef int k
+    if h < 1e-9:
+        w0, w1 = 1.0 - s, s
+    else:
+        w0, w1 = sin((1.0 - s) * h) / sin(h), sin(s * h) / sin(h)
+    for k in range(4):
+        out[k] = w0 * p0[k] + w1 * p1[k]
+    n = sqrt(out[0] * out[0] + out[1] * out[1] + out[2] * out[2] + out[3] * out[3])
+    for k in range(4):
+        out[k] /= n
+
+
+cdef inline void _matrix(const double* Q, double* R) noexcept nogil:
+    """Rotation matrix (row major) of the unit quaternion ``x, y, z, w``."""
+    cdef double x = Q[0], y = Q[1], z = Q[2], w = Q[3]
+    R[0] = 1 - 2 * (y * y + z * z)
+    R[1] = 2 * (x * y - z * w)
+    R[2] = 2 * (x * z + y * w)
+    R[3] = 2 * (x * y + z * w)
+    R[4] = 1 - 2 * (x * x + z * z)
+    R[5] = 2 * (y * z - x * w)
+    R[6] = 2 * (x * z - y * w)
+    R[7] = 2 * (y * z + x * w)
+    R[8] = 1 - 2 * (x * x + y * y)
