@@ -19,14 +19,15 @@
   planner with the exact validity checker and motion validator; the path is re-proved
   exactly and written out. ``--explain`` prints the model first. ``--slices N`` (turns about
   one axis) or ``--orientations N`` (free flying) let the robot turn, every translation and
-  turn in place certified (:func:`cspace.planning.plan.plan_turning`); a scene whose goal
-  orientation differs from the start's is planned that way by default (36 slices;
-  ``--no-turns`` keeps the start's). Without ``--planner``, ``auto``: RRTConnect, the
-  decision (the exact free space, then certified cells: :mod:`cspace.planning.decide`), PRM
-  with the narrow-passage sampler, then turns over 8 slices, within ``--time``
-  (``plan(..., planner='auto')``); exit
-  status 3 when no path exists, proved. ``--workers`` / ``--scheduler`` build through an
-  executor, as for ``build``.
+  turn in place certified (:func:`cspace.planning.plan.plan_turning`). Without ``--planner``,
+  ``auto``: RRTConnect, the decision (the exact free space, then certified cells:
+  :mod:`cspace.planning.decide`), then the robot turns while it moves (RRTConnect in SE(3)
+  and passages at fixed orientations, every motion certified by clearance:
+  :mod:`cspace.planning.se3`), within ``--time`` (``plan(..., planner='auto')``); a scene whose
+  goal orientation differs from the start's goes to SE(3) at once (``--no-turns`` keeps the
+  start's). Exit status 3 when no path exists, proved, as the robot may move: at the start's
+  orientation with ``--no-turns``; a robot that may turn freely gets 1 when nothing is found.
+  ``--workers`` / ``--scheduler`` build through an executor, as for ``build``.
 - ``cspace free-space SCENE`` — :func:`cspace.planning.free_space.free_space` at the start's
   orientation: its components, which hold start and goal, the proof when they differ;
   ``-o`` writes the union's surface.
@@ -308,7 +309,7 @@ def _build(args: argparse.Namespace) -> int:
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .planning.plan import AUTO, AUTO_SLICES, default_slices, plan
+    from .planning.plan import AUTO, plan
 
     path_out = _out(args.output, ("txt", "csv", "npy", "path"), "-o")
     result_out = _out(args.result, ("json",), "--result")
@@ -316,14 +317,11 @@ def _plan(args: argparse.Namespace) -> int:
     from .scene.files import load_scene
 
     scene = load_scene(args.scene)
-    turn = not np.array_equal(scene.goal_rotation, scene.start_rotation)
-    if turn and args.slices is None and args.orientations is None and not args.no_turns:
-        args.slices = DEFAULT_SLICES
-        print(f"cspace: note: the goal's orientation differs from the start's: planning with "
-              f"{DEFAULT_SLICES} orientation slices (--slices N to choose, --no-turns to keep "
-              "the start's orientation)", file=sys.stderr)
     if args.slices is not None or args.orientations is not None:
         return _plan_turning(args, scene, path_out, result_out, html_out)
+    turn = not np.array_equal(scene.goal_rotation, scene.start_rotation)
+    if turn and not args.no_turns and args.planner != AUTO:
+        return _plan_se3(args, scene, path_out, result_out, html_out)
     m = _model(args, scene)
     if args.explain:
         print(m.explain())
@@ -341,31 +339,34 @@ def _plan(args: argparse.Namespace) -> int:
              cache=None if args.no_cache else (args.cache_dir or True),
              robot_hull=args.robot_hull, memory=args.memory, turns=not args.no_turns)
     for t in r.tried or ():
-        cells = (f"decision by certified cells over {t['slices']} orientation slices and the "
-                 "turns between them" if t["slices"] else "decision (exact free space, cells)")
-        how = (cells if t["planner"] == "decide" else
-               f"{t['planner']} with {t['slices']} orientation slices (turns in place)"
-               if t["slices"] else f"{t['planner']} ({t['sampler']} sampler)")
+        how = ("decision for the ball inside the robot, at every orientation"
+               if t.get("robot") == "inscribed ball" else
+               "decision (exact free space, cells)" if t["planner"] == "decide" else
+               "passages at fixed orientations, turns where there is room (SE(3))"
+               if t["planner"] == "bridge" else
+               f"{t['planner']} in SE(3), certified motions" if t.get("space") == "SE3"
+               else f"{t['planner']} ({t['sampler']} sampler)")
         said = t.get("answer") or ("solved" if t["solved"] else "no path")
         print(f"  auto: {how}: {said} in {t['seconds']:.2f} s of {t['time']:.2f} s")
     if (d := r.decision) is not None and d.answer == "no path":
         wall = ("the separating surface is the certificate" if d.separation is not None else
                 f"a wall of {int(d.wall.sum())} cells inside the C-obstacles or near them")
-        print(f"  no path at the start's orientation, proved: {d.reason} ({wall}; for "
-              f"clearances above {d.clearance:.3g})")
-    turned = [t for t in r.tried or () if t["planner"] == "decide" and t["slices"]]
-    if (d is not None and d.answer == "no path" and not r.solved and r.slices is None
-            and (args.no_turns or (turned and turned[0]["answer"] == "no path"))):
-        print(f"{scene.name}: no path, proved: "
-              + (f"none over {turned[0]['slices']} orientation slices (turns about one "
-                 "axis), translating at each and turning in place between neighbours (not a "
-                 "proof over all rotations)" if turned else "none at the start's orientation"))
+        where = ("at any orientation" if any(t.get("robot") == "inscribed ball" and
+                                             t["answer"] == "no path" for t in r.tried or ())
+                 else "at the start's orientation")
+        print(f"  no path {where}, proved: {d.reason} ({wall}; for clearances above "
+              f"{d.clearance:.3g})")
+    everywhere = any(t.get("robot") == "inscribed ball" and t["answer"] == "no path"
+                     for t in r.tried or ())
+    if d is not None and d.answer == "no path" and not r.solved and (args.no_turns or everywhere):
+        print(f"{scene.name}: no path, proved: " + (
+            "none at any orientation (even the ball inside the robot that no turn changes "
+            "cannot pass)" if everywhere else "none at the start's orientation"))
         _finish({**_result_head(args, scene, r), "path": None}, result_out, html_out, scene,
                 None, decision=d)
         return EXIT_NO_PATH
-    if r.slices is not None:  # auto turned the robot
-        return _report_turning(args, scene, default_slices(scene, AUTO_SLICES), r, path_out,
-                               result_out, html_out)
+    if r.certified is not None:  # auto turned the robot
+        return _report_se3(args, scene, r, path_out, result_out, html_out)
     status = "solved" if r.solved else f"NOT solved ({r.status})"
     name = f"auto ({r.planner})" if auto else args.planner
     print(f"{scene.name}: {name} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
@@ -464,8 +465,66 @@ def _write_path(path_out, positions, orientations) -> None:
         write_atomic(path_out, lambda p: p.write_text(text))
 
 
-# Orientation slices when a scene's goal turns the robot and none are asked for.
-DEFAULT_SLICES = 36
+
+def _plan_se3(args: argparse.Namespace, scene, path_out, result_out, html_out) -> int:
+    """``cspace plan --planner X`` on a scene whose goal turns the robot: X in SE(3)."""
+    from .planning.se3.plan import plan_se3
+
+    r = plan_se3(scene, planner=args.planner, time=args.time, seed=args.seed)
+    return _report_se3(args, scene, r, path_out, result_out, html_out)
+
+
+def _posed_path_out(args: argparse.Namespace, scene, r, rel, path_out, what: str):
+    """A turning path's FCL re-check (``--fcl-check``: every pose along its motions, ``rel``
+    the rotations relative to the start) and path file: ``(fcl, proved, written)``."""
+    import numpy as np
+
+    fcl = None
+    if args.fcl_check and r.solved:
+        from .check.cross_check import pose_path_collisions
+
+        size = float(np.linalg.norm(np.ptp(np.asarray(scene.bounds), axis=0))) or 1.0
+        bad, n = pose_path_collisions(scene, r.path, rel, per_metre=1e3 / size, per_degree=100)
+        fcl = {"colliding_samples": bad, "samples": n}
+        print(f"FCL re-check: {bad} colliding of {n} poses along {what}")
+    proved = r.solved and not (fcl and fcl["colliding_samples"])
+    written = None
+    if path_out and proved:
+        _write_path(path_out, r.path, r.orientations)
+        written = str(path_out)
+        print(f"wrote {path_out}")
+    elif path_out:
+        print(f"no path written to {path_out}: the problem was not solved", file=sys.stderr)
+    return fcl, proved, written
+
+
+def _report_se3(args: argparse.Namespace, scene, r, path_out, result_out, html_out) -> int:
+    """Print, check, write and summarise a path planned in SE(3) (``plan_se3``'s result, or
+    the auto planner's turning stage)."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    name = f"auto ({r.planner})" if r.tried else args.planner
+    status = "solved" if r.solved else f"NOT solved ({r.status})"
+    c = r.certified
+    print(f"{scene.name}: {name} in SE(3) {status} in {r.time:.2f} s; {len(r.path)} poses, "
+          f"length {r.length:.4g}; certified: {c['motions']} motions "
+          f"({'valid' if r.valid else 'NOT certified'}), {c['queries']} clearance queries, "
+          f"bisection depth up to {c['max_depth']}; clearance error bound "
+          f"{c['error_bound']:.3g}, robot radius {c['rho']:.4g}")
+    if not r.solved and r.tried:
+        print(f"  {scene.name}: no path found within --time {args.time:g} (not a proof: the "
+              "robot may turn)")
+    rel = (Rotation.from_quat(r.orientations)
+           * Rotation.from_matrix(np.asarray(scene.start_rotation)).inv()).as_matrix()
+    fcl, proved, written = _posed_path_out(args, scene, r, rel, path_out, "the motions")
+    result = None
+    if result_out:
+        result = {**_result_head(args, scene, r), "space": "SE3", "certified": c,
+                  "path": r.path.tolist() if proved else None,
+                  "orientations": r.orientations.tolist() if proved else None,
+                  "path_file": written, "fcl_recheck": fcl}
+    return _finish(result, result_out, html_out, scene, r.path if proved else None)
 
 
 def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_out) -> int:
@@ -519,23 +578,9 @@ def _report_turning(args: argparse.Namespace, scene, slices, r, path_out, result
         print(f"  {slices!r}")
         print(f"  built lazily: {r.built['slices']} of {r.built['of'][0]} orientations' "
               f"C-spaces, {r.built['turns']} of {r.built['of'][1]} turns'")
-    fcl = None
-    if args.fcl_check and r.solved:
-        from .check.cross_check import pose_path_collisions
-
-        size = float(np.linalg.norm(np.ptp(np.asarray(scene.bounds), axis=0))) or 1.0
-        rel = [slices.rotation(k) for k in r.slices]
-        bad, n = pose_path_collisions(scene, r.path, rel, per_metre=1e3 / size, per_degree=100)
-        fcl = {"colliding_samples": bad, "samples": n}
-        print(f"FCL re-check: {bad} colliding of {n} poses along the translations and turns")
-    proved = r.solved and not (fcl and fcl["colliding_samples"])
-    written = None
-    if path_out and proved:
-        _write_path(path_out, r.path, r.orientations)
-        written = str(path_out)
-        print(f"wrote {path_out}")
-    elif path_out:
-        print(f"no path written to {path_out}: the problem was not solved", file=sys.stderr)
+    rel = [slices.rotation(k) for k in r.slices]
+    fcl, proved, written = _posed_path_out(args, scene, r, rel, path_out,
+                                           "the translations and turns")
     result = None
     if result_out:
         result = {
@@ -777,17 +822,20 @@ def main(argv: Sequence[str] | None = None) -> int:
     p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles", **_help(
         "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html\n"
         "exit status: 0 a proved path; 1 none found in the time given; 2 bad input; "
-        f"{EXIT_NO_PATH} proved that none exists (--planner auto: at the start's orientation "
-        "with --no-turns, else over 8 orientation slices and the turns between them); "
-        f"{EXIT_MEMORY} over the memory budget"))
+        f"{EXIT_NO_PATH} proved that none exists as the robot may move (--no-turns: at the "
+        "start's orientation; --slices N: over those slices, said so; a robot that may turn "
+        f"freely gets 1, not a proof); {EXIT_MEMORY} over the memory budget"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     _model_options(p)
     p.add_argument("--planner", default="auto",
                    help="any bound OMPL geometric planner, or 'auto' (default): RRTConnect, "
                         "then a decision by certified cells (a path through free cells, or a "
-                        "proof that none exists), then PRM with the narrow-passage sampler, "
-                        "then turns over orientation slices (with --no-turns: the decision "
-                        "again, with the rest), within --time")
+                        "proof that none exists), then the robot turns while it moves: "
+                        "RRTConnect in SE(3) and passages at fixed orientations, every motion "
+                        "certified by clearance (with --no-turns: PRM with the narrow-passage "
+                        "sampler and the decision again), within --time. A given planner "
+                        "plans in SE(3) when the goal's orientation differs from the start's, "
+                        "else translations")
     p.add_argument("--time", type=_positive, default=5.0,
                    help="planning time budget in seconds")
     p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (none: a new one each run)")
@@ -803,9 +851,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                         "orientations, N near-uniform ones of SO(3) and the goal's, each "
                         "linked to its nearest, every motion certified (0: the 24 alone)")
     p.add_argument("--no-turns", action="store_true",
-                   help="keep the start's orientation even when the goal's differs (by "
-                        f"default such a scene is planned with {DEFAULT_SLICES} slices), "
-                        "and do not let --planner auto turn the robot")
+                   help="keep the start's orientation (the goal's is then ignored) and do not "
+                        "let --planner auto turn the robot")
     _executor_options(p)
     p.add_argument("--html", help="also write an offline meshcat page of the scene and the path")
     p.add_argument("--sampler", default="uniform", choices=("uniform", "narrow"),

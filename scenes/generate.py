@@ -1,6 +1,6 @@
 """Regenerate the shipped scenes: ``python scenes/generate.py`` (``--check`` only compares).
 
-Writes ``window.toml``, ``comb.toml``, ``maze.toml``, ``cavity.toml``, ``piano.toml``, ``cage.toml``
+Writes ``window.toml``, ``comb.toml``, ``maze.toml``, ``cavity.toml``, ``piano.toml``, ``plate.toml``, ``cage.toml``
 (the one scene without a path) and the robot mesh
 ``meshes/octahedron.obj`` beside this script. Every obstacle is an axis-aligned box (so exact
 C-obstacles exist for each through convex ⊕ convex sums), at most 40 per scene. The robots
@@ -271,6 +271,33 @@ def piano() -> str:
                       start=(-1.2, -1.6, 0.5), goal=(1.2, 1.6, 0.5), boxes=boxes)
 
 
+def plate(half: float = 2.5) -> str:
+    """A plate that passes a tunnel through a wall only on edge: it must turn (about x) to pass
+    and turn back after, and no slice about z holds the orientation it needs. ``half``: the
+    wall's half extent in y and z (the tests widen it to keep the scene closed when turned)."""
+    side, thick = 1.0, 0.2  # the plate: side x side, thick in z
+    w, h, t = 0.3, 1.2, 0.5  # tunnel width (y) and height (z), wall thickness
+    boxes = [
+        box("wall-y-", (-t / 2, -half, -half), (t / 2, -w / 2, half)),
+        box("wall-y+", (-t / 2, w / 2, -half), (t / 2, half, half)),
+        box("floor", (-t / 2, -w / 2, -half), (t / 2, w / 2, -h / 2)),
+        box("roof", (-t / 2, -w / 2, h / 2), (t / 2, w / 2, half)),
+    ]
+    header = [
+        f"A plate {_num(side)} x {_num(side)} x {_num(thick)} (thin along z) and a wall "
+        f"{_num(t)} thick across x = 0 with a tunnel",
+        f"{_num(w)} wide (y) and {_num(h)} tall (z). Flat, the plate is {_num(side)} wide: "
+        "it passes only on edge, turned 90 degrees",
+        f"about x ({_num(thick)} wide, {_num(side)} tall: {_num((w - thick) / 2)} and "
+        f"{_num((h - side) / 2)} to spare per side), and ends flat again. The wall reaches",
+        "beyond the bounds, so the tunnel is the only way. `cspace plan` turns it in SE(3), "
+        "every motion certified.",
+    ]
+    return scene_toml("plate", header, {"box": (side, side, thick)},
+                      bounds=((-2.5, -2.0, -2.0), (2.5, 2.0, 2.0)),
+                      start=(-1.8, 0.0, 0.0), goal=(1.8, 0.0, 0.0), boxes=boxes)
+
+
 def cage() -> str:
     """A closed cage whose only opening, a slot, is narrower than the robot: no path exists,
     at any orientation (the cube's narrowest width is its side)."""
@@ -307,6 +334,7 @@ def render() -> dict[str, str]:
         "maze.toml": maze(),
         "cavity.toml": cavity(),
         "piano.toml": piano(),
+        "plate.toml": plate(),
         "cage.toml": cage(),
     }
 

@@ -219,7 +219,9 @@ def test_plan_and_the_cli_answer_no_path(tmp_path):
 
 def test_turns_between_slices_do_not_open_the_cage(tmp_path):
     """A cube never fits a slot half its width, turned or not: over 8 slices and the turns
-    between them there is no path either; `cspace plan` says so (exit 3) without flags."""
+    between them there is no path either (``decide_turning``, a proof over those slices);
+    `cspace plan` without flags says "no path at any orientation" (exit 3) from the ball
+    inside the cube, which no turn changes, not from the slices."""
     from cspace.planning.decide import decide_turning
     from cspace.planning.plan import default_slices
     from cspace.planning.turning import TurningCSpace
@@ -233,13 +235,15 @@ def test_turns_between_slices_do_not_open_the_cage(tmp_path):
     # budgets far above the proofs' (each ends at its proof): load cannot change the answer
     r = plan(scene, planner="auto", time=60.0, seed=1)
     assert not r.solved and r.decision.answer == "no path"
-    assert [(t["planner"], t["slices"], t.get("answer")) for t in r.tried] == [
-        ("RRTConnect", None, None), ("decide", None, "no path"), ("decide", 8, "no path")]
+    assert [(t["planner"], t.get("robot"), t.get("answer")) for t in r.tried] == [
+        ("RRTConnect", None, None), ("decide", None, "no path"),
+        ("decide", "inscribed ball", "no path")]
+    assert r.status == "No path at any orientation (proved)"
     p = subprocess.run([sys.executable, "-m", "cspace", "plan", str(path), "--time", "60",
                         "--seed", "1", "--no-cache"], capture_output=True, text=True,
                        timeout=300)
     assert p.returncode == 3, (p.stdout, p.stderr)
-    assert "none over 8 orientation slices" in p.stdout
+    assert "none at any orientation" in p.stdout
 
 
 def test_turns_between_slices_do_not_open_a_turned_tight_cage(tmp_path):

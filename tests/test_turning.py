@@ -309,24 +309,32 @@ def test_a_free_flying_rod_tilts_through_a_hole():
 
 
 def test_cli_turns_by_default_when_the_goal_does(tmp_path):
-    """A scene whose goal orientation differs from the start's is planned with slices unless
-    --no-turns says otherwise; orientations can be prebuilt through a process pool."""
+    """A scene whose goal orientation differs from the start's is planned in SE(3) unless
+    --no-turns says otherwise (by auto, and by a planner named); --slices still plans over
+    slices, prebuilt through a process pool."""
     scene = tmp_path / "turn.toml"
     text = (SCENES / "piano.toml").read_text()
     scene.write_text(text.replace("[planning]\n", "[planning]\ngoal_orientation = [0, 0, 90]\n"))
-    base = [sys.executable, "-m", "cspace", "plan", str(scene), "--seed", "1", "--time", "10",
+    base = [sys.executable, "-m", "cspace", "plan", str(scene), "--seed", "1", "--time", "20",
             "--no-cache", "-q"]
-    out = subprocess.run(base + ["-o", str(tmp_path / "p.path"), "--workers", "2"],
-                         capture_output=True, text=True, timeout=300)
-    assert out.returncode == 0, out.stdout + out.stderr
-    assert "planning with 36 orientation slices" in out.stderr
-    rows = np.loadtxt(tmp_path / "p.path")
-    assert np.allclose(Rotation.from_quat(rows[-1, 3:]).as_euler("xyz", degrees=True), [0, 0, 90])
+    for extra in ([], ["--planner", "RRTConnect"]):
+        out = subprocess.run(base + extra + ["-o", str(tmp_path / "p.path")],
+                             capture_output=True, text=True, timeout=300)
+        assert out.returncode == 0, out.stdout + out.stderr
+        assert "in SE(3) solved" in out.stdout
+        rows = np.loadtxt(tmp_path / "p.path")
+        assert np.allclose(Rotation.from_quat(rows[-1, 3:]).as_euler("xyz", degrees=True),
+                           [0, 0, 90])
+    sliced = subprocess.run(base + ["--slices", "36", "--workers", "2", "-o",
+                                    str(tmp_path / "s.path")],
+                            capture_output=True, text=True, timeout=300)
+    assert sliced.returncode == 0, sliced.stdout + sliced.stderr
+    assert "with 36 orientations solved" in sliced.stdout
     fixed = subprocess.run(base + ["--no-turns", "--time", "5"], capture_output=True, text=True,
                            timeout=300)
     # kept at the start's orientation, the piano has no path: proved (exit 3; the decision's
     # share of 5 s is 1 s, far above what it takes), not turned
-    assert fixed.returncode == 3 and "36 orientation slices" not in fixed.stderr
+    assert fixed.returncode == 3 and "SE(3)" not in fixed.stdout
     assert "no path, proved: none at the start's orientation" in fixed.stdout
 
 

@@ -9,13 +9,14 @@ OMPL.app's way, for comparison). The OMPL glue (spaces, checkers, samplers) is :
 from __future__ import annotations
 
 import time as _time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 
 import numpy as np
 
 from ..errors import ArgumentTypeError, InvalidArgumentError
 from ..scene.model import CSpace
 from .decide import decide
+from .solve import PlanResult, _seed, _solve
 from .ompl_plugin import (
     _bounds,
     _box_bounds,
@@ -55,87 +56,6 @@ FIRST_SHARE = 0.1
 # planning
 
 
-@dataclass(frozen=True)
-class PlanResult:
-    """Outcome of :func:`plan`.
-
-    Attributes
-    ----------
-    path : (n, 3) float64
-        The returned path (after simplification), ``(0, 3)`` if OMPL returned none.
-    solved : bool
-        OMPL found an exact solution *and* the path was re-proved valid exactly.
-    exact : bool
-        OMPL reported an exact (not approximate) solution.
-    valid : bool
-        The exact re-proof of ``path`` (:func:`verify_path`): every waypoint outside the
-        closed C-obstacles and in bounds, every segment ``segment_free``.
-    planner : str
-    motion : {'exact', 'discrete'}
-    time : float
-        Wall seconds for solve, simplification and re-proof.
-    solve_time : float
-        Wall seconds in ``solve()`` alone.
-    n_states : int
-        Waypoints in ``path``.
-    status : str
-        OMPL's ``PlannerStatus.asString()``.
-    state_checks, motion_checks : int
-        Python ``isValid`` / ``checkMotion`` calls (motion checks are 0 for ``'discrete'``:
-        OMPL's discrete validator calls ``isValid`` at each resolution step).
-    simplified : bool
-        Whether ``path`` is the simplified path (else the raw one; simplification is dropped
-        if its result fails the exact re-proof).
-    slices : (n,) int64 or None
-        For a turning robot (``plan(..., slices=...)``): the orientation slice of each
-        waypoint. Consecutive waypoints differ by a translation within one slice or by a
-        turn in place between neighbouring slices, each certified.
-    orientations : (n, 4) float64 or None
-        For a turning robot: each waypoint's orientation as a unit quaternion ``(x, y, z, w)``
-        (world frame, the scene's start rotation included).
-    built : dict or None
-        For a turning robot: ``{'slices': k, 'turns': t, 'of': (n slices, n turns)}``, the
-        C-spaces built (lazily, only those the planner entered) out of those there are;
-        with ``'start_orientation_only'`` when the start and goal share an orientation (True:
-        the path is translations at it alone, found before any turn was tried).
-    tried : list of dict or None
-        With ``planner='auto'``: each attempt in order, ``{'planner', 'sampler', 'slices',
-        'time', 'seconds', 'solved'}`` (``slices`` None: translations at the start's
-        orientation; planner ``'decide'``: :func:`cspace.planning.decide.decide`, with its
-        ``answer``); this result is the last attempt's, its ``time`` all of theirs (the
-        narrow sampler's pool and the turning attempt's builds included, the start's
-        C-space not).
-    decision : Decision or None
-        With ``planner='auto'``: the decision at the start's orientation. ``'no path'`` and
-        not solved: no translation path exists there (with a clearance above
-        ``decision.clearance``); without turns that is the answer (``cspace plan`` exit 3).
-    """
-
-    path: np.ndarray
-    solved: bool
-    exact: bool
-    valid: bool
-    planner: str
-    motion: str
-    time: float
-    solve_time: float
-    n_states: int
-    status: str
-    state_checks: int
-    motion_checks: int
-    simplified: bool
-    slices: np.ndarray | None = None
-    orientations: np.ndarray | None = None
-    built: dict | None = None
-    tried: list | None = None
-    decision: object = None
-
-    @property
-    def length(self) -> float:
-        """Euclidean length of ``path``."""
-        return float(np.linalg.norm(np.diff(self.path, axis=0), axis=1).sum())
-
-
 def _as_cspace(scene_or_cspace, cache=None, robot_hull: bool = False, memory=None):
     if isinstance(scene_or_cspace, CSpace):
         return scene_or_cspace, None
@@ -168,60 +88,6 @@ def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
     return a
 
 
-def _seed(ou, seed) -> None:
-    ou.setLogLevel(ou.LOG_ERROR)
-    if seed is not None:
-        # OMPL logs an error when seeds were already handed out, but still reseeds its seed
-        # generator, so the RNGs created from here on are reproducible.
-        ou.setLogLevel(ou.LOG_NONE)
-        ou.RNG.setSeed(int(seed))
-        ou.setLogLevel(ou.LOG_ERROR)
-
-
-def _solve(si, start, goal, *, planner: str, time: float, optimize: bool,
-           planner_range, simplify: bool, read, dim: int):
-    """Solve from ``start`` to ``goal`` on the set-up ``si``: each a list of state
-    coordinates, or a function that fills an allocated state.
-
-    Returns ``(status, exact, raw, simplified, solve_time)``: OMPL's status, whether the
-    solution is exact, the planner's states read by ``read`` into ``(n, dim)`` rows (none:
-    ``(0, dim)``), the simplified ones (None when not simplified) and the seconds in
-    ``solve()``.
-    """
-    ob, og, _ = _ompl()
-    s0, s1 = si.allocState(), si.allocState()
-    for state, value in ((s0, start), (s1, goal)):
-        if callable(value):
-            value(state)
-        else:
-            state[0:len(value)] = value
-    pdef = ob.ProblemDefinition(si)
-    pdef.setStartAndGoalStates(s0, s1)
-    objective = ob.PathLengthOptimizationObjective(si)
-    if not optimize:
-        objective.setCostThreshold(ob.Cost(float("inf")))
-    pdef.setOptimizationObjective(objective)
-    p = getattr(og, planner)(si)
-    if planner_range is not None and hasattr(p, "setRange"):
-        p.setRange(float(planner_range))
-    p.setProblemDefinition(pdef)
-    p.setup()
-    t0 = _time.perf_counter()
-    status = p.solve(float(time))
-    solve_time = _time.perf_counter() - t0
-    exact = status.getStatus() == ob.PlannerStatus.EXACT_SOLUTION
-    have = exact or status.getStatus() == ob.PlannerStatus.APPROXIMATE_SOLUTION
-    raw = np.zeros((0, dim))
-    simplified = None
-    if have:
-        path = pdef.getSolutionPath()
-        raw = np.array([read(x) for x in path.getStates()]).reshape(-1, dim)
-        if simplify and exact and len(raw) > 2:
-            og.PathSimplifier(si).simplify(path, min(1.0, time / 2.0))
-            simplified = np.array([read(x) for x in path.getStates()]).reshape(-1, dim)
-    return status, exact, raw, simplified, solve_time
-
-
 def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
          time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
@@ -240,10 +106,11 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         Reference-point translations; required for a CSpace.
     planner : str, default 'RRTConnect'
         A geometric planner bound in ``ompl.geometric`` (:func:`planner_names`), or
-        ``'auto'`` (what ``cspace plan`` does unless told otherwise): RRTConnect, then PRM
-        with the narrow-passage sampler, then (a scene, ``turns``) turns over
-        ``AUTO_SLICES`` orientation slices, each within its share of ``time``
-        (:data:`AUTO_SHARES`), until one solves; ``PlanResult.tried`` lists the attempts.
+        ``'auto'`` (what ``cspace plan`` does unless told otherwise): RRTConnect, the
+        decision by certified cells, then (a scene, ``turns``) the robot turns while it
+        moves, in SE(3), every motion certified (without turns: PRM with the narrow-passage
+        sampler), each within its share of ``time`` (:data:`AUTO_SHARES`), until one
+        solves; ``PlanResult.tried`` lists the attempts (:func:`_plan_auto`).
     time : float, default 1.0
         Seconds for ``solve()`` (simplification gets ``min(1, time / 2)`` more).
     seed : int, optional
@@ -286,8 +153,10 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         :class:`~cspace.errors.MemoryBudgetError` before anything is built; with turns, one
         budget for all the slices built.
     turns : bool, default True
-        With ``planner='auto'`` on a scene: whether it may turn the robot when translations
-        at the start's orientation find no path (False: the start's orientation only).
+        With ``planner='auto'`` on a scene: whether it may turn the robot (in SE(3)) when
+        translations at the start's orientation find no path, or at once when the goal's
+        orientation differs from the start's (False: the start's orientation only, the
+        goal's ignored).
 
     Returns
     -------
@@ -399,8 +268,6 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
 # planner='auto': a schedule of attempts within one budget
 
 AUTO = "auto"
-#: ``planner='auto'``: the orientation slices of its last attempt (turns in place).
-AUTO_SLICES = 8
 #: ``planner='auto'``: each attempt at the start's orientation, its share of the budget and
 #: its cap in seconds (turns get what is left). ``'decide'``:
 #: :func:`cspace.planning.decide.decide` (a path through free cells, a proof that none
@@ -411,27 +278,29 @@ AUTO_SHARES = (("RRTConnect", "uniform", 0.05, 0.5), ("decide", None, 0.2, 2.0),
 #: scene): the decision's share of the budget, uncapped. Only PRM comes after it, and a proof
 #: may need most of the time (the Parasol bug trap's: about 7 s of ``--time 10``).
 AUTO_DECIDE_ALONE = 0.85
-#: ``planner='auto'``: when the start's orientation has no path, the share of the budget for
-#: deciding over :data:`AUTO_SLICES` slices and the turns between them (before planning them),
-#: to which what the attempts before it left of their shares is added (an unused share goes to
-#: the stages after it: a proof that needs a little more than its share is not lost to load).
-AUTO_TURN_DECIDE = 0.3
+#: ``planner='auto'``: when the start's orientation has no path, the share of what is left for
+#: the proof over all orientations by the ball inside the robot
+#: (:func:`cspace.planning.se3.ball.no_path_at_any_orientation`) before turning.
+AUTO_BALL = 0.25
 
 
 def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: bool, bounds,
                cache, robot_hull: bool, memory, turns: bool, planner_range) -> PlanResult:
     """``plan(..., planner='auto')``: RRTConnect (most problems: milliseconds), then the
     decision by certified cells (a path through free cells; or a proof that there is none at
-    this orientation, which skips the samplers), then PRM with the narrow-passage sampler
-    (gaps a uniform sampler rarely hits), then, on a scene whose robot may turn, the turning
-    planner over :data:`AUTO_SLICES` slices (a passage the robot fits through only turned)
-    with the rest of the budget. Translations only (``turns=False``): the decision gets
-    :data:`AUTO_DECIDE_ALONE` of the budget, PRM the rest (and the decision again what is
-    left, when it is more than the first one had). After a proof at the start's
-    orientation, the decision over those slices comes first
-    (:func:`cspace.planning.decide.decide_turning`): a proof there too ends the search (not
-    solved, ``decision.answer == 'no path'``). Stops at the first solution; every answer is
-    certified as :func:`plan`'s."""
+    this orientation, which skips the samplers). Then, on a scene whose robot may turn
+    (``turns``): after a proof at the start's orientation, the proof over all orientations
+    by the ball inside the robot (:func:`cspace.planning.se3.ball.no_path_at_any_orientation`,
+    :data:`AUTO_BALL` of what is left; a proof ends the search: not solved,
+    ``decision.answer == 'no path'``, status "No path at any orientation (proved)"); then the
+    robot turns while it moves, with the rest of the budget
+    (:func:`cspace.planning.se3.stage.plan_turning_se3`: RRTConnect in SE(3) and passages at
+    fixed orientations, every motion certified by clearance). A scene whose goal orientation
+    differs from the start's goes to that stage at once. Translations only
+    (``turns=False``): the decision gets :data:`AUTO_DECIDE_ALONE` of the budget, PRM with
+    the narrow-passage sampler the rest (and the decision again what is left, when it is more
+    than the first one had). Stops at the first solution; every answer is certified as
+    :func:`plan`'s (:func:`plan_se3`'s for a turning path)."""
     if not (time > 0):
         raise InvalidArgumentError(f"time must be positive, got {time}")
     cs, scene = _as_cspace(scene_or_cspace, cache, robot_hull, memory)
@@ -443,19 +312,25 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         bounds = scene.bounds if bounds is None else bounds
     tried: list = []
     r = None
-    q0, q1 = (_endpoint(cs, q, _bounds(bounds if bounds is not None else cs.bounds), w)
-              for q, w in ((start, "start"), (goal, "goal")))
     d, d_budget = None, 0.0
     alone = not (turns and scene is not None)  # translations only: no turns to plan after
-    given = 0.0  # the budgets the attempts at the start's orientation were given
+    # A goal orientation other than the start's: translations at the start's cannot reach it
+    # (plan_se3 checks the start and goal poses instead).
+    turn_needed = (not alone and not np.array_equal(np.asarray(scene.goal_rotation),
+                                                    np.asarray(scene.start_rotation)))
+    if not turn_needed:
+        q0, q1 = (_endpoint(cs, q, _bounds(bounds if bounds is not None else cs.bounds), w)
+                  for q, w in ((start, "start"), (goal, "goal")))
     for n, (planner, sampler, share, cap) in enumerate(AUTO_SHARES):
+        if planner == "PRM" and not alone:
+            break  # the robot may turn: the SE(3) stages get the time (their bridge decides
+            # translations through narrow passages at fixed orientations)
         budget = (AUTO_DECIDE_ALONE * time if planner == "decide" and alone
                   else min(cap, share * time))
         if n:  # the first planner always runs: there is always a path or a status
             budget = min(budget, time - (_time.perf_counter() - t0))
-        if budget <= 0:
+        if budget <= 0 or turn_needed:
             break
-        given += budget
         if planner == "decide":
             d, d_budget = decide(cs, q0, q1, bounds=bounds, time=budget), budget
             tried.append({"planner": "decide", "sampler": None, "slices": None, "time": budget,
@@ -482,42 +357,32 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
                       "answer": d.answer, "seconds": d.time, "solved": d.answer == "path"})
         if d.answer == "path":
             r = _decided(cs, d, bounds)
-    elapsed = _time.perf_counter() - t0
-    left = time - elapsed
-    unused = max(0.0, given - elapsed)  # what the attempts before did not use of theirs
-    if (d is not None and d.answer == "no path" and turns and scene is not None and left > 0
-            and _turns_proved_useless(scene, q0, q1, bounds,
-                                      min(left, AUTO_TURN_DECIDE * time + unused),
-                                      cache, robot_hull or cs.robot_hull, memory, tried)):
-        return replace(_decided(cs, d, bounds), tried=tried, time=_time.perf_counter() - t0,
-                       decision=d)
+    left = time - (_time.perf_counter() - t0)
+    if (d is not None and d.answer == "no path" and turns and scene is not None and left > 0):
+        # No translation at the start's orientation. The ball inside the robot that no turn
+        # changes: if even it cannot pass, nothing can, at any orientation.
+        from .se3.ball import no_path_at_any_orientation
+
+        budget = AUTO_BALL * left
+        tb = _time.perf_counter()
+        proof = no_path_at_any_orientation(scene, time=budget, bounds=bounds, cache=cache,
+                                           memory=memory)
+        tried.append({"planner": "decide", "sampler": None, "slices": None, "time": budget,
+                      "robot": "inscribed ball", "answer": "no path" if proof else "unknown",
+                      "seconds": _time.perf_counter() - tb, "solved": False})
+        if proof is not None:
+            return replace(_decided(cs, d, bounds), tried=tried, time=_time.perf_counter() - t0,
+                           decision=proof, status="No path at any orientation (proved)")
     left = time - (_time.perf_counter() - t0)
     if not (r is not None and r.solved) and turns and scene is not None and left > 0:
-        r = plan_turning(scene, default_slices(scene, AUTO_SLICES), start, goal,
-                         planner="RRTConnect", time=left, seed=seed, simplify=simplify,
-                         bounds=bounds, planner_range=planner_range, cache=cache,
-                         robot_hull=robot_hull or cs.robot_hull, memory=memory)
-        tried.append({"planner": "RRTConnect", "sampler": "uniform", "slices": AUTO_SLICES,
-                      "time": left, "seconds": r.time, "solved": r.solved})
+        from .se3.stage import plan_turning_se3
+
+        r = plan_turning_se3(scene, time=left, seed=seed, bounds=bounds, cache=cache,
+                             memory=memory, tried=tried, planner_range=planner_range,
+                             skip=((0.0, 0.0, 0.0, 1.0),) if d is not None and d.answer != "unknown" else ())
     if d is not None and d.answer == "no path" and not (r is not None and r.solved):
-        r = r if r is not None and r.slices is not None else _decided(cs, d, bounds)
+        r = r if r is not None and r.certified is not None else _decided(cs, d, bounds)
     return replace(r, tried=tried, time=_time.perf_counter() - t0, decision=d)
-
-
-def _turns_proved_useless(scene, q0, q1, bounds, budget, cache, robot_hull, memory,
-                          tried) -> bool:
-    """:func:`cspace.planning.decide.decide_turning` over :data:`AUTO_SLICES` slices: True
-    when it proves that no translations and turns between them join start and goal."""
-    from .decide import decide_turning
-    from .turning import TurningCSpace
-
-    slices = default_slices(scene, AUTO_SLICES)
-    tcs = TurningCSpace(scene, slices, cache=cache, robot_hull=robot_hull, memory=memory)
-    tcs.bounds = _bounds(bounds)
-    td = decide_turning(tcs, q0, q1, time=budget)
-    tried.append({"planner": "decide", "sampler": None, "slices": len(slices), "time": budget,
-                  "answer": td.answer, "seconds": td.time, "solved": False})
-    return td.answer == "no path"
 
 
 def _decided(cs, d, bounds) -> PlanResult:

@@ -9,7 +9,7 @@ import numpy as np
 
 from ..errors import InvalidArgumentError
 from .ompl_plugin import _bounds, _box_bounds, _ompl, planner_names
-from .plan import PlanResult, _seed, _solve
+from .solve import PlanResult, _seed, _solve
 
 __all__ = ["SAMPLED_SPACES", "plan_sampled"]
 
