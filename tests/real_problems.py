@@ -436,6 +436,69 @@ def thin_wall(folder: Path, *, n_clutter: int = 36, tessellation: int = 1, seed:
                           "panels": sum(n.startswith("panel") for n, _, _ in world)})
 
 
+def twisting_corner(folder: Path, *, sliver_edges: int = 12, n_clutter: int = 16,
+                    seed: int = 11, tessellation: int = 6, width: float = 14.0) -> Problem:
+    """Problem 5 (Twistycool's kind: the robot turns *while* it translates): two rooms joined
+    by an L-shaped hallway 14 wide and 14 tall, carved out of one closed block (genus 0,
+    ``tessellation`` faces a side per lattice cell edge), with open double-sided floor and
+    ceiling sheets and ``n_clutter`` bodies in the rooms. The T robot at half size (a bar 30
+    long, 3 x 3 across, a knob 5 long; slivers) starts in room A with its bar along z and
+    ends in room B the same way. No fixed orientation passes: the hallway's first leg runs
+    along x and its second along z, each 14 wide, and the bar's projections on x and on z
+    cannot both be below 14 while it stays within the 14-tall layer. Round the corner the
+    bar must turn as it moves (a 30 bar fits a 14-wide right-angle turn: 2 sqrt(2) 14 > 39).
+    The block's outer cells stay solid and the bounds keep the reference point inside them,
+    so nothing goes round it."""
+    folder.mkdir(parents=True, exist_ok=True)
+    rng = np.random.default_rng(seed)
+    h = width / 2
+    X = [120.0, 150.0, 210.0, 250 - h, 250 + h, 350.0, 380.0]
+    Y = [120.0, 150 - h, 150 + h, 180.0]
+    Z = [-480.0, -450.0, -300 - h, -300 + h, -240.0, -150.0, -120.0]
+    occ = np.ones((len(X) - 1, len(Y) - 1, len(Z) - 1), bool)
+    free = [(1, 1), (1, 2),                  # room A: x in [150, 210], z in [-450, -293]
+            (2, 2), (3, 2),                  # hallway along x: z in [-307, -293]
+            (3, 3),                          # hallway along z: x in [243, 257]
+            (2, 4), (3, 4), (4, 4)]          # room B: x in [210, 350], z in [-240, -150]
+    for i, k in free:
+        occ[i, 1, k] = False
+    # every lattice cell edge cut into ``tessellation`` faces: a heavy, fine mesh
+    coords = [np.unique(np.concatenate([np.linspace(a, b, tessellation + 1)
+                                        for a, b in zip(c[:-1], c[1:])])) for c in (X, Y, Z)]
+    fine = np.repeat(np.repeat(np.repeat(occ, tessellation, 0), tessellation, 1),
+                     tessellation, 2)
+    block = lattice_solid(fine, *coords)
+    floor = double_sided(grid_sheet((150, 150 - h, -450), np.array([200.0, 0, 0]),
+                                    np.array([0, 0, 300.0]), 20, 30))
+    ceiling = double_sided(grid_sheet((150, 150 + h, -450), np.array([200.0, 0, 0]),
+                                      np.array([0, 0, 300.0]), 4, 6))
+    world = [("block", block, matrix((0, 0, 15), (4.0, -2.0, 3.0))),
+             ("floor", floor, matrix((0, 0, 0), (0.0, 0.0, 0.0))),
+             ("ceiling", ceiling, matrix((5, 0, 0), (0.0, 1.0, 0.0)))]
+    # clutter on the floor of the rooms, clear of the hallway, the start and the goal
+    keep = [((200, 140, -320), (270, 160, -230)), ((160, 140, -380), (200, 160, -320)),
+            ((260, 140, -235), (340, 160, -160)), ((150, 140, -240), (350, 160, -230))]
+    for name, mesh, m in clutter(rng, 4 * n_clutter, (155, 144.5, -445), (345, 145.5, -155),
+                                 keep_out=keep):
+        inside = any(all(X[i] + 8 <= x <= X[i + 1] - 8 for x in (mesh[0][:, 0].min(), mesh[0][:, 0].max()))
+                     and all(Z[k] + 8 <= z <= Z[k + 1] - 8 for z in (mesh[0][:, 2].min(), mesh[0][:, 2].max()))
+                     for i, k in ((1, 1), (4, 4)))
+        low = mesh[0][:, 1].max() < 150.0  # below the bar's layer: on the floor
+        if inside and low and len(world) < 3 + n_clutter:
+            world.append((name, mesh, m))
+    write_dae(folder / "world.dae", world)
+    V, F = t_robot(sliver_edges)
+    T = (V * 0.5, F)
+    offset = np.array([-14.0, 21.0, 9.0])
+    robot, c = _robot_file(folder, T, offset, (20, 0, -35), (3.0, 8.0, -6.0))
+    start = np.array([180.0, 150.0, -400.0]) + c - offset
+    goal = np.array([300.0, 150.0, -195.0]) + c - offset
+    bounds = np.array([[150.0, 148.0, -450.0], [350.0, 152.0, -150.0]]) + (c - offset)
+    cfg = write_cfg(folder / "corner.cfg", "world.dae", "robot.dae", start, goal, bounds)
+    return Problem("twisting_corner", cfg, folder / "world.dae", robot, n_triangles(world),
+                   len(T[1]), len(world), facts={"design_offset": c - offset})
+
+
 def piano(sliver_edges: int = 350) -> Mesh:
     """A closed non-convex 'grand piano' of about 1.7k triangles: a case 48 x 30 (x, z) and
     10 tall (y) whose curved side is a staircase of voxels, on three legs 14 tall; its long

@@ -612,3 +612,65 @@ def test_thin_wall_plans_round_the_edge_and_both_oracles_agree(thin_wall, tmp_pa
             robot_triangles=p.robot_triangles, build_s=build,
             model_build_s=r["model"]["build_seconds"], plan_s=r["seconds"], cli_s=seconds,
             fcl_cspace=f"{bad}/{n}", fcl_raw=f"{bad_raw}/{n_raw}")
+
+
+# --------------------------------------------------------------------------------------
+# turning while moving (issue #50): the default `cspace plan`, in SE(3)
+
+
+def _check_se3_path(p, scene, r, seconds, budget) -> tuple[int, int]:
+    """A default plan's SE(3) answer: solved, every motion certified, 0 colliding poses by
+    cspace's FCL oracle (the CLI's --fcl-check) and by the raw one along every motion, start
+    and goal reached, within the time budget (plus 10% and the build)."""
+    assert r["solved"] and r["space"] == "SE3" and r["certified"]["motions"] == len(r["path"]) - 1
+    assert r["fcl_recheck"]["colliding_samples"] == 0
+    P = np.array(r["path"])
+    rel = _relative(scene, r["orientations"])
+    assert np.allclose(P[0], scene.start) and np.allclose(P[-1], scene.goal)
+    oracle = RawFcl(p.world, p.robot, scene.reference_point)
+    bad_raw, n_raw = oracle.path(P, rel)
+    assert bad_raw == 0 and n_raw > 100
+    assert r["seconds"] <= 1.1 * budget
+    return bad_raw, n_raw
+
+
+@pytest.mark.filterwarnings("ignore:.*goal rotation differs")
+def test_slot_wall_default_plan_turns_in_se3(slot_wall, tmp_path):
+    """No flag: the goal's orientation differs, so the T is planned in SE(3) at once."""
+    p, scene, build = slot_wall
+    code, r, seconds = _plan_cli(p.cfg, tmp_path / "r.json", time_budget=60)
+    assert code == 0, r["tried"]
+    bad, n = _check_se3_path(p, scene, r, seconds, 60)
+    _report(p.name + " (SE(3))", plan_s=r["seconds"], cli_s=seconds, fcl_raw=f"{bad}/{n}",
+            planner=r["tried"][-1]["planner"])
+
+
+@pytest.fixture(scope="module", params=[pytest.param(22.0, id="hallway-22"),
+                                        pytest.param(18.0, id="hallway-18",
+                                                     marks=pytest.mark.slow)])
+def corner(request, tmp_path_factory):
+    t = time.perf_counter()
+    p = rp.twisting_corner(tmp_path_factory.mktemp("corner"), width=request.param)
+    scene = load_scene(p.cfg)
+    return p, scene, time.perf_counter() - t
+
+
+def test_twisting_corner_turns_while_it_moves(corner, tmp_path):
+    """The T must turn round the hallway's corner as it moves (no fixed orientation passes):
+    the default plan does, in SE(3); some motion of the path both moves and turns in the
+    hallway, and the raw FCL oracle finds no colliding pose along any motion. The budget is
+    far above what it takes (it ends at its path; hallway 22: a few seconds)."""
+    p, scene, build = corner
+    code, r, seconds = _plan_cli(p.cfg, tmp_path / "r.json", time_budget=60)
+    assert code == 0, r["tried"]
+    bad, n = _check_se3_path(p, scene, r, seconds, 60)
+    P = np.array(r["path"]) - p.facts["design_offset"]
+    rel = Rotation.from_matrix(_relative(scene, r["orientations"]))
+    moves_and_turns = [
+        k for k in range(len(P) - 1)
+        if np.linalg.norm(P[k + 1] - P[k]) > 1.0 and (rel[k].inv() * rel[k + 1]).magnitude() > 0.1
+        and max(P[k, 0], P[k + 1, 0]) > 215 and max(P[k, 2], P[k + 1, 2]) > -320]
+    assert moves_and_turns, P
+    _report(p.name, world_triangles=p.world_triangles, robot_triangles=p.robot_triangles,
+            build_s=build, plan_s=r["seconds"], cli_s=seconds, fcl_raw=f"{bad}/{n}",
+            motions=r["certified"]["motions"])

@@ -280,8 +280,10 @@ AUTO_SHARES = (("RRTConnect", "uniform", 0.05, 0.5), ("decide", None, 0.2, 2.0),
 AUTO_DECIDE_ALONE = 0.85
 #: ``planner='auto'``: when the start's orientation has no path, the share of what is left for
 #: the proof over all orientations by the ball inside the robot
-#: (:func:`cspace.planning.se3.ball.no_path_at_any_orientation`) before turning.
+#: (:func:`cspace.planning.se3.ball.no_path_at_any_orientation`) before turning, and its cap
+#: in seconds (the cage's and the bottle's take a fraction of a second).
 AUTO_BALL = 0.25
+AUTO_BALL_CAP = 5.0
 
 
 def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: bool, bounds,
@@ -363,7 +365,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         # changes: if even it cannot pass, nothing can, at any orientation.
         from .se3.ball import no_path_at_any_orientation
 
-        budget = AUTO_BALL * left
+        budget = min(AUTO_BALL * left, AUTO_BALL_CAP)
         tb = _time.perf_counter()
         proof = no_path_at_any_orientation(scene, time=budget, bounds=bounds, cache=cache,
                                            memory=memory)
@@ -377,9 +379,10 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     if not (r is not None and r.solved) and turns and scene is not None and left > 0:
         from .se3.stage import plan_turning_se3
 
+        decided = d is not None and d.answer != "unknown"
         r = plan_turning_se3(scene, time=left, seed=seed, bounds=bounds, cache=cache,
                              memory=memory, tried=tried, planner_range=planner_range,
-                             skip=((0.0, 0.0, 0.0, 1.0),) if d is not None and d.answer != "unknown" else ())
+                             skip=((0.0, 0.0, 0.0, 1.0),) if decided else ())
     if d is not None and d.answer == "no path" and not (r is not None and r.solved):
         r = r if r is not None and r.certified is not None else _decided(cs, d, bounds)
     return replace(r, tried=tried, time=_time.perf_counter() - t0, decision=d)

@@ -73,7 +73,8 @@ def _candidates(scene, goal: np.ndarray) -> Orientations:
 
 
 def slice_bridge(scene, *, time: float, seed=None, bounds=None, cache=None, memory=None,
-                 poses: PoseClearance | None = None, skip=()) -> PlanResult | None:
+                 poses: PoseClearance | None = None, skip=(), done: set | None = None
+                 ) -> PlanResult | None:
     """A certified SE(3) path through a passage taken at one fixed orientation (module
     docstring), or None when none is found within ``time`` seconds.
 
@@ -93,6 +94,9 @@ def slice_bridge(scene, *, time: float, seed=None, bounds=None, cache=None, memo
     skip : iterable of (4,) float64
         Relative orientations (unit quaternions) already decided (the start's, by the
         translational stage): not tried again.
+    done : set, optional
+        The candidates' indices decided so far (no path, or a path that could not be joined):
+        updated, and skipped by a later call given the same set.
 
     Returns
     -------
@@ -114,7 +118,9 @@ def slice_bridge(scene, *, time: float, seed=None, bounds=None, cache=None, memo
     cost = [min(2 * np.arccos(min(1.0, abs(float(q @ ref)))) for ref in ((0, 0, 0, 1.0), Qg))
             for q in quats]
     order = [k for k in np.argsort(cost, kind="stable").tolist()
-             if not any(abs(float(quats[k] @ np.asarray(s))) > 1 - 1e-12 for s in skip)]
+             if not any(abs(float(quats[k] @ np.asarray(s))) > 1 - 1e-12 for s in skip)
+             and k not in (done if done is not None else ())]
+    done = done if done is not None else set()
     tcs = TurningCSpace(scene, orients, cache=cache, memory=memory)
     q0, q1 = np.asarray(scene.start, dtype=np.float64), np.asarray(scene.goal, dtype=np.float64)
     I = np.array([0.0, 0.0, 0.0, 1.0])
@@ -124,10 +130,13 @@ def slice_bridge(scene, *, time: float, seed=None, bounds=None, cache=None, memo
             break
         Qk, Rk = quats[k], orients.rotations[k]
         if not (poses.pose_free(q0, Rk) and poses.pose_free(q1, Rk)):
+            done.add(k)
             continue  # this orientation does not fit at the start or the goal
         # Each orientation at least a quarter of what is left: a passage found late is not
         # lost to the first orientations' long undecided searches.
         d = decide(tcs.slice(k), q0, q1, bounds=b, time=left / min(4, len(order) - n))
+        if d.answer != "unknown":
+            done.add(k)
         if d.answer != "path":
             continue
         left = time - (_time.perf_counter() - t0)
