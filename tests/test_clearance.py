@@ -147,6 +147,26 @@ def test_a_capped_query_answers_below_the_cap_and_stops_above_it():
     assert mc.lower_bound(np.eye(3), q, cap=0.5) >= 0.5 - mc.error_bound
 
 
+def test_a_lower_bound_within_a_factor_is_below_the_truth_and_not_far_below():
+    """``grow``: pairs pruned within a factor; what is returned is never above the distance
+    (never a false free) and at least the distance over the factor."""
+    rng = np.random.default_rng(5)
+    a = trimesh.creation.annulus(r_min=0.5, r_max=1.0, height=0.6, sections=24)
+    V, F = t_robot(12)
+    RV = (V - V.mean(axis=0)) * 0.01
+    mc = MeshClearance(a.vertices + FAR, a.faces, RV, F, reach=600.0)
+    k = mc._k
+    for i in range(200):
+        R = Rotation.random(random_state=300 + i).as_matrix()
+        q = FAR + rng.normal(size=3) * 1.2
+        d = mc.distance(R, q)
+        for grow in (1.25, 4.0):
+            lb = k.distance(np.ascontiguousarray(R), q, np.inf, grow)
+            assert d / grow - 1e-12 <= lb <= d + 1e-12, (i, grow, lb, d)
+            capped = k.distance(np.ascontiguousarray(R), q, 0.3, grow)
+            assert capped <= d + 1e-12 and (d < 0.3 or capped >= 0.3 / grow - 1e-12)
+
+
 def _dense_collisions(oracle, q0, Q0, q1, Q1, n=4000) -> int:
     slerp = Slerp([0.0, 1.0], Rotation.from_quat([Q0, Q1]))
     t = np.linspace(0.0, 1.0, n)

@@ -308,13 +308,13 @@ cdef class ClearanceKernel:
                     d2 += t * t
         return sqrt(d2)
 
-    cdef double _leaves(self, Py_ssize_t i, Py_ssize_t j, double best) noexcept nogil:
+    cdef double _leaves(self, Py_ssize_t i, Py_ssize_t j, double best, double grow) noexcept nogil:
         cdef double A[9]
         cdef double lo[3]
         cdef double hi[3]
         cdef double n[3]
         cdef Py_ssize_t a, b, t, o, k, v
-        cdef double d, g, g2, na, s0, s1, s2
+        cdef double d, g, g2, na, s0, s1, s2, thr
         cdef bint flat_a
         for a in range(self.r_first[i], self.r_first[i] + self.r_count[i]):
             t = self.r_order[a]
@@ -340,20 +340,21 @@ cdef class ClearanceKernel:
                         g = lo[k] - self.ob_hi[o, k]
                         if g > 0:
                             g2 += g * g
-                if g2 >= best * best:
+                thr = best / grow  # a pair at least this far apart is pruned
+                if g2 >= thr * thr:
                     continue
-                # Then each triangle's plane: all three corners of the other beyond ``best``.
+                # Then each triangle's plane: all three corners of the other beyond ``thr``.
                 if self.o_r[o] < 0:
                     s0 = _dot(&self.on[o, 0], A) - self.od[o]
                     s1 = _dot(&self.on[o, 0], &A[3]) - self.od[o]
                     s2 = _dot(&self.on[o, 0], &A[6]) - self.od[o]
-                    if min(s0, min(s1, s2)) >= best or max(s0, max(s1, s2)) <= -best:
+                    if min(s0, min(s1, s2)) >= thr or max(s0, max(s1, s2)) <= -thr:
                         continue
                 if flat_a:
                     s0 = _dot(n, &self.OT[o, 0]) - na
                     s1 = _dot(n, &self.OT[o, 3]) - na
                     s2 = _dot(n, &self.OT[o, 6]) - na
-                    if min(s0, min(s1, s2)) >= best or max(s0, max(s1, s2)) <= -best:
+                    if min(s0, min(s1, s2)) >= thr or max(s0, max(s1, s2)) <= -thr:
                         continue
                 self.pairs += 1
                 d = _tri_tri(A, &self.OT[o, 0], self.r_r[t], self.o_r[o])
@@ -363,8 +364,13 @@ cdef class ClearanceKernel:
                         return 0.0
         return best
 
-    cdef double _query(self, const double* R, const double* q, double cap) noexcept nogil:
-        """Least distance at the pose ``(q, R)`` when below ``cap``, else at least ``cap``."""
+    cdef double _query(self, const double* R, const double* q, double cap,
+                       double grow=1.0) noexcept nogil:
+        """Least distance at the pose ``(q, R)`` when below ``cap``, else at least ``cap``.
+        With ``grow > 1``, a lower bound within that factor: pairs are pruned once their bound
+        times ``grow`` reaches the least distance found, ``best``, so every pair pruned or
+        measured is at least ``best / grow`` apart, which is returned (at least
+        ``cap / grow`` when nothing is found below ``cap``). Far fewer pairs are measured."""
         cdef Py_ssize_t si[4096]
         cdef Py_ssize_t sj[4096]
         cdef double sb[4096]
@@ -379,17 +385,17 @@ cdef class ClearanceKernel:
         self.queries += 1
         self._refit()
         b1 = self._bound(0, 0)
-        if b1 >= best:
-            return best
+        if b1 * grow >= best:
+            return best / grow
         si[0], sj[0], sb[0] = 0, 0, b1
         top = 1
         while top > 0:
             top -= 1
             i, j = si[top], sj[top]
-            if sb[top] >= best:
+            if sb[top] * grow >= best:
                 continue
             if self.r_count[i] > 0 and self.o_count[j] > 0:
-                best = self._leaves(i, j, best)
+                best = self._leaves(i, j, best, grow)
                 if best <= 0:
                     return 0.0
                 continue
@@ -410,18 +416,20 @@ cdef class ClearanceKernel:
             # The nearer pair on top: visited first, it lowers ``best`` for the farther one.
             if b1 < b2:
                 i1, j1, b1, i2, j2, b2 = i2, j2, b2, i1, j1, b1
-            if b1 < best:
+            if b1 * grow < best:
                 si[top], sj[top], sb[top] = i1, j1, b1
                 top += 1
-            if b2 < best:
+            if b2 * grow < best:
                 si[top], sj[top], sb[top] = i2, j2, b2
                 top += 1
-        return best
+        return best / grow
 
-    def distance(self, const double[:, ::1] R, const double[::1] q, double cap=INFINITY) -> float:
+    def distance(self, const double[:, ::1] R, const double[::1] q, double cap=INFINITY,
+                 double grow=1.0) -> float:
         """The robot turned by ``R`` about its reference point, which is at ``q``: its least
-        distance to the obstacles if below ``cap``, else a number at least ``cap``."""
-        return self._query(&R[0, 0], &q[0], cap)
+        distance to the obstacles if below ``cap``, else a number at least ``cap``; with
+        ``grow > 1`` a lower bound within that factor (:meth:`_query`)."""
+        return self._query(&R[0, 0], &q[0], cap, grow)
 
     def distances(self, const double[:, :, ::1] R, const double[:, ::1] q, double cap=INFINITY):
         """:meth:`distance` of each pose ``(R[k], q[k])``."""
@@ -433,11 +441,14 @@ cdef class ClearanceKernel:
         return out
 
     def motion(self, const double[::1] q0, const double[::1] Q0, const double[::1] q1,
-               const double[::1] Q1, double rho, double delta, int max_depth=40):
+               const double[::1] Q1, double rho, double delta, int max_depth=40,
+               double grow=4.0):
         """Certify the motion from pose ``(q0, Q0)`` to ``(q1, Q1)`` (positions; unit
         quaternions ``x, y, z, w``): the reference point on the segment, the rotation on the
         shortest slerp arc, both at constant speed. See
-        :meth:`cspace.geometry.clearance.MeshClearance.motion_free`.
+        :meth:`cspace.geometry.clearance.MeshClearance.motion_free`. Its clearances are lower
+        bounds within the factor ``grow`` (:meth:`_query`): cheaper, at the cost of a little
+        more halving.
 
         Returns ``(free, depth, queries)``."""
         cdef double sa[128]
@@ -461,11 +472,14 @@ cdef class ClearanceKernel:
         D = (sqrt((q1[0] - q0[0]) ** 2 + (q1[1] - q0[1]) ** 2 + (q1[2] - q0[2]) ** 2)
              + rho * theta)
         D = D * (1.0 + 1e-12) + 1e-300  # rounded up
-        La = self._at(q0, p0, p1, 0.0, theta, D + delta) - delta
-        if not (La > 0):
-            return False, 0, self.queries - before
-        Lb = self._at(q1, p0, p1, 1.0, theta, D + delta) - delta
+        # Each end needs half the sweep for the whole motion to pass at once: the capped
+        # queries stop there (a larger cap costs more and helps no more). The far end first:
+        # a motion that fails usually fails there.
+        Lb = self._at(q1, p0, p1, 1.0, theta, 0.5 * D * (1.0 + 1e-9) + delta, grow) - delta
         if not (Lb > 0):
+            return False, 0, self.queries - before
+        La = self._at(q0, p0, p1, 0.0, theta, D - Lb + delta, grow) - delta
+        if not (La > 0):
             return False, 0, self.queries - before
         sa[0], sb_[0], la[0], lb[0], dep[0] = 0.0, 1.0, La, Lb, 0
         top = 1
@@ -482,11 +496,11 @@ cdef class ClearanceKernel:
             need = D * (m - a) - La
             if D * (b - m) - Lb > need:
                 need = D * (b - m) - Lb
-            # Ask for twice what the halves need (a margin for the next level) and at least half
-            # this interval's sweep: a capped query stops early once that is certain.
-            if need < 0.25 * D * (b - a):
-                need = 0.25 * D * (b - a)
-            Lm = self._between(q0, q1, p0, p1, m, theta, 2.0 * need + delta) - delta
+            # What both halves need of the middle: a capped query stops once that is certain.
+            if need < 0:
+                need = 0
+            Lm = self._between(q0, q1, p0, p1, m, theta,
+                               need * (1.0 + 1e-9) + 1e-12 * D * (b - a) + delta, grow) - delta
             if not (Lm > 0):
                 return False, d + 1, self.queries - before
             sa[top], sb_[top], la[top], lb[top], dep[top] = m, b, Lm, Lb, d + 1
@@ -495,15 +509,15 @@ cdef class ClearanceKernel:
         return True, depth, self.queries - before
 
     cdef double _at(self, const double[::1] q, const double* p0, const double* p1, double s,
-                    double theta, double cap):
+                    double theta, double cap, double grow):
         cdef double Q[4]
         cdef double R[9]
         _slerp(p0, p1, s, theta, Q)
         _matrix(Q, R)
-        return self._query(R, &q[0], cap)
+        return self._query(R, &q[0], cap * grow, grow)
 
     cdef double _between(self, const double[::1] q0, const double[::1] q1, const double* p0,
-                         const double* p1, double s, double theta, double cap):
+                         const double* p1, double s, double theta, double cap, double grow):
         cdef double q[3]
         cdef double Q[4]
         cdef double R[9]
@@ -512,7 +526,7 @@ cdef class ClearanceKernel:
             q[k] = q0[k] + s * (q1[k] - q0[k])
         _slerp(p0, p1, s, theta, Q)
         _matrix(Q, R)
-        return self._query(R, q, cap)
+        return self._query(R, q, cap * grow, grow)
 
 
 cdef inline double _half_diagonal(const double* lo, const double* hi) noexcept nogil:
