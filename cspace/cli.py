@@ -416,7 +416,7 @@ def _result_head(args: argparse.Namespace, scene, r) -> dict:
             {k: getattr(r.decision, k) for k in ("answer", "reason", "depth", "clearance")}}
 
 
-def _finish(result, result_out, html_out, scene, path, decision=None) -> int:
+def _finish(result, result_out, html_out, scene, path, decision=None, rotations=None) -> int:
     """Write ``plan``'s JSON summary and HTML page (the scene, and ``path`` when proved, or
     the cells of a proof that there is none); exit status 0 when there is a proved path."""
     import json
@@ -429,7 +429,7 @@ def _finish(result, result_out, html_out, scene, path, decision=None) -> int:
         from .viz.scene_view import SceneView
 
         view = SceneView()
-        draw_scene(view, scene, path=path, decision=decision)
+        draw_scene(view, scene, path=path, decision=decision, rotations=rotations)
         write_atomic(html_out, lambda p: view.save(p))
         print(f"wrote {html_out}" + ("" if path is not None else " (the cells that prove no "
                                      "path exists)" if decision is not None else
@@ -524,7 +524,8 @@ def _report_se3(args: argparse.Namespace, scene, r, path_out, result_out, html_o
                   "path": r.path.tolist() if proved else None,
                   "orientations": r.orientations.tolist() if proved else None,
                   "path_file": written, "fcl_recheck": fcl}
-    return _finish(result, result_out, html_out, scene, r.path if proved else None)
+    return _finish(result, result_out, html_out, scene, r.path if proved else None,
+                   rotations=rel if proved else None)
 
 
 def _plan_turning(args: argparse.Namespace, scene, path_out, result_out, html_out) -> int:
@@ -590,7 +591,8 @@ def _report_turning(args: argparse.Namespace, scene, slices, r, path_out, result
             "slice_ids": r.slices.tolist() if proved else None,
             "path_file": written, "fcl_recheck": fcl,
         }
-    return _finish(result, result_out, html_out, scene, r.path if proved else None)
+    return _finish(result, result_out, html_out, scene, r.path if proved else None,
+                   rotations=np.asarray(rel) if proved else None)
 
 
 def _view(args: argparse.Namespace) -> int:

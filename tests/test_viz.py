@@ -10,6 +10,7 @@ Both use ``axes=False``: meshcat's axes are red/green/blue lines whose hues over
 from __future__ import annotations
 
 import base64
+import dataclasses
 import importlib.util
 import colorsys
 import os
@@ -461,3 +462,27 @@ def test_a_proof_that_no_path_exists_is_drawn_as_its_cells():
         index = np.frombuffer(geometry["data"]["index"]["array"].data, dtype=np.uint32)
         assert len(index) == 3 * 12 * int(cells.sum()) > 0
         assert material["color"] == scene_view._hex(scene_view.CELLS_COLOR)
+
+
+def test_a_turning_path_animates_the_robot_turning():
+    """Keyframes carry each waypoint's rotation (meshcat's quaternion track, x y z w), and the
+    robot at the goal is drawn at the goal's orientation."""
+    from scipy.spatial.transform import Rotation
+
+    scene = cspace.load_scene(Path(__file__).resolve().parents[1] / "scenes" / "piano.toml")
+    G = Rotation.from_euler("z", 90, degrees=True).as_matrix()
+    scene = dataclasses.replace(scene, goal_rotation=G)
+    path = np.array([scene.start, [0.0, 0.0, 0.5], scene.goal])
+    rots = Rotation.from_euler("z", [[0], [45], [90]], degrees=True)
+    view = viz.SceneView()
+    viz.draw_scene(view, scene, path=path, rotations=rots.as_matrix(), cobstacles=False)
+    cmds = scene_commands(view.static_html())
+    (anim,) = [c for c in cmds if c["type"] == "set_animation"]
+    (clip,) = anim["animations"]
+    (quat,) = [t for t in clip["clip"]["tracks"] if t["name"] == ".quaternion"]
+    got = np.array([k["value"] for k in quat["keys"]])
+    np.testing.assert_allclose(np.abs(got @ rots.as_quat().T).diagonal(), 1.0, atol=1e-9)
+    (goal,) = [c for c in cmds if c["type"] == "set_transform" and c["path"] == "/meshcat/robot/goal"]
+    M = np.array(goal["matrix"]).reshape(4, 4).T
+    np.testing.assert_allclose(M[:3, :3], G, atol=1e-12)
+    np.testing.assert_allclose(M[:3, 3], scene.goal)

@@ -13,7 +13,7 @@ __all__ = ["draw_scene"]
 
 def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
                superset: bool = False, animate: bool = True, cache=None,
-               decision=None, free_space=None) -> dict[str, str]:
+               decision=None, free_space=None, rotations=None) -> dict[str, str]:
     """Draw a :class:`cspace.scene.scene.Scene`: obstacles, the robot at start and goal, C-obstacles, a path.
 
     The scene is modelled and built as :func:`cspace.scene.model.model_scene` does (exact robot
@@ -27,6 +27,10 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
     path : (k, 3) float64, optional
         Reference-point positions of a path; drawn as a polyline, and the robot is animated
         along it when ``animate``.
+    rotations : (k, 3, 3) float64, optional
+        With ``path``: the robot's rotation at each waypoint, relative to the scene's start
+        orientation (a path that turns the robot: the animation turns it too). The robot at
+        the goal is drawn at the goal's orientation either way.
     cobstacles, superset : bool
         Whether to draw the C-obstacles / the superset of a body whose build failed.
     cache : COCache, path, True, or None
@@ -95,12 +99,13 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
     view.add_robot("start", scene.robot.vertices, scene.robot.faces, scene.start,
                    reference=scene.reference_point)
     view.add_robot("goal", scene.robot.vertices, scene.robot.faces, scene.goal,
-                   reference=scene.reference_point)
+                   reference=scene.reference_point,
+                   rotation=np.asarray(scene.goal_rotation) @ np.asarray(scene.start_rotation).T)
     if path is not None:
         # Waypoints a little larger than the default: a scene's path is its subject.
         view.add_path("path", path, radius=0.015 * float(np.ptp(scene.bounds, axis=0).max()))
         if animate:
-            view.animate_robot("start", path)
+            view.animate_robot("start", path, rotations=rotations)
     # Look across the start -> goal direction (from above) so a passage is seen edge-on.
     travel = np.asarray(scene.goal, float) - np.asarray(scene.start, float)
     side = np.cross(travel, [0.0, 0.0, 1.0])

@@ -196,6 +196,23 @@ def _mesh(vertices, faces, what: str) -> tuple[np.ndarray, np.ndarray]:
     return v, _faces(faces, len(v), f"{what} faces")
 
 
+def _rotation(R) -> np.ndarray:
+    """A (3, 3) rotation matrix, or :class:`InvalidArgumentError`."""
+    R = np.asarray(R, dtype=np.float64)
+    if R.shape != (3, 3) or not np.isfinite(R).all() or not np.allclose(R @ R.T, np.eye(3),
+                                                                         atol=1e-6):
+        raise InvalidArgumentError(f"rotation must be a (3, 3) rotation matrix, got {R.tolist()}")
+    return R
+
+
+def _pose_matrix(t: np.ndarray, R: np.ndarray) -> np.ndarray:
+    """The 4x4 transform turning by ``R`` and then moving by ``t``."""
+    m = np.eye(4)
+    m[:3, :3] = R
+    m[:3, 3] = t
+    return m
+
+
 def _opacity(x) -> float:
     x = float(x)
     if not 0.0 < x <= 1.0:
@@ -398,7 +415,7 @@ class SceneView:
         self._grow(v)
 
     def add_robot(self, name: str, vertices, faces=None, translation=(0.0, 0.0, 0.0), *,
-                  reference=(0.0, 0.0, 0.0)) -> None:
+                  reference=(0.0, 0.0, 0.0), rotation=None) -> None:
         """Draw a robot, opaque orange (``ROBOT_COLOR``), at ``/robot/<name>``.
 
         The node's transform places the robot: its reference point goes to ``translation``.
@@ -417,17 +434,18 @@ class SceneView:
         reference : (3,) float64, default (0, 0, 0)
             The reference point in the robot's own frame: the same ``c`` as in
             ``robot.reflected(c)`` for the C-obstacle.
+        rotation : (3, 3) float64, optional
+            The robot turned about its reference point (a pose's rotation); default none.
         """
-        import meshcat.transformations as tf
-
         v, f = _mesh(vertices, faces, "robot")
         t = _vector(translation, "translation")
         v = v - _vector(reference, "reference")
         path = f"robot/{_name(name)}"
         self._mesh_node(path, v, f, ROBOT_COLOR)
-        self.vis[path].set_transform(tf.translation_matrix(t))
+        R = np.eye(3) if rotation is None else _rotation(rotation)
+        self.vis[path].set_transform(_pose_matrix(t, R))
         self._robots[name] = v
-        self._grow(v + t)
+        self._grow(v @ R.T + t)
 
     def add_cobstacle(self, name: str, vertices, faces=None, opacity: float = 0.35, *,
                       edges: bool = True) -> None:
@@ -551,7 +569,7 @@ class SceneView:
         self._mesh_node(f"{base}/waypoints", v, f, PATH_COLOR)
 
     def animate_robot(self, name: str, path, *, fps: int = 30, seconds_per_segment: float = 1.0,
-                      play: bool = True, repetitions: int = 1) -> None:
+                      play: bool = True, repetitions: int = 1, rotations=None) -> None:
         """Move robot ``name`` (from :meth:`add_robot`) along ``path`` with a meshcat Animation.
 
         Keyframes sit at the waypoints; three.js interpolates linearly between them, so each
@@ -571,8 +589,11 @@ class SceneView:
             Start playing when the page opens.
         repetitions : int, default 1
             Times to play (the robot stays at the last waypoint afterwards).
+        rotations : (k, 3, 3) float64, optional
+            The robot's rotation about its reference point at each waypoint (a path that turns
+            the robot); the viewer turns it on the shortest arc between keyframes, as the
+            motion between poses does. Default: no turning.
         """
-        import meshcat.transformations as tf
         from meshcat.animation import Animation
 
         if name not in self._robots:
@@ -587,14 +608,18 @@ class SceneView:
             raise InvalidArgumentError(
                 f"seconds_per_segment must be positive and finite, got {seconds_per_segment}"
             )
+        Rs = (np.broadcast_to(np.eye(3), (len(p), 3, 3)) if rotations is None
+              else np.stack([_rotation(R) for R in np.asarray(rotations, dtype=np.float64)]))
+        if len(Rs) != len(p):
+            raise InvalidArgumentError(f"{len(Rs)} rotations for {len(p)} waypoints")
         anim = Animation(default_framerate=int(fps))
         node = f"robot/{name}"
-        for i, q in enumerate(p):
+        for i, (q, R) in enumerate(zip(p, Rs)):
             with anim.at_frame(self.vis, i * seconds_per_segment * fps) as frame:
-                frame[node].set_transform(tf.translation_matrix(q))
+                frame[node].set_transform(_pose_matrix(q, R))
         self.vis.set_animation(anim, play=bool(play), repetitions=int(repetitions))
         robot = self._robots[name]
-        self._grow((p[:, None, :] + robot[None, :, :]).reshape(-1, 3))
+        self._grow((np.einsum("kij,nj->kni", Rs, robot) + p[:, None, :]).reshape(-1, 3))
 
     # ---- camera and output ------------------------------------------------------
 
