@@ -472,6 +472,20 @@ cdef class ClearanceKernel:
         D = (sqrt((q1[0] - q0[0]) ** 2 + (q1[1] - q0[1]) ** 2 + (q1[2] - q0[2]) ** 2)
              + rho * theta)
         D = D * (1.0 + 1e-12) + 1e-300  # rounded up
+        # A motion that fails mostly meets an obstacle well inside it: look there first, at the
+        # midpoints of the first three halvings (breadth first), with collision-only queries
+        # (capped at the error bound: nearly every pair is pruned). Nothing is certified by
+        # them; they only end a blocked motion early.
+        for k in range(1, 8):
+            d = 0  # k's level: 1 | 2, 3 | 4 .. 7
+            while k >> (d + 1):
+                d += 1
+            # k = 1..7 -> s = 1/2, 1/4, 3/4, 1/8, 3/8, 5/8, 7/8
+            m = (2.0 * (k - (1 << d)) + 1.0) / (2 << d)
+            if D * m * (1.0 - m) <= delta:
+                continue
+            if not (self._between(q0, q1, p0, p1, m, theta, 2.0 * delta, 1.0) > delta):
+                return False, 0, self.queries - before
         # Each end needs half the sweep for the whole motion to pass at once: the capped
         # queries stop there (a larger cap costs more and helps no more). The far end first:
         # a motion that fails usually fails there.

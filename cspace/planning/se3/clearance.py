@@ -18,6 +18,8 @@ is the same at both ends (one end free, the other is).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from ...geometry.clearance import MeshClearance
@@ -30,7 +32,9 @@ __all__ = ["PoseClearance", "quaternion_matrix"]
 
 def quaternion_matrix(Q) -> np.ndarray:
     """``(3, 3)`` rotation of a unit quaternion ``(x, y, z, w)`` (normalised first)."""
-    x, y, z, w = np.asarray(Q, dtype=np.float64) / np.linalg.norm(Q)
+    x, y, z, w = (float(v) for v in Q)
+    n = math.sqrt(x * x + y * y + z * z + w * w)
+    x, y, z, w = x / n, y / n, z / n, w / n
     return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
                      [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
@@ -76,6 +80,7 @@ class PoseClearance:
         self.scene = scene
         b = np.asarray(scene.bounds if bounds is None else bounds, dtype=np.float64)
         self.bounds = b.reshape(2, 3)
+        self._lo, self._hi = self.bounds[0].tolist(), self.bounds[1].tolist()
         c = np.asarray(scene.reference_point, dtype=np.float64)
         self.reference_point = c
         OV, OF, off = [], [], 0
@@ -100,6 +105,8 @@ class PoseClearance:
                                      W[closed].reshape(-1, 3).min(axis=0),
                                      W[closed].reshape(-1, 3).max(axis=0)))
         self._obstacle_points = np.concatenate(points)
+        self._obstacles_lo = self._obstacle_points.min(axis=0)
+        self._obstacles_hi = self._obstacle_points.max(axis=0)
         self._robot_points, (W, closed) = _parts(RV, scene.robot.faces)
         self._robot_solid = MeshCO(W, closed, name=scene.robot.name) if len(closed) else None
 
@@ -116,8 +123,9 @@ class PoseClearance:
         return self.clearance.rho
 
     def in_bounds(self, q) -> bool:
-        q = np.asarray(q, dtype=np.float64)
-        return bool(((self.bounds[0] <= q) & (q <= self.bounds[1])).all())
+        lo, hi = self._lo, self._hi
+        x, y, z = (float(v) for v in q)
+        return lo[0] <= x <= hi[0] and lo[1] <= y <= hi[1] and lo[2] <= z <= hi[2]
 
     def contained(self, q, R) -> str | None:
         """The name of a closed obstacle body holding a robot part at ``(q, R)``, or of the
@@ -125,12 +133,17 @@ class PoseClearance:
         the clearance is positive (a part is then wholly inside or wholly outside)."""
         q = np.asarray(q, dtype=np.float64)
         R = np.asarray(R, dtype=np.float64).reshape(3, 3)
-        P = self._robot_points @ R.T + q
+        P = None
         for name, solid, lo, hi in self._solids:
+            # the robot's ball about q misses the body's box: nothing of it is inside
+            if ((q + self.rho < lo) | (q - self.rho > hi)).any():
+                continue
+            P = self._robot_points @ R.T + q if P is None else P
             near = ((lo <= P) & (P <= hi)).all(axis=1)
             if near.any() and solid.contains(np.ascontiguousarray(P[near])).any():
                 return name
-        if self._robot_solid is not None:
+        if self._robot_solid is not None and not (
+                (q + self.rho < self._obstacles_lo) | (q - self.rho > self._obstacles_hi)).any():
             near = np.linalg.norm(self._obstacle_points - q, axis=1) <= self.rho
             if near.any():
                 local = (self._obstacle_points[near] - q) @ R  # R^T (p - q)
@@ -146,12 +159,15 @@ class PoseClearance:
             return False
         return self.contained(q, R) is None
 
-    def motion_free(self, q0, Q0, q1, Q1, *, max_depth: int = 40) -> tuple[bool, int, int]:
+    def motion_free(self, q0, Q0, q1, Q1, *, max_depth: int = 40,
+                    from_free: bool = False) -> tuple[bool, int, int]:
         """:meth:`cspace.geometry.clearance.MeshClearance.motion_free` (both ends in the bounds,
-        a box: the straight segment stays in them), and no containment at the end ``q1``."""
+        a box: the straight segment stays in them), and no containment at the end ``q1``.
+        ``from_free``: the caller knows the start pose free (a planner's tree state), so the
+        end, reached without touching anything, is free too: containment is not asked."""
         if not (self.in_bounds(q0) and self.in_bounds(q1)):
             return False, 0, 0
         free, depth, n = self.clearance.motion_free(q0, Q0, q1, Q1, max_depth=max_depth)
-        if free and self.contained(q1, quaternion_matrix(Q1)) is not None:
+        if free and not from_free and self.contained(q1, quaternion_matrix(Q1)) is not None:
             return False, depth, n
         return free, depth, n

@@ -59,7 +59,7 @@ def _classes() -> dict:
 
     class CertifiedMotionValidator(ob.MotionValidator):
         """``checkMotion(s1, s2)``: :meth:`PoseClearance.motion_free` of OMPL's interpolation
-        from ``s1`` to ``s2``.
+        from ``s1`` (a valid state, as OMPL's planners and simplifier ask) to ``s2``.
 
         Attributes
         ----------
@@ -76,7 +76,10 @@ def _classes() -> dict:
             self.calls += 1
             q0, Q0 = _pose(s1)
             q1, Q1 = _pose(s2)
-            free, depth, n = self.poses.motion_free(q0, Q0, q1, Q1)
+            # OMPL's planners and shortcutting move from states already valid (in a tree, on
+            # a path): the end is then free when the motion is. The returned path is
+            # re-certified from its valid start all the same (certify_path).
+            free, depth, n = self.poses.motion_free(q0, Q0, q1, Q1, from_free=True)
             self.queries += n
             self.max_depth = max(self.max_depth, depth)
             return free
