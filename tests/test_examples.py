@@ -7,6 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 pytest.importorskip("ompl")
@@ -77,3 +78,11 @@ def test_plan_with_turns(tmp_path):
     assert "without turning: solved False" in out
     assert "with 8 orientations: solved True" in out
     assert "FCL re-check along translations and turns: 0 colliding of" in out
+
+
+def test_plan_in_se3(tmp_path):
+    out = run(tmp_path, "plan_in_se3.py")
+    assert "tried decide: no path" in out and "solved True" in out
+    assert "FCL re-check along the motions: 0 colliding of" in out
+    rows = np.loadtxt(tmp_path / "out" / "plate.path")
+    assert rows.shape[1] == 7 and (tmp_path / "out" / "plate.html").stat().st_size > 10000
