@@ -91,7 +91,7 @@ class MeshClearance:
     """
 
     def __init__(self, obstacle_vertices, obstacle_faces, robot_vertices, robot_faces, *,
-                 reach: float = 0.0, leaf: int = 4):
+                 reach: float = 0.0, leaf: int = 8):
         OV = np.ascontiguousarray(obstacle_vertices, dtype=np.float64).reshape(-1, 3)
         OF = np.ascontiguousarray(obstacle_faces, dtype=np.int64).reshape(-1, 3)
         RV = np.ascontiguousarray(robot_vertices, dtype=np.float64).reshape(-1, 3)
