@@ -410,7 +410,12 @@ def _choose_frame(obstacles, bounds: np.ndarray) -> np.ndarray | None:
     b = np.asarray(bounds, dtype=np.float64)
     if not (b[1] > b[0]).all():
         return None
-    N = np.vstack([np.zeros((0, 3))] + [_facet_normals(co) for co in obstacles])
+    return frame_of_normals(np.vstack([np.zeros((0, 3))] + [_facet_normals(co) for co in obstacles]))
+
+
+def frame_of_normals(N: np.ndarray) -> np.ndarray | None:
+    """:func:`_choose_frame` on unit normals ``N (k, 3)``: a frame in which more of them lie
+    along an axis than in the scene's own, or None."""
     if len(N) < 3:
         return None
     N = N[:: -(-len(N) // _FRAME_NORMALS)]  # many bodies: an even sample of their normals

@@ -4,8 +4,8 @@ A sampling planner in SE(3) rarely draws a pose inside a passage the robot fits 
 at one orientation and only by translating (a plate through a slot, on edge). At a fixed
 orientation, though, the translational C-space is exact, and :func:`cspace.planning.decide.decide`
 finds a path through such a passage or proves there is none. :func:`slice_bridge` tries the
-orientations where walls usually want the robot (its axes along the world's or along its own
-start axes: the cube's 24 rotations each way, and the goal's), nearest the start first: at each
+orientations where walls usually want the robot (its axes along the walls' frame, its own start
+axes or the world's: the cube's 24 rotations each way, and the goal's), nearest the start first: at each
 where start and goal positions are free, it decides the translation from start to goal, and
 joins a path found to the start and goal poses by turns (a turn in place when it is certified,
 else :func:`cspace.planning.se3.plan.plan_se3` between the two poses).
@@ -48,18 +48,36 @@ def _joined(poses, scene, a, b, *, time: float, seed, bounds) -> tuple | None:
     return r.path, rel
 
 
-def _candidates(scene, goal: np.ndarray) -> Orientations:
-    """The identity, the goal and the 24 rotations that put the robot's own axes along the
-    world's (``C S^T`` for the cube's rotations ``C``, ``S`` the start orientation) or along
-    its own start axes (``S C S^T``, the same turned with the robot: a scene whose walls are
-    square to the robot's start, in any frame), relative to the start, duplicates dropped."""
+def _walls_frame(scene) -> np.ndarray:
+    """The frame the obstacles' faces are square to (most of their normals along its axes:
+    :func:`cspace.planning.cells.frame_of_normals`), the world's when none beats it."""
+    from ..cells import frame_of_normals
+
+    N = []
+    for body in scene.obstacles:
+        T = np.asarray(body.vertices, dtype=np.float64)[np.asarray(body.faces)]
+        n = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+        length = np.linalg.norm(n, axis=1)
+        N.append(n[length > 0] / length[length > 0, None])
+    W = frame_of_normals(np.concatenate(N)) if N else None
+    return np.eye(3) if W is None else W
+
+
+def _candidates(scene, goal: np.ndarray) -> tuple[Orientations, np.ndarray]:
+    """The identity, the goal and the rotations that put the robot's own axes along the
+    walls' frame ``W`` (``W C S^T`` for the cube's 24 rotations ``C``, ``S`` the start
+    orientation), along its own start axes (``S C S^T``: walls square to the robot's start)
+    or along the world's (``C S^T``), relative to the start, duplicates dropped; and each
+    one's rank for the order of trial (0 the identity and the goal, then by family)."""
     from scipy.spatial.transform import Rotation
 
     from ..orientations import _cube_rotations
 
     S = np.asarray(scene.start_rotation, dtype=np.float64)
+    W = _walls_frame(scene)
     C = _cube_rotations()
-    cand = np.concatenate([np.eye(3)[None], goal[None], C @ S.T, S @ C @ S.T])
+    cand = np.concatenate([np.eye(3)[None], goal[None], W @ C @ S.T, S @ C @ S.T, C @ S.T])
+    family = np.concatenate([[0, 0], np.full(len(C), 1), np.full(len(C), 2), np.full(len(C), 3)])
     Q = Rotation.from_matrix(cand).as_quat()
     keep: list[int] = []
     for i, q in enumerate(Q):
@@ -69,7 +87,7 @@ def _candidates(scene, goal: np.ndarray) -> Orientations:
     R[0] = np.eye(3)
     links = tuple(tuple(j for j in range(len(R)) if j != i) for i in range(len(R)))
     g = int(np.argmax(np.abs(Q[keep] @ Rotation.from_matrix(goal).as_quat())))
-    return Orientations(R, links, g)
+    return Orientations(R, links, g), family[keep]
 
 
 def slice_bridge(scene, *, time: float, seed=None, bounds=None, cache=None, memory=None,
@@ -112,12 +130,13 @@ def slice_bridge(scene, *, time: float, seed=None, bounds=None, cache=None, memo
     Qg = relative_goal(scene)
     from scipy.spatial.transform import Rotation
 
-    orients = _candidates(scene, Rotation.from_quat(Qg).as_matrix())
+    orients, family = _candidates(scene, Rotation.from_quat(Qg).as_matrix())
     quats = Rotation.from_matrix(orients.rotations).as_quat()
-    # Nearest the start and goal orientations first: the least turning.
-    cost = [min(2 * np.arccos(min(1.0, abs(float(q @ ref)))) for ref in ((0, 0, 0, 1.0), Qg))
+    # Nearest the start and goal orientations first (the least turning), the walls' frame
+    # before the robot's and the world's at equal turning.
+    cost = [round(min(2 * np.arccos(min(1.0, abs(float(q @ ref)))) for ref in ((0, 0, 0, 1.0), Qg)), 9)
             for q in quats]
-    order = [k for k in np.argsort(cost, kind="stable").tolist()
+    order = [k for k in np.lexsort((family, cost)).tolist()
              if not any(abs(float(quats[k] @ np.asarray(s))) > 1 - 1e-12 for s in skip)
              and k not in (done if done is not None else ())]
     done = done if done is not None else set()

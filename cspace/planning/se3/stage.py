@@ -32,7 +32,7 @@ __all__ = ["plan_turning_se3", "BRIDGE_FIRST", "BRIDGE_FIRST_CAP", "SE3_FIRST", 
 BRIDGE_FIRST = 0.1
 BRIDGE_FIRST_CAP = 3.0
 #: The first SE(3) sampling attempt's share of what is left.
-SE3_FIRST = 0.6
+SE3_FIRST = 0.4
 #: The bridge's share of what the first SE(3) attempt leaves.
 BRIDGE = 0.6
 
