@@ -517,14 +517,17 @@ def piano(sliver_edges: int = 350) -> Mesh:
 
 
 def apartment(folder: Path, *, rooms=(4, 3), wall_cells: int = 1, sheet_cells=(60, 40),
-              furniture: int = 12, seed: int = 5, sliver_edges: int = 350) -> Problem:
+              furniture: int = 12, seed: int = 5, sliver_edges: int = 350,
+              door: float = 60.0) -> Problem:
     """An apartment-class world of about 40k triangles in about 180 bodies round
     ``CENTRE``: a floor and a ceiling (open double-sided tessellated sheets), outer walls
     and inner wall segments (open double-sided sheets, each its own node) with a door 60
     wide and 60 tall in every inner segment, and ``furniture`` bodies a room (closed
     tessellated boxes, closed tori, open panels; turned node matrices). The robot is
     :func:`piano`; start and goal are in opposite corner rooms, so a path goes through
-    doors. The footprint is 600 x 400 (x, z), 80 tall (y, Assimp's up)."""
+    doors. The footprint is 600 x 400 (x, z), 80 tall (y, Assimp's up). ``door``: the doors'
+    width (60: the piano, 48 x 30, passes every door as it starts; 40: the doors in walls
+    along x only turned 90 degrees about y, so a path must turn it)."""
     from zoo import torus
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -554,7 +557,7 @@ def apartment(folder: Path, *, rooms=(4, 3), wall_cells: int = 1, sheet_cells=(6
     def segment(name, corner, u, length):
         n_u = max(4, int(round(length / 10.0)) * c)
         mid = n_u // 2
-        w = max(1, int(round(60.0 / length * n_u / 2)))   # a door 60 wide ...
+        w = max(1, int(round(door / length * n_u / 2)))   # a door ``door`` wide ...
         h = int(round(60.0 / size[1] * 8 * c))            # ... and 60 tall
         holes = [(i, j) for i in range(mid - w, mid + w) for j in range(h)]
         world.append((name, double_sided(grid_sheet(corner, u, size[1] * ey, n_u, 8 * c,

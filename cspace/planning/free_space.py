@@ -78,22 +78,23 @@ _BOX = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1
                 dtype=np.int64)
 
 
-def _pieces(co, name: str, b: np.ndarray) -> tuple[list, list, list]:
+def _pieces(co, name: str, b: np.ndarray, check=None) -> tuple[list, list, list]:
     """What the stored C-obstacle ``co`` is made of, near the closed box ``b``: its convex
     pieces (ConvexPolytope, or ``(k, 3)`` float64 points: their hull), its closed meshes
     (C-obstacles of kind ``'mesh'``, whose vertices :func:`free_space` needs on its grid) and
-    its triangle pairs (:func:`_pair_plan`: counted before any piece is made)."""
+    its triangle pairs (:func:`_pair_plan`: counted before any piece is made). ``check()``
+    is called between chunks of pairs (the deadline)."""
     if co.kind == "convex":
         return [co.polytope], [], []
     if co.kind == "union":
-        got = [_pieces(part, name, b) for part in co.parts]
+        got = [_pieces(part, name, b, check) for part in co.parts]
         return tuple([x for g in got for x in g[k]] for k in range(3))
     if co.kind == "surface":
         return list(co._impl.pieces), [], []
     if co.kind == "mesh":
         return [], [co], []
     if co.kind == "pairs":
-        return [], [], [_pair_plan(co, b)]
+        return [], [], [_pair_plan(co, b, check)]
     raise UnsupportedError(
         f"free_space: C-obstacle {name} is of kind {co.kind!r}; the exact union takes "
         "C-obstacles made of convex pieces ('convex', 'union', 'surface', 'pairs') and "
@@ -116,7 +117,7 @@ class _PairPlan:
     extra: float
 
 
-def _pair_plan(co, b: np.ndarray) -> _PairPlan:
+def _pair_plan(co, b: np.ndarray, check=None) -> _PairPlan:
     """The pieces of a triangle-pair C-obstacle whose boxes meet ``b`` (flat ones left out
     when an operand is closed, as the C-obstacle leaves them), counted before any is made.
     With a closed convex robot part, one piece per convex patch of (nearly) coplanar
@@ -153,6 +154,8 @@ def _pair_plan(co, b: np.ndarray) -> _PairPlan:
     I, J = [], []
     rows = max(1, 200_000 // max(len(T), 1))  # pairs tested at once
     for i0 in range(0, len(S), rows):
+        if check is not None:
+            check("counting the pieces", f" ({i0} of {len(S)} obstacle triangles)")
         lo = s_lo[i0:i0 + rows, None] + t_lo[None] - g
         hi = s_hi[i0:i0 + rows, None] + t_hi[None] + g
         ii, jj = np.nonzero(((lo <= bg[1]) & (hi >= bg[0])).all(axis=2))
@@ -589,11 +592,12 @@ def free_space(cspace, bounds=None, *, max_pieces: int = MAX_PIECES,
     found, count, err = [], 0, 0.0
     operands = _operands(cspace, inner, G)
     for i, co in enumerate(operands):  # what each C-obstacle is made of, counted
+        check("counting the pieces", f" (C-obstacle {i} of {len(operands)})")
         B = np.asarray(co.bounds, dtype=np.float64)
         if (B[1] < inner[0]).any() or (B[0] > inner[1]).any():
             continue  # does not meet the closed inner box: nothing inside it changes
         name = f"#{i}" + (f" ({co.name})" if getattr(co, "name", None) else "")
-        got, closed, plans = _pieces(co, name, inner)
+        got, closed, plans = _pieces(co, name, inner, check)
         found.append((name, got, plans))
         count += len(got) + sum(len(p.i) for p in plans)
         if count > max_pieces:

@@ -143,17 +143,24 @@ def slice_bridge(scene, *, time: float, seed=None, bounds=None, cache=None, memo
     tcs = TurningCSpace(scene, orients, cache=cache, memory=memory)
     q0, q1 = np.asarray(scene.start, dtype=np.float64), np.asarray(scene.goal, dtype=np.float64)
     I = np.array([0.0, 0.0, 0.0, 1.0])
+    build = 0.0  # the longest a slice's C-space took to build: none is started without it
     for n, k in enumerate(order):
         left = time - (_time.perf_counter() - t0)
-        if left <= 0:
+        if left <= build:
             break
         Qk, Rk = quats[k], orients.rotations[k]
         if not (poses.pose_free(q0, Rk) and poses.pose_free(q1, Rk)):
             done.add(k)
             continue  # this orientation does not fit at the start or the goal
+        tb = _time.perf_counter()
+        cs = tcs.slice(k)
+        build = max(build, _time.perf_counter() - tb)
+        left = time - (_time.perf_counter() - t0)
+        if left <= 0:
+            break
         # Each orientation at least a quarter of what is left: a passage found late is not
         # lost to the first orientations' long undecided searches.
-        d = decide(tcs.slice(k), q0, q1, bounds=b, time=left / min(4, len(order) - n))
+        d = decide(cs, q0, q1, bounds=b, time=left / min(4, len(order) - n))
         if d.answer != "unknown":
             done.add(k)
         if d.answer != "path":
