@@ -76,14 +76,16 @@ def _fcl_check(scene, r) -> tuple[int, int]:
 MOVES = [GRID_MOVES[0], GRID_MOVES[1], GRID_MOVES[4]]
 
 
-@pytest.mark.parametrize("move", [pytest.param(m, marks=pytest.mark.slow) if m is not GRID_MOVES[4]
+@pytest.mark.parametrize("move", [pytest.param(m, marks=pytest.mark.slow) if m is not GRID_MOVES[1]
                                   else m for m in MOVES], ids=[m.label for m in MOVES])
 def test_the_plate_passes_the_tunnel_on_edge(tmp_path, move):
     """The plate fits the tunnel only turned 90 degrees about its own x: a default auto plan
     turns it, and every pose along every motion is free by FCL; never 'no path'. As given,
     shifted to (250, 150, -300), and turned, scaled by 3.7 and shifted. The budget is far
-    above what it takes (it ends at its path): load cannot change the answer. (The plate as
-    given is also ``make test``'s through the command line, below.)"""
+    above what it takes (it ends at its path): load cannot change the answer. ``make test``
+    runs the shifted one (and the plate as given through the command line, below); the
+    turned one takes 20-40 s (the bridge finds it after the first SE(3) attempt) and runs
+    in ``make test-slow``."""
     scene = _plate(tmp_path, move)
     r = plan(scene, planner="auto", time=60.0, seed=1)
     assert r.solved and r.certified is not None, r.tried
