@@ -38,7 +38,7 @@ import numpy as np
 
 from ._kernels import load
 from .boxes import BoxTree
-from .distance import _segment_segment_d2
+from .distance import _segment_segment_d2, shorter_edge_normals
 
 __all__ = ["MeshClearance", "ERROR_BOUND", "SLIVER"]
 
@@ -108,7 +108,8 @@ class MeshClearance:
         r_tree = BoxTree(RT.min(axis=1), RT.max(axis=1), leaf)
         self.n_obstacle_triangles, self.n_robot_triangles = len(OF), len(RF)
         self._k = _kernel.ClearanceKernel(
-            OT, sliver_radii(OT), o_tree.order, np.ascontiguousarray(o_tree.lo[:, :3]),
+            OT, sliver_radii(OT), _unit(shorter_edge_normals(OT.reshape(-1, 3, 3))),
+            _unit(shorter_edge_normals(RT)), o_tree.order, np.ascontiguousarray(o_tree.lo[:, :3]),
             np.ascontiguousarray(o_tree.hi[:, :3]), o_tree.first, o_tree.count,
             RV, RF, sliver_radii(RT), r_tree.order, r_tree.first, r_tree.count)
         self._arrays = (OT, RV, RF)
@@ -153,12 +154,16 @@ class MeshClearance:
         return bool(free), int(depth), int(n)
 
 
+def _unit(n: np.ndarray) -> np.ndarray:
+    """Rows normalised; zero rows (degenerate triangles: slivers, whose plane is never used)
+    stay zero."""
+    length = np.linalg.norm(n, axis=1)
+    return np.ascontiguousarray(n / np.where(length > 0, length, 1.0)[:, None])
+
+
 def _one_way_reference(A: np.ndarray, B: np.ndarray, best2: np.ndarray) -> np.ndarray:
     """``A``'s corners against ``B``'s interior, its edges crossing ``B`` (-1), row-wise."""
-    E = np.stack([B[:, 1] - B[:, 0], B[:, 2] - B[:, 1], B[:, 0] - B[:, 2]], axis=1)
-    longest = np.einsum("kij,kij->ki", E, E).argmax(axis=1)
-    r = np.arange(len(B))
-    n = np.cross(E[r, (longest + 1) % 3], E[r, (longest + 2) % 3])
+    n = shorter_edge_normals(B)
     nn = np.einsum("kj,kj->k", n, n)
     ok = nn > 0
 

@@ -19,14 +19,21 @@ def _point_segment_d2(p, a, b):
     return np.einsum("kj,kj->k", d, d)
 
 
+def shorter_edge_normals(tri) -> np.ndarray:
+    """``(k, 3)`` normals of ``(k, 3, 3)`` triangles, the cross product of their two shorter
+    edges (not normalised): on a sliver the better conditioned one (see
+    cspace.mesh.query_reference._tri_dist2). Zero for a degenerate triangle."""
+    tri = np.asarray(tri, dtype=np.float64)
+    E = np.stack([tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 1], tri[:, 0] - tri[:, 2]], axis=1)
+    longest = np.einsum("kij,kij->ki", E, E).argmax(axis=1)
+    r = np.arange(len(tri))
+    return np.cross(E[r, (longest + 1) % 3], E[r, (longest + 2) % 3])
+
+
 def _point_triangle_d2(p, tri):
     """Squared distance from points to triangles (k,), float."""
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    # The normal from the two shorter edges (see cspace.mesh.query_reference._tri_dist2: slivers).
-    E = np.stack([b - a, c - b, a - c], axis=1)
-    longest = np.einsum("kij,kij->ki", E, E).argmax(axis=1)
-    r = np.arange(len(tri))
-    n = np.cross(E[r, (longest + 1) % 3], E[r, (longest + 2) % 3])
+    n = shorter_edge_normals(tri)
     nn = np.einsum("kj,kj->k", n, n)
     with np.errstate(divide="ignore", invalid="ignore"):
         h = np.einsum("kj,kj->k", p - a, n) / nn

@@ -174,17 +174,6 @@ cdef double _tri_tri(const double* A, const double* B, double ra, double rb) noe
     return d if d > 0 else 0.0
 
 
-def _unit_normals(T):
-    """Unit normals of ``(k, 3, 3)`` triangles from their two shorter edges (as ``_normal``);
-    zero for a degenerate one (a sliver then: its plane is never used)."""
-    E = np.stack([T[:, 1] - T[:, 0], T[:, 2] - T[:, 1], T[:, 0] - T[:, 2]], axis=1)
-    longest = np.einsum("kij,kij->ki", E, E).argmax(axis=1)
-    r = np.arange(len(T))
-    n = np.cross(E[r, (longest + 1) % 3], E[r, (longest + 2) % 3])
-    length = np.linalg.norm(n, axis=1)
-    return np.ascontiguousarray(np.where(length[:, None] > 0, n / np.where(length > 0, length, 1.0)[:, None], 0.0))
-
-
 def pair_distances(const double[:, ::1] A, const double[:, ::1] B, const double[::1] ra,
                    const double[::1] rb):
     """Row-wise :func:`_tri_tri` of ``(k, 9)`` triangles (tests against the reference)."""
@@ -201,6 +190,8 @@ cdef class ClearanceKernel:
 
     Parameters (arrays as :class:`cspace.geometry.clearance.MeshClearance` prepares them):
     ``OT (m, 9)`` obstacle triangles, ``o_r (m,)`` their sliver inradii (-1: not a sliver),
+    ``o_n (m, 3)`` and ``r_n (k, 3)`` the obstacle and robot triangles' unit normals from their
+    shorter edges (robot frame; only non-slivers' are used),
     the obstacle tree (``order, lo, hi, first, count``); ``RV (v, 3)`` robot vertices minus
     the reference point, ``RF (k, 3)``, ``r_r (k,)`` and the robot tree's ``order, first,
     count`` (its boxes are refitted to the moved vertices at each query).
@@ -234,19 +225,18 @@ cdef class ClearanceKernel:
     cdef object _keep
     cdef object _boxes
 
-    def __init__(self, OT, o_r, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
+    def __init__(self, OT, o_r, o_n, r_n, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
                  r_first, r_count):
-        self._keep = (OT, o_r, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
+        self._keep = (OT, o_r, o_n, r_n, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
                       r_first, r_count)
         self.OT, self.o_r, self.o_order, self.o_lo, self.o_hi = OT, o_r, o_order, o_lo, o_hi
         self.o_first, self.o_count = o_first, o_count
         self._boxes = (np.ascontiguousarray(np.asarray(OT).reshape(-1, 3, 3).min(axis=1)),
                        np.ascontiguousarray(np.asarray(OT).reshape(-1, 3, 3).max(axis=1)))
         self.ob_lo, self.ob_hi = self._boxes
-        on = _unit_normals(np.asarray(OT).reshape(-1, 3, 3))
-        self.on, self.od = on, np.einsum("kj,kj->k", on, np.asarray(OT)[:, :3])
-        self.rn = _unit_normals(np.asarray(RV)[np.asarray(RF)])
-        self._boxes = self._boxes + (self.on, self.od, self.rn)
+        od = np.einsum("kj,kj->k", np.asarray(o_n), np.asarray(OT)[:, :3])
+        self.on, self.od, self.rn = o_n, od, r_n
+        self._boxes = self._boxes + (od,)
         self.RV, self.RF, self.r_r, self.r_order = RV, RF, r_r, r_order
         self.r_first, self.r_count = r_first, r_count
         self.wv = np.empty((RV.shape[0], 3))
