@@ -229,3 +229,16 @@ def test_the_turning_stages_share_the_budget_and_never_say_no_path(tmp_path):
         assert used + t["time"] <= 6.0 + 1e-6, r["tried"]
         used += t["seconds"]
     assert [t["planner"] for t in r["tried"] if t.get("space")][:2] == ["bridge", "RRTConnect"]
+
+
+def test_a_turned_goal_with_a_tiny_budget_answers_unsolved():
+    """A goal turned and a budget used up by the build: no crash, an unsolved SE(3) result
+    (an attempt of a millisecond), never a translation answer or 'no path'."""
+    scene = cspace.load_scene(SCENES / "piano.toml")
+    G = Rotation.from_euler("z", 90, degrees=True).as_matrix()
+    scene = dataclasses.replace(scene, goal_rotation=G @ scene.start_rotation)
+    for budget in (1e-6, 1e-3):
+        r = plan(scene, planner="auto", time=budget, seed=1)
+        assert r.certified is not None and r.tried[-1]["space"] == "SE3"
+        assert not r.solved or r.certified["motions"] == len(r.path) - 1
+        assert r.decision is None

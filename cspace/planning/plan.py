@@ -376,7 +376,9 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
             return replace(_decided(cs, d, bounds), tried=tried, time=_time.perf_counter() - t0,
                            decision=proof, status="No path at any orientation (proved)")
     left = time - (_time.perf_counter() - t0)
-    if not (r is not None and r.solved) and turns and scene is not None and left > 0:
+    # The turning stage runs with what is left, or (nothing left and nothing tried: a goal
+    # turned, a tiny budget) for a millisecond, so there is always a result.
+    if not (r is not None and r.solved) and turns and scene is not None and (left > 0 or r is None):
         from .se3.stage import plan_turning_se3
 
         decided = d is not None and d.answer != "unknown"

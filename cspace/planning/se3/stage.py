@@ -39,9 +39,9 @@ BRIDGE = 0.6
 
 def plan_turning_se3(scene, *, time: float, seed=None, bounds=None, cache=None, memory=None,
                      tried: list | None = None, planner_range=None, skip=()
-                     ) -> PlanResult | None:
-    """The certified SE(3) path of the first attempt that solves (module docstring), else the
-    last SE(3) attempt's unsolved result. ``skip``: relative orientations whose translations
+                     ) -> PlanResult:
+    """The certified SE(3) path of the first attempt that solves (module docstring), else an
+    SE(3) attempt's unsolved result (one of a millisecond when the budget left none). ``skip``: relative orientations whose translations
     were already decided (not bridged again)."""
     t0 = _time.perf_counter()
     tried = tried if tried is not None else []
@@ -75,4 +75,13 @@ def plan_turning_se3(scene, *, time: float, seed=None, bounds=None, cache=None, 
             r = found if found is not None else r
         if r is not None and r.solved:
             break
+    if r is None:
+        # The budget ran out before any SE(3) attempt (a tiny --time): one that returns at
+        # once, so the caller always has a result (unsolved) that names SE(3).
+        ts = _time.perf_counter()
+        r = plan_se3(scene, time=1e-3, seed=seed, bounds=b, poses=poses,
+                     planner_range=planner_range)
+        tried.append({"planner": "RRTConnect", "sampler": "uniform", "slices": None,
+                      "space": "SE3", "time": 1e-3, "seconds": _time.perf_counter() - ts,
+                      "solved": r.solved})
     return r
