@@ -549,17 +549,17 @@ def test_convex_sum_kernel_leaves_what_it_cannot_hold_to_the_reference():
     # the sum's edges as convex._edges_of finds them; facets that do not close up: the kernel
     # declines, and the reference names the error
     from cspace.errors import ExactnessError
-    from cspace.mesh.convex import _edges_of
+    from cspace.mesh.convex import _edges_of_reference
 
     for _, P, Q in _polytopes()[::17]:
         S = cvms.convex_minkowski_sum(P, Q).polytope
         got = kernel.edges_of(S.facet_indices, S.facet_offsets, len(S.ints))
-        want = _edges_of(S.facet_indices, S.facet_offsets, len(S.ints), "S")
+        want = _edges_of_reference(S.facet_indices, S.facet_offsets, len(S.ints), "S")
         assert np.array_equal(got[0], want[0]) and np.array_equal(got[1], want[1])
         open_ = S.facet_offsets[:-1].copy()  # the last facet dropped: a hole
         assert kernel.edges_of(S.facet_indices[:open_[-1]], open_, len(S.ints)) is None
         with pytest.raises(ExactnessError):
-            _edges_of(S.facet_indices[:open_[-1]], open_, len(S.ints), "S")
+            _edges_of_reference(S.facet_indices[:open_[-1]], open_, len(S.ints), "S")
 
 
 _POLY_FIELDS = ("ints", "facet_offsets", "facet_indices", "normals", "edges", "edge_facets")
@@ -653,6 +653,70 @@ def test_polytope_of_mesh_kernel_declines_what_it_cannot_hold():
     assert kernel.polytope_of_mesh(P, F[1:]) is None
     assert kernel.polytope_of_mesh(np.vstack([P, P[:1]]), F) is None
     assert kernel.polytope_of_mesh(P, np.where(F == 7, 8, F)) is None
+
+
+def _point_sets():
+    """Integer point sets for hulls: small coordinates with many coplanar and collinear points
+    and repeats, lattice boxes with interior and face points, points on a sphere (all
+    corners), coordinates near the kernel's 2**30 range, mostly-coplanar sets with one apex."""
+    rng = np.random.default_rng(5)
+    out = []
+    for t in range(400):
+        n = int(rng.integers(4, 60))
+        kind = t % 5
+        if kind == 0:
+            P = rng.integers(-5, 6, size=(n, 3))
+        elif kind == 1:
+            P = rng.integers(-2**29, 2**29, size=(n, 3))
+        elif kind == 2:
+            P = rng.integers(0, 3, size=(n, 3)) * 7
+        elif kind == 3:
+            v = rng.normal(size=(n, 3))
+            P = np.rint(v / np.linalg.norm(v, axis=1)[:, None] * 1000)
+        else:
+            P = rng.integers(-3, 4, size=(n, 3))
+            P[:, 2] = P[:, 0] + P[:, 1]
+            P = np.vstack([P, [[0, 0, 5]]])
+        out.append(np.ascontiguousarray(P, dtype=np.int64))
+    return out
+
+
+def test_hull_of_points_is_the_reference():
+    """The compiled hull of points (the kernel's incremental hull for few points, Qhull's
+    triangles for many, each proved by ``polytope_of_mesh``) is the exact wrap's polytope,
+    identically, on every set where the wrap finds a hull; where there is none (fewer than
+    four distinct points, all collinear or coplanar) the kernel declines and ``from_ints``
+    raises the reference's named error."""
+    from cspace.errors import DegenerateError
+    from cspace.geometry._kernels import convex as kernel
+    from cspace.geometry.exact import Grid
+    from cspace.mesh.convex import ConvexPolytope, _qhull_proposal
+
+    grid = Grid.for_extent(2.0**31)
+    proposed = 0
+    for P in _point_sets():
+        want = ConvexPolytope.from_ints(P, grid=grid, method="wrap")
+        got = kernel.hull_of_points(P)
+        assert got is not None
+        assert _same_polytope(ConvexPolytope._from_kernel(got, grid=grid, name="polytope"), want)
+        assert _same_polytope(ConvexPolytope.from_ints(P, grid=grid), want)
+        q = _qhull_proposal(P)
+        if q is not None:
+            proposed += 1
+            assert all(np.array_equal(a, b) for a, b in zip(q, got))
+    assert proposed >= 380, proposed
+    # no volume, and beyond the kernel's range
+    line = np.array([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3], [5, 5, 5]], dtype=np.int64)
+    flat = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [3, 2, 0]], dtype=np.int64)
+    few = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 1, 0], [0, 0, 0]], dtype=np.int64)
+    for P, why in ((line, "collinear"), (flat, "coplanar"), (few, "3 distinct points")):
+        assert kernel.hull_of_points(P) is None
+        with pytest.raises(DegenerateError, match=why):
+            ConvexPolytope.from_ints(P, grid=grid)
+    cube = np.array([[a, b, c] for a in (0, 1) for b in (0, 1) for c in (0, 1)], dtype=np.int64)
+    assert kernel.hull_of_points(cube + 2**30) is None
+    assert _same_polytope(ConvexPolytope.from_ints(cube + 2**30, grid=grid),
+                          ConvexPolytope.from_ints(cube + 2**30, grid=grid, method="wrap"))
 
 
 # The exact wrap (pure Python) takes seconds a hull of ~1000 vertices: the default run

@@ -183,7 +183,16 @@ class ConvexPolytope:
         """Exact convex hull of grid-integer points (see :meth:`from_points`)."""
         if method not in ("auto", "qhull", "wrap"):
             raise InvalidArgumentError(f"'{method}' is not a valid method, must be one of 'auto', 'qhull', 'wrap'")
-        ints = np.unique(np.asarray(ints, dtype=np.int64).reshape(-1, 3), axis=0)
+        ints = np.ascontiguousarray(ints, dtype=np.int64).reshape(-1, 3)
+        if method == "auto":
+            # Compiled: a hull proposed (incrementally for few points, by Qhull for many)
+            # and proved exactly by the kernel over every point; None leaves it to the
+            # reference below, which decides and names the reason.
+            got = (_compiled.hull_of_points(ints) if len(ints) <= _FEW_POINTS
+                   else _qhull_proposal(ints))
+            if got is not None:
+                return cls._from_kernel(got, grid=grid, name=name)
+        ints = np.unique(ints, axis=0)
         if len(ints) == 0:
             raise EmptyMeshError(f"{name}: no points")
         tetra = _find_tetrahedron(ints, name)
@@ -214,8 +223,11 @@ class ConvexPolytope:
         """
         got = _compiled.polytope_of_mesh(np.ascontiguousarray(ints, dtype=np.int64),
                                          np.ascontiguousarray(faces, dtype=np.int64))
-        if got is None:
-            return None
+        return None if got is None else cls._from_kernel(got, grid=grid, name=name)
+
+    @classmethod
+    def _from_kernel(cls, got, *, grid: Grid, name: str) -> "ConvexPolytope":
+        """From the convex kernel's ``(ints, offsets, flat, normals, edges, edge_facets)``."""
         P, offsets, flat, normals, edges, edge_facets = got
         return cls(grid=grid, ints=P, facet_offsets=offsets, facet_indices=flat,
                    normals=normals, edges=edges, edge_facets=edge_facets, name=name)
@@ -394,7 +406,8 @@ class ConvexPolytope:
             ints, grid = -self.ints, replace(self.grid, origin=tuple(int(v) for v in c))
         # Point reflection reverses orientation: reverse each facet's vertex order.
         o, f = self.facet_offsets, self.facet_indices
-        flat = np.concatenate([f[o[i] : o[i + 1]][::-1] for i in range(len(o) - 1)])
+        facet = np.repeat(np.arange(len(o) - 1), np.diff(o))
+        flat = f[o[facet] + o[facet + 1] - 1 - np.arange(len(f))]
         edges, edge_facets = _edges_of(flat, o, len(ints), self.name)
         return ConvexPolytope(
             grid=grid,
@@ -438,7 +451,17 @@ def _as_points(points, name: str) -> np.ndarray:
 
 
 def _edges_of(flat: np.ndarray, offsets: np.ndarray, n_vertices: int, name: str):
-    """Edges of a closed polygon mesh with their left/right facets; raises if not closed."""
+    """Edges of a closed polygon mesh with their left/right facets; raises if not closed.
+
+    Compiled (:func:`cspace.geometry._kernels.convex.edges_of`, the same edges in the same
+    order); :func:`_edges_of_reference` decides and names what does not close up."""
+    got = _compiled.edges_of(np.ascontiguousarray(flat, dtype=np.int64),
+                             np.ascontiguousarray(offsets, dtype=np.int64), n_vertices)
+    return got if got is not None else _edges_of_reference(flat, offsets, n_vertices, name)
+
+
+def _edges_of_reference(flat: np.ndarray, offsets: np.ndarray, n_vertices: int, name: str):
+    """:func:`_edges_of` in numpy."""
     deg = np.diff(offsets)
     facet = np.repeat(np.arange(len(deg)), deg)
     nxt = np.arange(len(flat)) + 1
@@ -514,6 +537,34 @@ def _certify(ints, plane_pts, normals):
     if (on_plane.sum(axis=0) < 3).any():
         return None
     return normals, on_plane
+
+
+# Up to this many points the kernel's incremental hull beats Qhull's proposal (both proved
+# by the same kernel; measured beside scipy's ConvexHull in benchmarks/bench_cvms.py).
+_FEW_POINTS = 128
+
+
+def _qhull_proposal(ints: np.ndarray):
+    """Qhull's triangles of the distinct points, each turned to face along Qhull's outward
+    plane (a float guess), proved exactly by the kernel (:func:`polytope_of_mesh`: closed,
+    consistently oriented, every point on or below every plane, volumes equal); None when
+    Qhull fails or the proof does not hold (then the reference decides)."""
+    from scipy.spatial import ConvexHull
+    from scipy.spatial import QhullError
+
+    pts = np.unique(ints, axis=0)
+    if len(pts) < 4:
+        return None
+    try:
+        hull = ConvexHull(pts.astype(np.float64))
+    except QhullError:
+        return None
+    F = hull.simplices.astype(np.int64)
+    X = pts.astype(np.float64)
+    n = np.cross(X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]])
+    flip = np.einsum("ij,ij->i", n, hull.equations[:, :3]) < 0
+    F[flip] = F[flip][:, ::-1]
+    return _compiled.polytope_of_mesh(np.ascontiguousarray(pts), np.ascontiguousarray(F))
 
 
 def _qhull_planes(ints: np.ndarray, tetra: np.ndarray):

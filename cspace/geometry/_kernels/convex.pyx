@@ -20,7 +20,9 @@ caller runs the reference, which raises the same named error.
 :func:`polytope_of_mesh` proves a closed mesh exactly convex and returns its polytope as
 ``ConvexPolytope.from_ints`` makes it (its own range, ``|coordinate| < 2**30``, and its proof
 are in its docstring); the reference is ``cspace.mesh.closed.ClosedMesh`` then
-``cspace.mesh.convex.convex_within_bound``.
+``cspace.mesh.convex.convex_within_bound``. :func:`hull_of_points` proposes the hull of a point
+set incrementally and leaves the proof to :func:`polytope_of_mesh`; its reference is the exact
+wrap, ``ConvexPolytope.from_ints(..., method='wrap')``.
 """
 
 import numpy as np
@@ -854,3 +856,150 @@ def polytope_of_mesh(const int64_t[:, ::1] P, const int64_t[:, ::1] F):
     if edges is None:
         return None
     return ints_arr, offsets_arr, flat_arr, normals_arr, edges[0], edges[1]
+
+
+# --------------------------------------------------------------------------------------------
+# the exact hull of a point set
+
+# Beyond this many distinct points the incremental hull below (every point tested against
+# every live face, O(n h)) loses to the caller's reference (Qhull proposes, an exact
+# certificate decides).
+cdef Py_ssize_t HULL_POINTS = 2048
+
+
+cdef inline i128 _side(const int64_t* a, const int64_t* b, const int64_t* c,
+                       const int64_t* p) noexcept nogil:
+    """``((b - a) x (c - a)) . (p - a)``: positive when ``p`` is above the triangle ``abc``
+    (counter-clockwise seen from above). Differences below ``2**31`` make each cross
+    component below ``2**63`` and the sum below ``2**96``: exact in ``__int128``."""
+    cdef i128 u0 = b[0] - a[0], u1 = b[1] - a[1], u2 = b[2] - a[2]
+    cdef i128 v0 = c[0] - a[0], v1 = c[1] - a[1], v2 = c[2] - a[2]
+    return ((u1 * v2 - u2 * v1) * (p[0] - a[0]) + (u2 * v0 - u0 * v2) * (p[1] - a[1])
+            + (u0 * v1 - u1 * v0) * (p[2] - a[2]))
+
+
+def hull_of_points(const int64_t[:, ::1] P):
+    """The exact convex hull of grid-integer points, as ``ConvexPolytope.from_ints`` makes it.
+
+    ``P`` (n, 3) grid integers, repeats allowed. An incremental hull over the distinct points
+    (a point strictly above some live triangle replaces the triangles it sees by a fan from
+    their horizon; a point on or below all of them is inside) proposes a closed triangle
+    mesh; :func:`polytope_of_mesh` then proves it, over *every* distinct point, exactly
+    convex and containing them all, and returns the canonical polytope. So a mistake here
+    can only make this return None, never a wrong hull.
+
+    Returns ``polytope_of_mesh``'s tuple, or None (the caller runs its reference, which
+    decides and names the reason) for fewer than four distinct points, all of them coplanar,
+    coordinates of ``2**30`` or more, or more than ``HULL_POINTS`` distinct points.
+    """
+    cdef Py_ssize_t n = P.shape[0], i, j, k, q, t, nf, nv, nh, nn, cap, step, found
+    cdef int64_t a, b, c, d
+    cdef i128 s
+    cdef int64_t x0, x1, x2
+    if n < 4 or P.shape[1] != 3 or not _within(P, MESH_COORD):
+        return None
+    # the distinct points, in lexicographic order
+    order_arr = np.empty(n, dtype=np.int64)
+    tmp_arr = np.empty(n, dtype=np.int64)
+    cdef int64_t[::1] order = order_arr, tmp = tmp_arr
+    for i in range(n):
+        order[i] = i
+    _msort(&order[0], &tmp[0], n, &P[0, 0], 3)
+    Q_arr = np.empty((n, 3), dtype=np.int64)
+    cdef int64_t[:, ::1] Q = Q_arr
+    nv = 0
+    for i in range(n):
+        if nv == 0 or _cmp(&P[0, 0], 3, order[i], order[i - 1]) != 0:
+            for k in range(3):
+                Q[nv, k] = P[order[i], k]
+            nv += 1
+    if nv < 4 or nv > HULL_POINTS:
+        return None
+    Q_arr = Q_arr[:nv]
+    Q = Q_arr
+    # a tetrahedron: the first and last points, the first off their line, the first off
+    # their plane
+    a, b = 0, nv - 1
+    c = -1
+    for i in range(1, nv - 1):
+        x0 = (Q[b, 1] - Q[a, 1]) * (Q[i, 2] - Q[a, 2]) - (Q[b, 2] - Q[a, 2]) * (Q[i, 1] - Q[a, 1])
+        x1 = (Q[b, 2] - Q[a, 2]) * (Q[i, 0] - Q[a, 0]) - (Q[b, 0] - Q[a, 0]) * (Q[i, 2] - Q[a, 2])
+        x2 = (Q[b, 0] - Q[a, 0]) * (Q[i, 1] - Q[a, 1]) - (Q[b, 1] - Q[a, 1]) * (Q[i, 0] - Q[a, 0])
+        if x0 != 0 or x1 != 0 or x2 != 0:
+            c = i
+            break
+    if c < 0:
+        return None
+    d = -1
+    for i in range(1, nv - 1):
+        s = _side(&Q[a, 0], &Q[b, 0], &Q[c, 0], &Q[i, 0])
+        if s != 0:
+            d = i
+            break
+    if d < 0:
+        return None
+    if s > 0:  # d above abc: turn abc over so that every face looks away from the fourth
+        b, c = c, b
+    # live faces (double-buffered: the faces a point keeps, then the fan it adds); a hull of
+    # v points has 2v - 4 triangles, a fan at most as many as the faces it replaces plus 2
+    cap = 4 * nv + 16
+    F_arr = np.empty((cap, 3), dtype=np.int64)
+    G_arr = np.empty((cap, 3), dtype=np.int64)
+    vis_arr = np.empty(cap, dtype=np.uint8)
+    hor_arr = np.empty((cap * 3, 2), dtype=np.int64)
+    cdef int64_t[:, ::1] F = F_arr, G = G_arr, H = hor_arr
+    cdef uint8_t[::1] vis = vis_arr
+    F[0, 0], F[0, 1], F[0, 2] = a, b, c
+    F[1, 0], F[1, 1], F[1, 2] = a, d, b
+    F[2, 0], F[2, 1], F[2, 2] = b, d, c
+    F[3, 0], F[3, 1], F[3, 2] = c, d, a
+    nf = 4
+    # the other points in a stride order (any order gives the same hull; a scattered one
+    # meets interior points once the hull is large, and they cost one pass)
+    step = 1
+    for q in (7919, 104729, 1299709, 15485863):
+        if nv % q != 0:
+            step = q % nv if q % nv else 1
+            break
+    j = 0
+    for t in range(nv):
+        j = (j + step) % nv if t else 0
+        if j == a or j == b or j == c or j == d:
+            continue
+        found = 0
+        for i in range(nf):
+            vis[i] = _side(&Q[F[i, 0], 0], &Q[F[i, 1], 0], &Q[F[i, 2], 0], &Q[j, 0]) > 0
+            found += vis[i]
+        if not found:
+            continue
+        # the horizon: directed edges of seen faces whose reverse no seen face holds
+        nh = 0
+        for i in range(nf):
+            if not vis[i]:
+                continue
+            for k in range(3):
+                x0, x1 = F[i, k], F[i, (k + 1) % 3]
+                q = 0
+                for nn in range(nf):
+                    if vis[nn] and ((F[nn, 0] == x1 and F[nn, 1] == x0)
+                                    or (F[nn, 1] == x1 and F[nn, 2] == x0)
+                                    or (F[nn, 2] == x1 and F[nn, 0] == x0)):
+                        q = 1
+                        break
+                if not q:
+                    H[nh, 0], H[nh, 1] = x0, x1
+                    nh += 1
+        nn = 0
+        for i in range(nf):
+            if not vis[i]:
+                G[nn, 0], G[nn, 1], G[nn, 2] = F[i, 0], F[i, 1], F[i, 2]
+                nn += 1
+        if nn + nh > cap:
+            return None
+        for i in range(nh):
+            G[nn, 0], G[nn, 1], G[nn, 2] = H[i, 0], H[i, 1], j
+            nn += 1
+        F, G = G, F
+        nf = nn
+    faces = np.asarray(F)[:nf].copy()
+    return polytope_of_mesh(Q_arr, faces)
