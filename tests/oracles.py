@@ -547,6 +547,47 @@ def exact_sum_mesh(A_vertices, A_faces, B_points) -> tuple[np.ndarray, np.ndarra
     return pieces[0]
 
 
+def sum_support_points(A_vertices, A_faces, B_points, n: int, seed: int) -> np.ndarray:
+    """Points of ``A ⊕ B`` of the raw inputs, on its boundary where nothing covers them.
+
+    Each is ``a + b`` with ``a`` on A's surface (a face, an edge or a vertex, a third each)
+    and ``b`` the vertex of B supporting a direction of A's normal cone at ``a`` (the face's
+    normal; a blend of the two faces' at an edge; of the faces' around a vertex). Every one
+    lies in the exact sum by construction (numpy only, no cspace, no FCL); a sum that is
+    within ``e`` of the exact one holds each, or has it within ``e`` of its surface.
+    """
+    V = np.asarray(A_vertices, dtype=np.float64)
+    F = np.asarray(A_faces, dtype=np.int64)
+    B = np.asarray(B_points, dtype=np.float64).reshape(-1, 3)
+    rng = np.random.default_rng(seed)
+    tri = V[F]
+    nrm = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    nrm /= np.linalg.norm(nrm, axis=1)[:, None]
+    k = n // 3
+    fi = rng.integers(0, len(F), k)
+    faces = np.einsum("ij,ijk->ik", rng.dirichlet([1, 1, 1], k), tri[fi])
+    d_faces = nrm[fi]
+    # edges: the two faces of each undirected edge
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    owner = np.tile(np.arange(len(F)), 3)
+    key = np.minimum(E[:, 0], E[:, 1]) * len(V) + np.maximum(E[:, 0], E[:, 1])
+    order = np.argsort(key, kind="stable")
+    twin = np.nonzero(key[order][1:] == key[order][:-1])[0]
+    e0, e1 = order[twin], order[twin + 1]
+    pick = rng.integers(0, len(e0), k)
+    t, s = rng.random((2, k, 1))
+    edges = V[E[e0[pick], 0]] * (1 - t) + V[E[e0[pick], 1]] * t
+    d_edges = nrm[owner[e0[pick]]] * (1 - s) + nrm[owner[e1[pick]]] * s
+    # vertices: a random blend of the normals of the faces around each
+    m = n - 2 * k
+    corner = F.reshape(-1)[rng.integers(0, 3 * len(F), m)]
+    incident = [np.nonzero((F == c).any(axis=1))[0] for c in corner]
+    d_verts = np.array([nrm[f].T @ rng.dirichlet(np.ones(len(f))) for f in incident])
+    a = np.vstack([faces, edges, V[corner]])
+    d = np.vstack([d_faces, d_edges, d_verts])
+    return a + B[np.argmax(d @ B.T, axis=1)]
+
+
 def mesh_volume(vertices, faces) -> float:
     """Enclosed volume of a closed outward triangle mesh (float64, about the centroid)."""
     V = np.asarray(vertices, dtype=np.float64)
