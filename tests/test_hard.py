@@ -374,3 +374,72 @@ def test_turned_combs_and_grates_keep_the_stated_bound(shape, teeth, seed, offse
         c = V.mean(axis=0)
         gap = brute_force_sum_distance(V - c, F, -R, hull.simplices[:, ::-1], p - c)
         assert (gap > 0).all(), gap.min()
+
+
+def _two_boxes(kind: str):
+    """Two closed unit boxes given as one mesh, sharing a face: concatenated (each box its own
+    vertices; the shared square's diagonals cross), welded with the same triangles on the
+    shared square (they cancel), or a 2 x 2 box resting on a unit one (no vertex shared)."""
+    import trimesh
+
+    a = trimesh.creation.box((1.0, 1.0, 1.0))
+    if kind == "big on small":
+        b = trimesh.creation.box((2.0, 2.0, 1.0))
+        b.apply_translation([0.0, 0.0, 1.0])
+        boxes = [(-0.5, -0.5, -0.5, 0.5, 0.5, 0.5), (-1.0, -1.0, 0.5, 1.0, 1.0, 1.5)]
+    else:
+        b = trimesh.creation.box((1.0, 1.0, 1.0))
+        if kind == "welded":  # the shared square triangulated alike from both sides
+            b.apply_transform(trimesh.transformations.rotation_matrix(np.pi / 2, [1, 0, 0]))
+        b.apply_translation([1.0, 0.0, 0.0])
+        boxes = [(-0.5, -0.5, -0.5, 0.5, 0.5, 0.5), (0.5, -0.5, -0.5, 1.5, 0.5, 0.5)]
+    m = trimesh.util.concatenate([a, b])
+    if kind == "welded":
+        m.merge_vertices()
+    return np.asarray(m.vertices), np.asarray(m.faces), np.array(boxes)
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (250.0, 150.0, -300.0)], ids=["origin", "far"])
+@pytest.mark.parametrize("kind", ["concatenated", "welded", "big on small"])
+def test_closed_bodies_sharing_a_face_are_summed_as_their_union(kind, offset):
+    """Issue #51: two closed boxes sharing a face, given as one mesh, are a valid solid (their
+    union), not a refused one. Welded with the same triangles on the shared square, the two
+    copies of each cancel (interior) and the union's boundary is summed as one body;
+    otherwise each body is summed and the result is their union. Checked against the exact
+    sum of the raw boxes (each box ⊕ -R is a box: exact bounds), at the origin and far."""
+    V, F, boxes = _two_boxes(kind)
+    V = V + offset
+    boxes = boxes + np.tile(offset, 2)
+    R = np.array([[x, y, z] for x in (-0.1, 0.15) for y in (-0.2, 0.1) for z in (-0.05, 0.1)])
+    M = minkowski_sum((V, F), -R)
+    assert type(M).__name__ == ("SumPolyhedron" if kind == "welded" else "SumUnion")
+    lo = boxes[:, :3] - R.max(axis=0)
+    hi = boxes[:, 3:] - R.min(axis=0)
+    if kind == "welded":  # one body: its exact volume is the union's
+        assert abs(M.volume - np.prod(hi[0] - lo[0]) * 2 + np.prod(
+            np.minimum(hi[0], hi[1]) - np.maximum(lo[0], lo[1]))) < 1e-6
+    rng = np.random.default_rng(3)
+    q = rng.uniform(lo.min(axis=0) - 0.2, hi.max(axis=0) + 0.2, (3000, 3))
+    truth = ((q[:, None] >= lo[None]) & (q[:, None] <= hi[None])).all(axis=2).any(axis=1)
+    # nearest face of the truth, to leave out points within the bound of the boundary
+    gap = np.min(np.abs(np.concatenate([q[:, None] - lo[None], q[:, None] - hi[None]], 1)),
+                 axis=(1, 2))
+    parts = M.parts if hasattr(M, "parts") else [M]
+    ours = np.zeros(len(q), dtype=bool)
+    for p in parts:
+        ours |= CSpaceObstacle.from_mesh(p.vertices, p.faces).contains(q)
+    clear = gap > M.error_bound
+    assert (ours[clear] == truth[clear]).all()
+    assert truth.sum() > 500 and (~truth).sum() > 500
+
+
+def test_a_double_sided_face_of_one_body_is_still_named():
+    """A face listed with both windings on one closed box is not two bodies' shared face:
+    without both copies the box is open, so the operand's own error stands."""
+    from cspace.errors import DuplicateFaceError
+    import trimesh
+
+    b = trimesh.creation.box((1.0, 1.0, 1.0))
+    F = np.vstack([b.faces, b.faces[2, ::-1]])
+    with pytest.raises(DuplicateFaceError, match="double-sided"):
+        minkowski_sum((b.vertices, F), 0.1 * b.vertices)

@@ -71,6 +71,34 @@ def weld_dedupe(body, grid: Grid):
     return ints, F[order], counts, reversed_copy[which[order]], welded
 
 
+def cancel_opposite_faces(F: np.ndarray) -> np.ndarray | None:
+    """Welded triangles as a 2-chain: a triangle listed once with each winding cancels.
+
+    Where two closed bodies given as one mesh share a face, each lists it facing out of
+    itself, so the two copies have opposite windings; the face is interior to their union
+    and the chain without both is the union's boundary. Returns the triangles left, each
+    once, in input order (collapsed ones dropped: snapping's thin features are handled
+    apart); None when a triangle's copies do not cancel to at most one (a face repeated with
+    one winding: validation names it) or nothing cancels.
+    """
+    F = np.asarray(F, dtype=np.int64)
+    F = F[~_collapsed(F)]
+    if not len(F):
+        return None
+    _, first, which = unique_rows(np.sort(F, axis=1))
+    sign = np.where(_parity(F) == _parity(F[first[which]]), 1, -1)
+    net = np.zeros(len(first), dtype=np.int64)
+    np.add.at(net, which, sign)
+    if np.abs(net).max() > 1 or len(first) == len(F):
+        return None
+    # the copy with the surviving winding, the first one listed
+    keep = np.zeros(len(F), dtype=bool)
+    cand = np.nonzero(sign == net[which])[0]
+    _, at = np.unique(which[cand], return_index=True)
+    keep[cand[at]] = True
+    return F[keep]
+
+
 def _collapsed(F: np.ndarray) -> np.ndarray:
     """Rows of welded triangles with a repeated corner (a segment or a point)."""
     return (F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 0] == F[:, 2])

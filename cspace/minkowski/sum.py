@@ -17,7 +17,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InvalidMeshError, NonManifoldError, NotConvexError, SelfIntersectionError
+from ..errors import (DuplicateFaceError, InvalidMeshError, NonManifoldError, NotConvexError,
+                      SelfIntersectionError)
 from ..geometry.exact import Grid
 from ..memory import MemoryGuard
 from ..mesh.closed import ClosedMesh, as_mesh
@@ -149,10 +150,14 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
     -------
     SumPolyhedron or SumUnion
         Closed and oriented; CVMS when A is convex too (``result.convex``), NCC-CVMS otherwise.
-        When A is closed pieces meeting at non-manifold edges or vertices (two boxes sharing
-        an edge), a :class:`SumUnion`: A split there exactly, as scenes and
-        :meth:`cspace.CSpaceObstacle.build` split it, and the sum of each piece (their union
-        is the sum; its surfaces overlap, see :class:`SumUnion`). When A has features thinner
+        When A is closed bodies given as one mesh that share faces, a face listed by each
+        (with opposite windings) is interior to their union: the two copies cancel and the
+        union's boundary is summed as one body when it is one (two welded boxes sharing a
+        face). Bodies that stay apart, meeting at faces, non-manifold edges or vertices (two
+        concatenated boxes, two boxes sharing an edge), give a :class:`SumUnion`: A split
+        into its bodies (as it indexes its vertices, else at the non-manifold edges and
+        vertices, as scenes and :meth:`cspace.CSpaceObstacle.build` split it), and the sum of
+        each (their union is the sum; its surfaces overlap, see :class:`SumUnion`). When A has features thinner
         than the grid step that snap to segments or points no other face holds (a needle
         through a box), a :class:`SumUnion` too: the sum of A's other faces, and each
         feature's sum with B, the feature grown by one grid step (``stats['thin_features']``;
@@ -161,9 +166,11 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
     Raises
     ------
     InvalidMeshError
-        Bad operands (open, non-manifold where it does not split into pieces, NaN, ...), A
-        intersecting itself (``SelfIntersectionError``, naming two triangles that cross), or
-        B not convex (``NotConvexError``).
+        Bad operands (open, non-manifold where it does not split into bodies, NaN, ...), a
+        body of A intersecting itself (``SelfIntersectionError``, naming two triangles that
+        cross), or B not convex (``NotConvexError``). Welded bodies whose shared face is
+        triangulated differently on each side do not split (``NonManifoldError``): give them
+        as separate vertex sets, or with the same triangles on the shared face.
     MemoryBudgetError
         The build grew past the memory budget; it stopped there and nothing is kept.
     """
@@ -179,7 +186,8 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
     A, thin, grid_a = _thin_features(A, grid_a)
     try:
         out = _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0, guard)
-    except NonManifoldError as exc:  # closed pieces meeting at edges or vertices?
+    except (NonManifoldError, DuplicateFaceError, SelfIntersectionError) as exc:
+        # closed pieces meeting at faces, edges or vertices, or crossing each other?
         out = _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, exc, guard)
     return _with_thin_features(out, A, thin, Bc, thick_b, grid_a, t0) if len(thin) else out
 
@@ -241,10 +249,17 @@ def _with_thin_features(out, A, thin, Bc: ConvexPolytope, thick_b: bool, grid: G
     return SumUnion(tuple(parts), tuple(pieces), grid, stats)
 
 
-def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard) -> SumUnion:
-    """:class:`SumUnion` of A split as scenes split a body; ``why`` stands when A does not
-    fall apart (one piece: a surface pinched at a vertex)."""
-    from ..mesh.components import split_mesh
+def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard):
+    """A that is closed bodies given as one mesh, summed as their union: faces two bodies
+    share (listed by each, facing out of it) cancel as a 2-chain, leaving the union's
+    boundary, summed as one body when it is one (two boxes sharing a face); else a
+    :class:`SumUnion` of A split as scenes split a body (at non-manifold edges and vertices,
+    into connected components: bodies that touch or cross each other; the sum of a union is
+    the union of the sums). ``why`` stands when neither helps (one body crossing itself, a
+    surface pinched at a vertex, a face repeated with one winding)."""
+    from types import SimpleNamespace
+
+    from ..mesh.components import cancel_opposite_faces, split_mesh, weld_dedupe
     from ..mesh.operands import _mesh_arrays
 
     t0 = time.perf_counter()
@@ -252,7 +267,18 @@ def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard) -> Sum
         raise why
     V, F = _mesh_arrays(A)
     grid = grid_a if grid_a is not None else Grid.for_points(V[np.unique(F)])
-    pieces = split_mesh(V, F, grid)
+    ints, _, _, _, welded = weld_dedupe(SimpleNamespace(vertices=V, faces=F), grid)
+    union = cancel_opposite_faces(welded)
+    if union is not None:
+        used, local = np.unique(union, return_inverse=True)
+        try:
+            return _sum_with((grid.to_float(ints[used]), local.reshape(-1, 3)), Bc, thick_b,
+                             grid, progress, workers, t0, guard)
+        except (NonManifoldError, SelfIntersectionError):
+            V, F = grid.to_float(ints[used]), local.reshape(-1, 3)  # split what is left
+        except InvalidMeshError:
+            raise why from None  # the shared faces were a body's own (a double-sided face)
+    pieces = _bodies_as_given(V, F, grid) or split_mesh(V, F, grid)
     if len(pieces) < 2:
         raise why
     parts = []
@@ -270,6 +296,29 @@ def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard) -> Sum
              "thickened_operands": max(p.stats.get("thickened_operands", 0) for p in parts),
              "hull_excess": max(p.stats.get("hull_excess", 0.0) for p in parts)}
     return SumUnion(tuple(parts), tuple(pieces), grid, stats)
+
+
+def _bodies_as_given(V: np.ndarray, F: np.ndarray, grid: Grid) -> list:
+    """The bodies of a mesh by its own vertex indices (two boxes concatenated, sharing a
+    face whose triangles differ, before welding joins them), each ``(vertices, faces)``,
+    when there are several and each is a valid closed mesh on ``grid``; else []."""
+    from ..geometry.graphs import component_labels
+
+    F = np.asarray(F, dtype=np.int64)
+    n, label = component_labels(len(V), F[:, 0].repeat(2), F[:, 1:].reshape(-1))
+    if n < 2:
+        return []
+    face_label = label[F[:, 0]]
+    out = []
+    for c in np.unique(face_label):
+        used, local = np.unique(F[face_label == c], return_inverse=True)
+        body = (np.asarray(V, dtype=np.float64)[used], local.reshape(-1, 3))
+        try:
+            as_mesh(body, grid=grid, name="A")
+        except InvalidMeshError:
+            return []
+        out.append(body)
+    return out if len(out) > 1 else []
 
 
 def _sum_with(A, Bc: ConvexPolytope, thick_b: bool, grid_a, progress, workers, t0, guard):
