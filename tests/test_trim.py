@@ -97,27 +97,44 @@ def _params():
     return [pytest.param(n, marks=pytest.mark.slow) if slow else n for n, (_, _, slow) in CASES.items()]
 
 
+def _on_step(x, grid: Grid) -> np.ndarray:
+    """The test's own rounding of raw coordinates to the grid's step (round half to even, as
+    any rounding to a dyadic step is; the step is all it takes from cspace): the operands the
+    references see, from the raw input, with nothing cspace validated, welded or hulled."""
+    return np.ldexp(np.rint(np.ldexp(np.asarray(x, dtype=np.float64), -grid.exponent)),
+                    grid.exponent)
+
+
 class Case:
-    """Operands on one grid, their sum, and the FCL oracle (robot ``-B``)."""
+    """Operands on one grid, their sum, and the references: FCL (robot ``-B``), libigl's
+    exact union and brute-force distances, all on the raw operands rounded to the grid's step
+    by the test (``_on_step``), never on cspace's validated mesh or its hull."""
 
     def __init__(self, name, v, f, b, occupancy=None, ring_free=False):
+        import trimesh
+
         grid = Grid.for_points(v, b)
         self.name = name
         self.ring_free = ring_free
         self.occupancy = occupancy
         self.A = ClosedMesh.from_arrays(v, f, grid=grid, name=name)
         self.B = ConvexPolytope.from_points(b, grid=grid, name="B")
-        self.robot = self.B.reflected((0.0, 0.0, 0.0))
         self.S = minkowski_sum(self.A, self.B)
         self.size = float(np.ptp(self.S.vertices, axis=0).max())
-        self.fcl = FclSolid(self.A.vertices, self.A.faces)
+        # the references' operands: the raw input on the step, and the robot -B as trimesh's
+        # hull of the raw points (outward triangles for fcl.Convex)
+        self.ref_v, self.ref_f = _on_step(v, grid), np.asarray(f, dtype=np.int64)
+        self.ref_b = _on_step(b, grid)
+        hull = trimesh.convex.convex_hull(-self.ref_b)
+        self.robot_v, self.robot_f = np.asarray(hull.vertices), np.asarray(hull.faces)
+        self.fcl = FclSolid(self.ref_v, self.ref_f)
         self.fcl_misses = {"membership": 0, "distance": 0, "max_fcl_error": 0.0}
         self._reference = None
 
     def reference_mesh(self):
         """libigl's exact union (oracles.exact_sum_mesh), built on first use."""
         if self._reference is None:
-            self._reference = oracles.exact_sum_mesh(self.A.vertices, self.A.faces, self.B.vertices)
+            self._reference = oracles.exact_sum_mesh(self.ref_v, self.ref_f, self.ref_b)
         return self._reference
 
     def reference_winding(self, q) -> np.ndarray:
@@ -125,10 +142,11 @@ class Case:
 
     def reference_distance(self, q) -> np.ndarray:
         """Distance of outside points to the exact sum, by brute force over feature pairs."""
-        return oracles.brute_force_sum_distance(self.A.vertices, self.A.faces, self.B.vertices, self.B.faces, q)
+        return oracles.brute_force_sum_distance(self.ref_v, self.ref_f, -self.robot_v,
+                                                self.robot_f, q)
 
     def classify(self, q, band):
-        return self.fcl.classify(self.robot.vertices, self.robot.faces, q, band=band)
+        return self.fcl.classify(self.robot_v, self.robot_f, q, band=band)
 
     def surface_distance(self, q) -> np.ndarray:
         d2, _, _ = igl.point_mesh_squared_distance(
@@ -219,10 +237,10 @@ def check_volume_matches_the_exact_reference(c: Case):
     # The float mesh encloses (to rounding) the exact volume.
     assert oracles.mesh_volume(S.vertices, S.faces) == pytest.approx(S.volume, rel=1e-12)
     if c.occupancy is not None:
-        ref = oracles.voxel_box_sum(c.occupancy, c.B.vertices.min(0), c.B.vertices.max(0))
+        ref = oracles.voxel_box_sum(c.occupancy, c.ref_b.min(0), c.ref_b.max(0))
         assert S.volume_exact == ref.volume  # exact equality: both are exact
     else:
-        ref = oracles.exact_sum_volume(c.A.vertices, c.A.faces, c.B.vertices)
+        ref = oracles.exact_sum_volume(c.ref_v, c.ref_f, c.ref_b)
         assert abs(S.volume / ref - 1.0) <= 1e-9, (S.volume, ref)
 
 
