@@ -12,7 +12,7 @@ What it records (every input fixed, every random draw seeded):
 - ``sum/*``: Minkowski sums, convex ⊕ convex (``convex_minkowski_sum`` and the CVMS path of
   ``minkowski_sum``), non-convex closed ⊕ convex (``minkowski_sum``, NCC-CVMS: an L prism by
   hand, a torus, an annulus, genus-1 and scanned meshes of ``../shared/data`` when present),
-  two boxes sharing an edge (a ``SumUnion``), an off-origin case (operands translated by
+  two boxes sharing an edge (the union of two bodies' sums), an off-origin case (operands translated by
   (250, 150, -300)), scaled cases and a reflected robot. Per case: sha256 of the vertices
   (float64) and faces (int64), counts, the exact volume (a rational, as text), the float
   volume, ``error_bound``, holes, non-manifold features, facet kinds, and the superset's
@@ -240,16 +240,14 @@ def fp_minkowski_sum(S) -> dict:
 
 
 def fp_sum_polyhedron(S) -> dict:
-    """A ``minkowski_sum`` result (SumPolyhedron, or SumUnion of them)."""
+    """A ``minkowski_sum`` result (a SumPolyhedron; for a union, its parts too)."""
     out = fp_surface(S)
     out["rounding"] = fls(S.rounding)
     out["convex"] = bool(S.convex)
-    if hasattr(S, "parts"):  # SumUnion
+    if len(getattr(S, "pieces", ())) > 1:  # the union of several bodies' sums
         out["parts"] = [fp_sum_polyhedron(p) for p in S.parts]
-        out["pieces"] = [{"vertices_sha": sha(v, np.float64), "faces_sha": sha(f, np.int64)}
-                         for v, f in S.pieces]
-        out["grid"] = fp_grid(S.grid)
-        return out
+        out["pieces"] = [{"vertices_sha": sha(b.vertices, np.float64),
+                          "faces_sha": sha(b.faces, np.int64)} for b in S.pieces]
     out.update(
         volume=fl(S.volume), volume_exact=rational(S.volume_exact), holes=int(S.n_holes),
         is_manifold=bool(S.is_manifold), nonmanifold_edges=len(S.nonmanifold_edges),

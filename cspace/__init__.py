@@ -15,8 +15,8 @@ Public API
   closed mesh and a convex polytope, an oriented 2-cycle with signed corner multiplicities.
 - :func:`minkowski_sum` → :class:`SumPolyhedron` — the exact sum of a closed (non-convex)
   polyhedron and a convex one: NCC-CVMS (superset, exact trimming, holes, non-manifold
-  contacts), CVMS when both are convex; :class:`SumUnion` (the sum of each piece) when the
-  polyhedron is closed pieces meeting at non-manifold edges or vertices.
+  contacts), CVMS when both are convex; for a polyhedron that is several closed bodies
+  (touching, sharing faces, crossing), the exact boundary of the union of their sums.
 - :class:`CSpaceObstacle`, :class:`CSpace` — C-obstacles and exact queries over translations
   (``contains``, ``signed_distance``, ``segment_free``, ``first_contact``). FCL cross-checks:
   :mod:`cspace.check`.
@@ -44,7 +44,7 @@ from .geometry.exact import Grid
 from .mesh.closed import ClosedMesh, as_mesh
 from .mesh.convex import ConvexPolytope
 from .minkowski.cvms import FACET_KINDS, MinkowskiSum, convex_minkowski_sum
-from .minkowski.polyhedron import SumPolyhedron, SumUnion
+from .minkowski.polyhedron import SumPolyhedron
 from .minkowski.sum import minkowski_sum
 from .minkowski.superset import SUPERSET_KINDS, Superset, minkowski_superset
 from .cobstacle.obstacle import CSpaceObstacle
@@ -66,7 +66,6 @@ __all__ = [
     "minkowski_superset",
     "minkowski_sum",
     "SumPolyhedron",
-    "SumUnion",
     "Body",
     "Scene",
     "load_scene",

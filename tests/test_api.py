@@ -9,7 +9,7 @@ import cspace
 PUBLIC = {
     "__version__", "Grid", "ClosedMesh", "as_mesh", "ConvexPolytope", "MinkowskiSum",
     "FACET_KINDS", "convex_minkowski_sum", "Superset", "SUPERSET_KINDS", "minkowski_superset",
-    "minkowski_sum", "SumPolyhedron", "SumUnion", "model_scene", "SceneModel",
+    "minkowski_sum", "SumPolyhedron", "model_scene", "SceneModel",
     "Body", "Scene", "load_scene", "SceneError", "CSpaceObstacle", "CSpace", "CspaceError", "InvalidMeshError", "EmptyMeshError",
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError", "BuildError",

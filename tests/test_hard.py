@@ -405,29 +405,28 @@ def test_closed_bodies_sharing_a_face_are_summed_as_their_union(kind, offset):
     """Issue #51: two closed boxes sharing a face, given as one mesh, are a valid solid (their
     union), not a refused one. Welded with the same triangles on the shared square, the two
     copies of each cancel (interior) and the union's boundary is summed as one body;
-    otherwise each body is summed and the result is their union. Checked against the exact
-    sum of the raw boxes (each box ⊕ -R is a box: exact bounds), at the origin and far."""
+    otherwise the bodies' sums are united exactly: one surface either way. Checked against
+    the exact sum of the raw boxes (each box ⊕ -R is a box: exact bounds), at the origin
+    and far."""
     V, F, boxes = _two_boxes(kind)
     V = V + offset
     boxes = boxes + np.tile(offset, 2)
     R = np.array([[x, y, z] for x in (-0.1, 0.15) for y in (-0.2, 0.1) for z in (-0.05, 0.1)])
     M = minkowski_sum((V, F), -R)
-    assert type(M).__name__ == ("SumPolyhedron" if kind == "welded" else "SumUnion")
+    assert len(M.pieces) == (0 if kind == "welded" else 2)  # welded: one body
     lo = boxes[:, :3] - R.max(axis=0)
     hi = boxes[:, 3:] - R.min(axis=0)
-    if kind == "welded":  # one body: its exact volume is the union's
-        assert abs(M.volume - np.prod(hi[0] - lo[0]) * 2 + np.prod(
-            np.minimum(hi[0], hi[1]) - np.maximum(lo[0], lo[1]))) < 1e-6
+    # one surface: the union's exact volume (two boxes less their overlap)
+    union = (np.prod(hi - lo, axis=1).sum()
+             - np.prod(np.maximum(0.0, np.minimum(hi[0], hi[1]) - np.maximum(lo[0], lo[1]))))
+    assert abs(M.volume - union) < 1e-6 * union
     rng = np.random.default_rng(3)
     q = rng.uniform(lo.min(axis=0) - 0.2, hi.max(axis=0) + 0.2, (3000, 3))
     truth = ((q[:, None] >= lo[None]) & (q[:, None] <= hi[None])).all(axis=2).any(axis=1)
     # nearest face of the truth, to leave out points within the bound of the boundary
     gap = np.min(np.abs(np.concatenate([q[:, None] - lo[None], q[:, None] - hi[None]], 1)),
                  axis=(1, 2))
-    parts = M.parts if hasattr(M, "parts") else [M]
-    ours = np.zeros(len(q), dtype=bool)
-    for p in parts:
-        ours |= CSpaceObstacle.from_mesh(p.vertices, p.faces).contains(q)
+    ours = CSpaceObstacle.from_mesh(M.vertices, M.faces).contains(q)
     clear = gap > M.error_bound
     assert (ours[clear] == truth[clear]).all()
     assert truth.sum() > 500 and (~truth).sum() > 500
@@ -443,3 +442,35 @@ def test_a_double_sided_face_of_one_body_is_still_named():
     F = np.vstack([b.faces, b.faces[2, ::-1]])
     with pytest.raises(DuplicateFaceError, match="double-sided"):
         minkowski_sum((b.vertices, F), 0.1 * b.vertices)
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (250.0, 150.0, -300.0)], ids=["origin", "far"])
+def test_closed_bodies_crossing_each_other_are_summed_as_their_union(offset):
+    """Two closed boxes given as one mesh that pass through each other (each valid, the
+    mesh crossing itself only where the bodies cross) are a union, not a refused solid: one
+    surface, its exact volume the union's, and every point decided as the raw boxes' exact
+    sum decides it (a single body folded through itself is still named:
+    ``test_bad_input.test_self_intersecting_obstacle_is_named_not_built``)."""
+    import trimesh
+
+    a = trimesh.creation.box((1.0, 0.4, 0.4))
+    b = trimesh.creation.box((0.4, 1.0, 0.4))
+    b.apply_translation([0.2, 0.1, 0.05])
+    m = trimesh.util.concatenate([a, b])
+    V, F = np.asarray(m.vertices) + offset, np.asarray(m.faces)
+    boxes = np.array([[-0.5, -0.2, -0.2, 0.5, 0.2, 0.2],
+                      [0.0, -0.4, -0.15, 0.4, 0.6, 0.25]]) + np.tile(offset, 2)
+    R = np.array([[x, y, z] for x in (-0.05, 0.1) for y in (-0.1, 0.05) for z in (-0.05, 0.05)])
+    M = minkowski_sum((V, F), -R)
+    assert len(M.pieces) == 2 and len(M.parts) == 2
+    lo, hi = boxes[:, :3] - R.max(axis=0), boxes[:, 3:] - R.min(axis=0)
+    union = (np.prod(hi - lo, axis=1).sum()
+             - np.prod(np.maximum(0.0, np.minimum(hi[0], hi[1]) - np.maximum(lo[0], lo[1]))))
+    assert abs(M.volume - union) < 1e-6 * union
+    q = np.random.default_rng(4).uniform(lo.min(axis=0) - 0.1, hi.max(axis=0) + 0.1, (3000, 3))
+    truth = ((q[:, None] >= lo[None]) & (q[:, None] <= hi[None])).all(axis=2).any(axis=1)
+    gap = np.min(np.abs(np.concatenate([q[:, None] - lo[None], q[:, None] - hi[None]], 1)),
+                 axis=(1, 2))
+    ours = CSpaceObstacle.from_mesh(M.vertices, M.faces).contains(q)
+    clear = gap > M.error_bound
+    assert (ours[clear] == truth[clear]).all() and 500 < truth.sum() < 2500

@@ -259,17 +259,22 @@ def test_minkowski_sum_of_solids_sharing_an_edge_or_a_vertex_is_their_union(shar
     with pytest.raises(cspace.NonManifoldError):
         cspace.ClosedMesh.from_arrays(*A)
     B = ROBOT.reflected((0, 0, 0))
-    M = cspace.minkowski_sum(A, B)  # was: NonManifoldError
-    assert isinstance(M, cspace.SumUnion) and len(M.parts) == 2
+    M = cspace.minkowski_sum(A, B)  # was: NonManifoldError, then two overlapping shells
+    assert isinstance(M, cspace.SumPolyhedron) and len(M.pieces) == len(M.parts) == 2
     one = cspace.minkowski_sum(trimesh.creation.box((1.0, 1.0, 1.0)), B)
-    for part in M.parts:  # each piece's exact sum: a translate of one box's
-        assert part.convex and part.volume_exact == one.volume_exact
-    assert M.error_bound == max(p.error_bound for p in M.parts)
-    assert len(M.to_trimesh().faces) == sum(len(p.faces) for p in M.parts)
+    # each piece's exact sum: translates of each other (one frame for both: B's step
+    # differs from the boxes', so they were snapped together), and of one box's sum within
+    # the bound
+    a, b = M.parts
+    assert a.convex and b.convex and a.volume_exact == b.volume_exact
+    assert abs(a.volume - one.volume) < 6 * 4 * M.error_bound
+    # one surface: the union's boundary, closed, its exact volume the two sums' less their
+    # overlap (they overlap where the boxes meet: less than both, more than one)
+    assert a.volume_exact < M.volume_exact < a.volume_exact + b.volume_exact
+    assert len(M.nonmanifold_edges) == 0 and M.n_holes == 0
     # a point is in the sum exactly when it is in some part: the same as build's union
     co = cspace.CSpaceObstacle.build(A, ROBOT, conservative=False)
     assert co.kind == "union"
-    parts = [cspace.CSpaceObstacle.from_mesh(p.vertices, p.faces) for p in M.parts]
     Q = np.random.default_rng(3).uniform(-0.8, 2.8, (4000, 3))
-    ours = np.any([p.contains(Q) for p in parts], axis=0)
+    ours = cspace.CSpaceObstacle.from_mesh(M.vertices, M.faces).contains(Q)
     assert np.array_equal(ours, co.contains(Q)) and 0 < ours.sum() < len(Q)

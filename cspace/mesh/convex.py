@@ -9,6 +9,10 @@ one square facet.
 :func:`convex_within_bound` decides whether a snapped closed mesh is convex, or convex within
 the bend snapping can make (its hull's ``excess`` then stated and counted in every
 ``error_bound``). The sum of two polytopes (CVMS) is :mod:`cspace.minkowski.cvms`.
+
+Length: one type and the decisions it rests on (the exact hull of points with its compiled
+path and pure-Python references, the convexity test within snapping's bend), which other
+modules must not each redo.
 """
 
 from __future__ import annotations

@@ -10,9 +10,9 @@
 """
 
 from .cvms import MinkowskiSum, convex_minkowski_sum
-from .polyhedron import SumPolyhedron, SumUnion
+from .polyhedron import SumPolyhedron
 from .sum import minkowski_sum
 from .superset import Superset, minkowski_superset
 
-__all__ = ["MinkowskiSum", "convex_minkowski_sum", "SumPolyhedron", "SumUnion", "minkowski_sum",
+__all__ = ["MinkowskiSum", "convex_minkowski_sum", "SumPolyhedron", "minkowski_sum",
            "Superset", "minkowski_superset"]

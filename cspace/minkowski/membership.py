@@ -164,9 +164,12 @@ class _PieceTest:
 
         Called when ``p + eps * v - B`` misses the surface of A: then the interior of
         ``p - B`` misses it too, ``x`` is not on the surface, and ``x`` is in A exactly when
-        ``q - B`` is. Decided by the parity of proper crossings of a segment from ``x`` to a
-        point outside A's bounding box; a segment through an edge or vertex of A (detected
-        exactly) is replaced by another one.
+        ``q - B`` is. Decided by the winding number of A at ``x``: the proper crossings of a
+        segment from ``x`` to a point outside A's bounding box, each +1 leaving a triangle's
+        back and -1 entering it; a segment through an edge or vertex of A (detected exactly)
+        is replaced by another one. Positive means inside: for one closed body that is the
+        parity, for A made of several (:func:`cspace.minkowski.ncc_cvms._trim` of pieces) the
+        union, wherever the bodies overlap or touch.
         """
         nb = len(self.Bv)
         c = [int(v) for v in self.Bv.sum(axis=0)]
@@ -183,14 +186,15 @@ class _PieceTest:
             # far end, integer grid point: beyond the box in the direction d
             scale = 4 * span // int(np.abs(d).max()) + 4
             y = [int(round(xf[k])) + int(d[k]) * scale for k in range(3)]
-            crossings = self._crossings(X, W, y)
-            if crossings is not None:
-                return crossings % 2 == 1
+            winding = self._crossings(X, W, y)
+            if winding is not None:
+                return winding > 0
         raise ExactnessError("no non-degenerate ray found for a point-in-solid test")  # pragma: no cover
 
     def _crossings(self, X: list, W: int, y: list):
-        """Proper crossings of the segment ``X / W -> y`` with A's triangles, None if the
-        segment passes through an edge or a vertex of A."""
+        """Signed proper crossings of the segment ``X / W -> y`` with A's triangles (+1 from a
+        triangle's back to its front: the winding number at ``X / W``, ``y`` being outside),
+        None if the segment passes through an edge or a vertex of A."""
         Y = [c * W for c in y]
         lo = np.minimum([X[k] / W for k in range(3)], y) - 2
         hi = np.maximum([X[k] / W for k in range(3)], y) + 2
@@ -208,7 +212,7 @@ class _PieceTest:
                     return None  # through an edge or a vertex
                 continue
             if e[0] == e[1] == e[2]:
-                n += 1
+                n += 1 if s1 < 0 else -1
         return n
 
     def contains(self, P4: tuple, v: tuple) -> bool:

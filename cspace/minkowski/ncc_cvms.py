@@ -37,7 +37,8 @@ from .output import _Output, _nonmanifold, _output, _to_float_compiled
 from .planes import _plane_groups
 from .polyhedron import SumPolyhedron
 from .rounding import _rounding_check
-from .superset import Superset, minkowski_superset, on_common_step, reduced_superset
+from .superset import (Superset, joined_supersets, minkowski_superset, on_common_step,
+                       reduced_superset)
 from .traversal import _shells
 
 
@@ -112,11 +113,24 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int,
 
     report("superset", 0.0)
     t = time.perf_counter()
-    S = minkowski_superset(A, B)
-    A, B = on_common_step(A, B)  # the operands as the superset snapped them
-    stats["superset_facets"] = S.n_facets
-    if reduced:  # without the facets that cannot hold a point of the sum's boundary
-        S = reduced_superset(S, A, B)
+    # A may be several closed bodies (touching, sharing faces, crossing): their supersets
+    # joined are a superset of the union, whose boundary lies on theirs; membership is the
+    # union's (a cell is inside when it is inside some body's sum).
+    bodies = list(A) if isinstance(A, (list, tuple)) else [A]
+    if len(bodies) > 1 and not reduced:
+        raise ValueError("_trim: several bodies are trimmed with the reduced superset only")
+    supersets, snapped = [], []
+    stats["superset_facets"] = 0
+    for body in bodies:
+        Si = minkowski_superset(body, B)
+        body, B = on_common_step(body, B)  # the operands as the superset snapped them
+        stats["superset_facets"] += Si.n_facets
+        if reduced:  # without the facets that cannot hold a point of the sum's boundary
+            Si = reduced_superset(Si, body, B)
+        supersets.append(Si)
+        snapped.append(body)
+    S = joined_supersets(supersets, snapped)
+    A = snapped[0] if len(snapped) == 1 else _Bodies(snapped)
     t = lap("superset", t)
     stats["reduced_facets"] = S.n_facets
 
@@ -154,6 +168,17 @@ def _trim(A: ClosedMesh, B: ConvexPolytope, t0: float, progress, workers: int,
     result = _result(out, S, stats, workers)
     report("rounding_check", 1.0)
     return result
+
+
+class _Bodies:
+    """Several closed bodies on one grid as the membership test reads A: their triangles,
+    one body's after another's (``ints``, ``faces``)."""
+
+    def __init__(self, bodies: list):
+        sizes = np.cumsum([0] + [len(b.ints) for b in bodies[:-1]])
+        self.ints = np.vstack([b.ints for b in bodies])
+        self.faces = np.vstack([b.faces + k for b, k in zip(bodies, sizes)])
+        self.grid = bodies[0].grid
 
 
 def _result(out: _Output, S: Superset, stats: dict, workers: int = 1) -> SumPolyhedron:

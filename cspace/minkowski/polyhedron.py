@@ -1,4 +1,4 @@
-"""The results of the exact sums: :class:`SumPolyhedron`, :class:`SumUnion`, :class:`ExactVolume`.
+"""The results of the exact sums: :class:`SumPolyhedron` and :class:`ExactVolume`.
 
 A :class:`SumPolyhedron` holds the sum's boundary as exact homogeneous integer points
 (``points_exact``) and their float64 rounding (``vertices``, ``(n, 3)``, scene units, world frame),
@@ -18,7 +18,7 @@ import numpy as np
 from ..geometry.exact import Grid
 from ..geometry.tritri import _cross, _dot
 
-__all__ = ["SumPolyhedron", "SumUnion"]
+__all__ = ["SumPolyhedron"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,7 +75,16 @@ class SumPolyhedron:
         (``superset_facets``: the convolution's; ``reduced_facets``: those the trimming keeps,
         :func:`~cspace.minkowski.superset.reduced_superset`; ``superset_triangles``: the kept
         ones' triangles; ``n_planes``, ``candidate_pairs``, ``cut_pairs``, ``subfacets``,
-        ``shells``, ``membership_tests``, ``output_triangles``).
+        ``shells``, ``membership_tests``, ``output_triangles``); for A made of several
+        bodies, ``bodies`` and ``thin_features`` (how many of them are features thinner than
+        the grid step, each grown by a step).
+    pieces : tuple of ClosedMesh
+        When A was several closed bodies (meeting at faces, edges or vertices, crossing
+        each other, or with features thinner than the grid step: see
+        :func:`cspace.minkowski_sum`), those bodies, on A's grid; this surface is then the
+        exact boundary of the union of their sums. Empty for one body.
+    operand_b : ConvexPolytope or None
+        B as summed, with :attr:`pieces` (for :attr:`parts`).
     """
 
     vertices: np.ndarray
@@ -94,6 +103,20 @@ class SumPolyhedron:
     convex: bool = False
     stats: dict = field(default_factory=dict, repr=False)
     rounding: np.ndarray = field(default_factory=lambda: np.zeros(3), repr=False)
+    pieces: tuple = field(default=(), repr=False)
+    operand_b: object = field(default=None, repr=False)
+    #: How a body of :attr:`pieces` is summed with :attr:`operand_b` (set by
+    #: :func:`cspace.minkowski_sum`, which this module does not import).
+    sum_of_body: object = field(default=None, repr=False)
+
+    @cached_property
+    def parts(self) -> tuple:
+        """The sum of each body of A, when A was several (:attr:`pieces`; computed on first
+        access, each an exact :class:`SumPolyhedron`); else ``(self,)``. Their union is this
+        surface's solid."""
+        if len(self.pieces) < 2:
+            return (self,)
+        return tuple(self.sum_of_body(body) for body in self.pieces)
 
     @cached_property
     def volume_exact(self) -> Fraction:
@@ -113,7 +136,8 @@ class SumPolyhedron:
         return (
             f"SumPolyhedron(vertices={len(self.vertices)}, faces={len(self.faces)}, "
             f"holes={self.n_holes}, nonmanifold_edges={len(self.nonmanifold_edges)}, "
-            f"convex={self.convex})"
+            f"convex={self.convex}"
+            + (f", bodies={len(self.pieces)})" if self.pieces else ")")
         )
 
     @property
@@ -138,83 +162,6 @@ class SumPolyhedron:
                 + self.stats.get("hull_excess", 0.0))
 
     def to_trimesh(self):
-        import trimesh
-
-        return trimesh.Trimesh(self.vertices, self.faces, process=False)
-
-
-@dataclass(frozen=True, eq=False)
-class SumUnion:
-    """``A ⊕ B`` for an A made of closed pieces that meet at non-manifold edges or vertices
-    (two boxes sharing an edge or a corner), or with features thinner than the grid step (a
-    needle through a box: the sum of its other faces, and of each segment or point the
-    feature snaps to, grown by a step): the union of the pieces' sums, each exact, not
-    merged into one surface. ``(P1 ∪ P2) ⊕ B = (P1 ⊕ B) ∪ (P2 ⊕ B)``.
-
-    Attributes
-    ----------
-    parts : tuple of SumPolyhedron
-        The sum of each piece (``A`` split exactly as scenes split a body:
-        :func:`cspace.mesh.components.split_mesh`), each closed and oriented outwards.
-    pieces : tuple of (vertices, faces)
-        The pieces of A (float64 vertices on the grid, faces; a thin feature's: its segment's
-        two ends, or a point twice, and one degenerate face).
-    grid : Grid
-    stats : dict
-        ``parts`` (how many), ``total`` seconds, and the largest ``thickened_operands`` and
-        ``hull_excess`` of the parts.
-
-    Notes
-    -----
-    The parts' sums overlap (they share at least the sum of the contact), so
-    :attr:`vertices`/:attr:`faces` (and :meth:`to_trimesh`) are the parts' closed surfaces
-    joined, **not** the boundary of the union: a point is in ``A ⊕ B`` exactly when it is in
-    some part (:meth:`cspace.CSpaceObstacle.build` answers queries on such a union). There is
-    no single volume, hole count or non-manifold list of the union; ask each part.
-    """
-
-    parts: tuple
-    pieces: tuple = field(repr=False)
-    grid: Grid = field(repr=False)
-    stats: dict = field(default_factory=dict, repr=False)
-    convex = False
-
-    @cached_property
-    def _joined(self):
-        V, F, n = [], [], 0
-        for p in self.parts:
-            V.append(np.asarray(p.vertices, dtype=np.float64))
-            F.append(np.asarray(p.faces, dtype=np.int64) + n)
-            n += len(V[-1])
-        return np.vstack(V), np.vstack(F)
-
-    @property
-    def vertices(self) -> np.ndarray:
-        """(n, 3) float64: every part's vertices, one after the other."""
-        return self._joined[0]
-
-    @property
-    def faces(self) -> np.ndarray:
-        """(m, 3) int64: every part's closed surface (overlapping; not the union's boundary)."""
-        return self._joined[1]
-
-    @property
-    def rounding(self) -> np.ndarray:
-        """Per axis, the largest of the parts' float64 rounding bounds."""
-        return np.max([p.rounding for p in self.parts], axis=0)
-
-    @property
-    def error_bound(self) -> float:
-        """The largest of the parts' bounds (a union of sums each within its bound of the
-        unsnapped one is within the largest of them)."""
-        return max(p.error_bound for p in self.parts)
-
-    def __repr__(self) -> str:
-        return (f"SumUnion(parts={len(self.parts)}, vertices={len(self.vertices)}, "
-                f"faces={len(self.faces)})")
-
-    def to_trimesh(self):
-        """The parts' closed surfaces in one ``trimesh.Trimesh`` (overlapping shells)."""
         import trimesh
 
         return trimesh.Trimesh(self.vertices, self.faces, process=False)

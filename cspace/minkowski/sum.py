@@ -4,15 +4,18 @@ A is closed (possibly non-convex, any genus, several components); B is convex. C
 through CVMS (:func:`cspace.minkowski.cvms.convex_minkowski_sum`); the others through the
 superset (:func:`cspace.minkowski.superset.minkowski_superset`) and the exact trimming
 (:mod:`cspace.minkowski.ncc_cvms`). A flat convex operand is thickened by one grid step (an
-error that can only add collisions, counted in ``error_bound``); closed pieces meeting at
-non-manifold edges or vertices are summed piece by piece (:class:`SumUnion`). Operands are
-snapped onto one grid of one step (:meth:`cspace.Grid.for_operands`).
+error that can only add collisions, counted in ``error_bound``); an A that is several closed
+bodies (meeting at faces, edges or vertices, crossing, or with features thinner than the grid
+step) is summed as their union, one exact surface. Operands are snapped onto one grid of one
+step (:meth:`cspace.Grid.for_operands`).
 """
 
 from __future__ import annotations
 
 import gc
 import time
+from dataclasses import replace
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -27,7 +30,7 @@ from ..mesh.self_intersection import self_intersections
 from ..workers import worker_count
 from .cvms import convex_minkowski_sum
 from .ncc_cvms import _trim
-from .polyhedron import SumPolyhedron, SumUnion
+from .polyhedron import SumPolyhedron
 
 __all__ = ["minkowski_sum"]
 
@@ -148,20 +151,20 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
 
     Returns
     -------
-    SumPolyhedron or SumUnion
+    SumPolyhedron
         Closed and oriented; CVMS when A is convex too (``result.convex``), NCC-CVMS otherwise.
-        When A is closed bodies given as one mesh that share faces, a face listed by each
-        (with opposite windings) is interior to their union: the two copies cancel and the
-        union's boundary is summed as one body when it is one (two welded boxes sharing a
-        face). Bodies that stay apart, meeting at faces, non-manifold edges or vertices (two
-        concatenated boxes, two boxes sharing an edge), give a :class:`SumUnion`: A split
-        into its bodies (as it indexes its vertices, else at the non-manifold edges and
-        vertices, as scenes and :meth:`cspace.CSpaceObstacle.build` split it), and the sum of
-        each (their union is the sum; its surfaces overlap, see :class:`SumUnion`). When A has features thinner
-        than the grid step that snap to segments or points no other face holds (a needle
-        through a box), a :class:`SumUnion` too: the sum of A's other faces, and each
-        feature's sum with B, the feature grown by one grid step (``stats['thin_features']``;
-        within ``error_bound``: a feature is never lost to snapping).
+        When A is several closed bodies given as one mesh, the exact boundary of the union of
+        their sums (``(P1 ∪ P2) ⊕ B = (P1 ⊕ B) ∪ (P2 ⊕ B)``: one surface, its exact volume and
+        holes, non-manifold where the bodies' sums touch; the bodies in ``result.pieces``,
+        their sums in ``result.parts``). A face two bodies share (listed by each, with
+        opposite windings) is interior and cancels: welded alike, they are one body (two
+        boxes sharing a face). Otherwise A is split into its bodies as it indexes its
+        vertices (two concatenated boxes), else at its non-manifold edges and vertices as
+        scenes and :meth:`cspace.CSpaceObstacle.build` split it (two boxes sharing an edge).
+        Features thinner than the grid step that snap to segments or points no other face
+        holds (a needle through a box) are bodies too: each grown by one grid step
+        (``stats['thin_features']``; within ``error_bound``: a feature is never lost to
+        snapping).
 
     Raises
     ------
@@ -184,12 +187,22 @@ def minkowski_sum(A, B, *, progress=None, workers: int | None = None,
     if Bc is None:
         raise NotConvexError("B must be convex (the robot of a translational C-obstacle)")
     A, thin, grid_a = _thin_features(A, grid_a)
-    try:
-        out = _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0, guard)
-    except (NonManifoldError, DuplicateFaceError, SelfIntersectionError) as exc:
-        # closed pieces meeting at faces, edges or vertices, or crossing each other?
-        out = _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, exc, guard)
-    return _with_thin_features(out, A, thin, Bc, thick_b, grid_a, t0) if len(thin) else out
+    if not len(thin):
+        try:
+            return _sum_with(A, Bc, thick_b, grid_a, progress, workers, t0, guard)
+        except (NonManifoldError, DuplicateFaceError, SelfIntersectionError) as exc:
+            # closed bodies meeting at faces, edges or vertices, or crossing each other?
+            bodies, grid_a = _bodies(A, grid_a, exc)
+    else:
+        bodies = [A] if isinstance(A, ClosedMesh) else None
+        if bodies is None:
+            try:
+                bodies = [as_mesh(A, grid=grid_a, name="A")]
+            except (NonManifoldError, DuplicateFaceError) as exc:
+                bodies, grid_a = _bodies(A, grid_a, exc)
+        bodies += _thin_bodies(thin, grid_a)
+    return _sum_of_bodies(bodies, Bc, thick_b, grid_a, progress, workers, t0, guard,
+                          thin=len(thin))
 
 
 def _thin_features(A, grid_a):
@@ -223,46 +236,34 @@ def _thin_features(A, grid_a):
     return (V, rest), ints[thin[:, :2]], grid
 
 
-def _with_thin_features(out, A, thin, Bc: ConvexPolytope, thick_b: bool, grid: Grid,
-                        t0: float) -> SumUnion:
-    """``out`` (the sum of A's other faces) and the sum of each thin feature with B: a
-    segment or point grown by one grid step on every axis (the flat operand's rule of
-    :func:`_convex_or_thickened`, within ``sqrt(3)`` steps, in each part's ``error_bound``),
-    as one :class:`SumUnion`."""
+def _thin_bodies(thin: np.ndarray, grid: Grid) -> list:
+    """Each thin feature (a segment or a point, grid integers) as a closed body: its hull
+    grown by one grid step on every axis (the flat operand's rule of
+    :func:`_convex_or_thickened`, within ``sqrt(3)`` steps: counted in ``error_bound``)."""
     from ..geometry.snapping import grow_points
-    from ..mesh.operands import _mesh_arrays
 
-    parts = list(out.parts) if isinstance(out, SumUnion) else [out]
-    pieces = list(out.pieces) if isinstance(out, SumUnion) else [_mesh_arrays(A)]
+    out = []
     for k, seg in enumerate(thin):
-        piece = ConvexPolytope.from_ints(grow_points(np.unique(seg, axis=0), (1, 1, 1)),
-                                         grid=grid, name=f"thin feature {k}")
-        s = _from_convex(piece, Bc, time.perf_counter())
-        s.stats["thickened_operands"] = 1 + int(thick_b)
-        s.stats["hull_excess"] = Bc.excess
-        parts.append(s)
-        pieces.append((grid.to_float(seg), np.array([[0, 1, 1]], dtype=np.int64)))
-    stats = {"parts": len(parts), "thin_features": len(thin),
-             "total": time.perf_counter() - t0,
-             "thickened_operands": max(p.stats.get("thickened_operands", 0) for p in parts),
-             "hull_excess": max(p.stats.get("hull_excess", 0.0) for p in parts)}
-    return SumUnion(tuple(parts), tuple(pieces), grid, stats)
+        P = ConvexPolytope.from_ints(grow_points(np.unique(seg, axis=0), (1, 1, 1)),
+                                     grid=grid, name=f"thin feature {k}")
+        out.append(ClosedMesh.from_arrays(P.vertices, P.faces, grid=grid,
+                                          name=f"thin feature {k}"))
+    return out
 
 
-def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard):
-    """A that is closed bodies given as one mesh, summed as their union: faces two bodies
-    share (listed by each, facing out of it) cancel as a 2-chain, leaving the union's
-    boundary, summed as one body when it is one (two boxes sharing a face); else a
-    :class:`SumUnion` of A split as scenes split a body (at non-manifold edges and vertices,
-    into connected components: bodies that touch or cross each other; the sum of a union is
-    the union of the sums). ``why`` stands when neither helps (one body crossing itself, a
-    surface pinched at a vertex, a face repeated with one winding)."""
+def _bodies(A, grid_a, why) -> tuple[list, Grid]:
+    """A that is closed bodies given as one mesh, as its bodies ``(vertices, faces)``, and
+    its grid: faces two bodies share (listed by each, facing out of it) cancel as a 2-chain,
+    leaving the union's boundary, one body when it is one (two welded boxes sharing a face);
+    else the bodies as the mesh indexes them (two concatenated boxes), else A split at its
+    non-manifold edges and vertices as scenes split a body (two boxes sharing an edge).
+    ``why`` stands when none of these helps (one body crossing itself, a surface pinched at
+    a vertex, a face repeated with one winding)."""
     from types import SimpleNamespace
 
     from ..mesh.components import cancel_opposite_faces, split_mesh, weld_dedupe
     from ..mesh.operands import _mesh_arrays
 
-    t0 = time.perf_counter()
     if isinstance(A, ClosedMesh):
         raise why
     V, F = _mesh_arrays(A)
@@ -271,31 +272,68 @@ def _sum_of_pieces(A, Bc, thick_b, grid_a, progress, workers, why, guard):
     union = cancel_opposite_faces(welded)
     if union is not None:
         used, local = np.unique(union, return_inverse=True)
+        body = (grid.to_float(ints[used]), local.reshape(-1, 3))
         try:
-            return _sum_with((grid.to_float(ints[used]), local.reshape(-1, 3)), Bc, thick_b,
-                             grid, progress, workers, t0, guard)
+            as_mesh(body, grid=grid, name="A")
+            return [body], grid
         except (NonManifoldError, SelfIntersectionError):
-            V, F = grid.to_float(ints[used]), local.reshape(-1, 3)  # split what is left
+            V, F = body  # split what is left
         except InvalidMeshError:
             raise why from None  # the shared faces were a body's own (a double-sided face)
     pieces = _bodies_as_given(V, F, grid) or split_mesh(V, F, grid)
     if len(pieces) < 2:
         raise why
-    parts = []
-    for k, piece in enumerate(pieces):
-        def sub(f, stage, k=k):
-            if progress is not None:
-                progress((k + f) / len(pieces), f"piece {k + 1} of {len(pieces)}: {stage}")
+    return pieces, grid
+
+
+def _sum_of_bodies(bodies: list, Bc: ConvexPolytope, thick_b: bool, grid: Grid, progress,
+                   workers, t0: float, guard, thin: int = 0) -> SumPolyhedron:
+    """The sum of A's bodies (``(vertices, faces)`` or closed meshes on ``grid``) as one
+    surface: one body's sum, or the exact union's boundary (NCC-CVMS of the bodies'
+    supersets joined, membership in the union: :func:`cspace.minkowski.ncc_cvms._trim`),
+    with the bodies and B kept for :attr:`SumPolyhedron.parts`."""
+    meshes = []
+    for k, body in enumerate(bodies):
+        name = f"A: body {k + 1} of {len(bodies)}" if len(bodies) > 1 else "A"
         try:
-            parts.append(_sum_with(piece, Bc, thick_b, grid, sub, workers, time.perf_counter(),
-                                   guard))
+            m = body if isinstance(body, ClosedMesh) else as_mesh(body, grid=grid, name=name)
+            _no_self_intersection(m)
         except InvalidMeshError as exc:
-            raise type(exc)(f"A: piece {k} of {len(pieces)} (A split at its non-manifold edges "
-                            f"and vertices): {exc}") from None
-    stats = {"parts": len(parts), "total": time.perf_counter() - t0,
-             "thickened_operands": max(p.stats.get("thickened_operands", 0) for p in parts),
-             "hull_excess": max(p.stats.get("hull_excess", 0.0) for p in parts)}
-    return SumUnion(tuple(parts), tuple(pieces), grid, stats)
+            raise type(exc)(f"{exc} (A split into {len(bodies)} closed bodies at the faces, "
+                            "edges and vertices they share)") from None
+        meshes.append(m)
+    if len(meshes) == 1:
+        return _sum_with(meshes[0], Bc, thick_b, grid, progress, workers, t0, guard)
+    if not meshes[0].grid.same_step(Bc.grid):
+        # one frame for every body's superset: re-snapped together, as on_common_step
+        # re-snaps one body and B whose steps differ
+        ga, gb = Grid.for_operands(np.vstack([m.vertices for m in meshes]), Bc.vertices,
+                                   bits=min(meshes[0].grid.bits, Bc.grid.bits))
+        meshes, Bc = [m.on_grid(ga) for m in meshes], Bc.on_grid(gb)
+    enabled = gc.isenabled()
+    gc.disable()  # as in _sum_with: the trimming's small tuples, no cycles worth a pass
+    try:
+        out = _trim(meshes, Bc, t0, progress, worker_count(workers), guard)
+    finally:
+        if enabled:
+            gc.enable()
+    out.stats["bodies"] = len(meshes)
+    out.stats["thin_features"] = thin
+    out.stats["thickened_operands"] = int(thick_b) + (1 if thin else 0)
+    out.stats["hull_excess"] = Bc.excess
+    return replace(out, pieces=tuple(meshes), operand_b=Bc,
+                   sum_of_body=partial(minkowski_sum, B=Bc, workers=workers))
+
+
+def _no_self_intersection(A: ClosedMesh) -> None:
+    """SelfIntersectionError naming two triangles of A that cross, if any do."""
+    crossing = self_intersections(A)
+    if len(crossing):
+        i, j = crossing[0].tolist()
+        raise SelfIntersectionError(
+            f"mesh '{A.name}' intersects itself: triangles {i} and {j} meet beyond a shared "
+            f"edge or vertex ({len(crossing)} such pairs); its inside is not defined. Repair "
+            "it, or model it as an open surface (a scene does: surface semantics)")
 
 
 def _bodies_as_given(V: np.ndarray, F: np.ndarray, grid: Grid) -> list:
@@ -330,13 +368,7 @@ def _sum_with(A, Bc: ConvexPolytope, thick_b: bool, grid_a, progress, workers, t
         out.stats["hull_excess"] = Ac.excess + Bc.excess
         return out
     A = as_mesh(A, grid=grid_a, name=getattr(A, "name", None) or "A")
-    crossing = self_intersections(A)
-    if len(crossing):
-        i, j = crossing[0].tolist()
-        raise SelfIntersectionError(
-            f"mesh '{A.name}' intersects itself: triangles {i} and {j} meet beyond a shared "
-            f"edge or vertex ({len(crossing)} such pairs); its inside is not defined. Repair "
-            "it, or model it as an open surface (a scene does: surface semantics)")
+    _no_self_intersection(A)
     # The trimming makes millions of small tuples and few reference cycles: the cyclic
     # collector's passes over them cost a quarter of the time, and nothing waits for it.
     enabled = gc.isenabled()

@@ -415,6 +415,47 @@ def reduced_superset(S: Superset, A, B) -> Superset:
                     a_edges=S.a_edges, perturbation=S.perturbation, timings=dict(S.timings))
 
 
+def joined_supersets(supersets: list, pieces: list) -> Superset:
+    """The supersets of several bodies ``pieces[i]`` with one B, as one superset of their
+    union: points, facets and provenance one body after the other, A's vertices, faces and
+    edges numbered likewise (body ``i``'s after those of the bodies before it). Every facet
+    keeps what it was made of, so a reduced superset stays one (its facets face out of
+    convex pieces of the union, and it holds the union's boundary, which lies on the
+    bodies')."""
+    if len(supersets) == 1:
+        return supersets[0]
+    grid = supersets[0].grid
+    if any(S.grid != grid for S in supersets):
+        raise ValueError("joined_supersets: the bodies' supersets are in different frames")
+    labels, ints, offsets, flat, a_edges = [], [], [np.zeros(1, dtype=np.int64)], [], []
+    source_a = []
+    nv = nf = ne = npts = nflat = 0
+    for S, P in zip(supersets, pieces):
+        lab = S.labels.copy()
+        lab[:, 0] += nv
+        labels.append(lab)
+        ints.append(S.ints)
+        offsets.append(S.facet_offsets[1:] + nflat)
+        flat.append(S.facet_indices + npts)
+        a_edges.append(S.a_edges + nv)
+        src = S.source_a.copy()
+        src[:, 1] += np.choose(src[:, 0], [nv, ne, nf])
+        source_a.append(src)
+        nv += len(P.ints)
+        nf += len(P.faces)
+        ne += len(S.a_edges)
+        npts += len(S.ints)
+        nflat += len(S.facet_indices)
+    return Superset(grid=grid, labels=np.vstack(labels), ints=np.vstack(ints),
+                    facet_offsets=np.concatenate(offsets), facet_indices=np.concatenate(flat),
+                    multiplicity=np.concatenate([S.multiplicity for S in supersets]),
+                    kind=np.concatenate([S.kind for S in supersets]),
+                    source_a=np.vstack(source_a),
+                    source_b=np.vstack([S.source_b for S in supersets]),
+                    a_edges=np.vstack(a_edges), perturbation=supersets[0].perturbation,
+                    timings={})
+
+
 def _dual_potential(B: ConvexPolytope, E: np.ndarray) -> np.ndarray:
     """Potential on B's facets (rows) from edge differences: delta[R] - delta[L] = E[e].
 
