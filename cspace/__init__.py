@@ -48,7 +48,7 @@ from .minkowski.polyhedron import SumPolyhedron
 from .minkowski.sum import minkowski_sum
 from .minkowski.superset import SUPERSET_KINDS, Superset, minkowski_superset
 from .cobstacle.obstacle import CSpaceObstacle
-from .scene.files import load_scene
+from .scene.files import load_scene, save_scene
 from .scene.model import CSpace, SceneModel, model_scene
 from .scene.scene import Body, Scene
 
@@ -69,6 +69,7 @@ __all__ = [
     "Body",
     "Scene",
     "load_scene",
+    "save_scene",
     "CSpaceObstacle",
     "CSpace",
     "model_scene",

@@ -46,6 +46,7 @@ import sys
 import time
 from collections.abc import Sequence
 
+from ._version import __version__
 from .output import MESH_FORMATS, write_atomic
 
 
@@ -170,11 +171,13 @@ def _superset(args: argparse.Namespace) -> int:
 
 def _check(args: argparse.Namespace) -> int:
     from .check.cross_check import cross_check
-    from .scene.model import CSpace
     from .scene.files import load_scene
 
     scene = load_scene(args.scene)
-    cs = CSpace.from_scene(scene, robot_hull=args.robot_hull)
+    m = _model(args, scene)
+    if args.explain:
+        print(m.explain())
+    cs = m.cspace()
     # FCL's verdict from the raw scene (every body, its own solid rule), not from the C-space.
     r = cross_check(cs, n=args.n, seed=args.seed, band=args.band, scene=scene,
                     robot_hull=args.robot_hull)
@@ -309,8 +312,10 @@ def _build(args: argparse.Namespace) -> int:
 def _plan(args: argparse.Namespace) -> int:
     import numpy as np
 
-    from .planning.plan import AUTO, plan
+    from .planning.plan import AUTO, DEFAULT_TIME, plan
 
+    if args.time is None:  # one default with Python's plan()
+        args.time = DEFAULT_TIME
     path_out = _out(args.output, ("txt", "csv", "npy", "path"), "-o")
     result_out = _out(args.result, ("json",), "--result")
     html_out = _out(args.html, ("html",), "--html")
@@ -369,8 +374,12 @@ def _plan(args: argparse.Namespace) -> int:
         return _report_se3(args, scene, r, path_out, result_out, html_out)
     status = "solved" if r.solved else f"NOT solved ({r.status})"
     name = f"auto ({r.planner})" if auto else args.planner
-    print(f"{scene.name}: {name} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
-          f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
+    if r.solved:
+        print(f"{scene.name}: {name} {status} in {r.time:.2f} s; {len(r.path)} waypoints, "
+              f"length {r.length:.4g}; exact re-check: {'valid' if r.valid else 'INVALID'}")
+    else:  # no path: nothing was re-checked (an approximate one, if any, is not written)
+        print(f"{scene.name}: {name} {status} in {r.time:.2f} s: no path found (not a proof "
+              "that none exists)")
     fcl = None
     if args.fcl_check and r.solved:
         from .check.cross_check import path_collisions
@@ -566,10 +575,14 @@ def _report_turning(args: argparse.Namespace, scene, slices, r, path_out, result
         args.planner = f"auto ({r.planner})"
     status = "solved" if r.solved else f"NOT solved ({r.status})"
     turns = int((np.diff(r.slices) != 0).sum()) if len(r.slices) else 0
-    print(f"{scene.name}: {args.planner} with {len(slices)} orientations {status} in "
-          f"{r.time:.2f} s; {len(r.path)} waypoints ({turns} turns between neighbouring "
-          f"orientations), length {r.length:.4g}; exact re-check: "
-          f"{'valid' if r.valid else 'INVALID'}")
+    if r.solved:
+        print(f"{scene.name}: {args.planner} with {len(slices)} orientations {status} in "
+              f"{r.time:.2f} s; {len(r.path)} waypoints ({turns} turns between neighbouring "
+              f"orientations), length {r.length:.4g}; exact re-check: "
+              f"{'valid' if r.valid else 'INVALID'}")
+    else:
+        print(f"{scene.name}: {args.planner} with {len(slices)} orientations {status} in "
+              f"{r.time:.2f} s: no path found")
     first = r.built.get("start_orientation_only")
     if first is not None:
         print("  start and goal share an orientation: "
@@ -625,8 +638,12 @@ def _view(args: argparse.Namespace) -> int:
             fs = free_space(model_scene(scene, cache=cache).cspace(), scene.bounds)
         except (UnsupportedError, MemoryBudgetError) as e:  # the scene is drawn all the same
             print(f"free space: not drawn: {e}")
-    report = draw_scene(view, scene, path=path, superset=args.superset, cache=cache,
-                        free_space=fs)
+    progress = _Progress(args.quiet, args.progress)
+    try:
+        report = draw_scene(view, scene, path=path, superset=args.superset, cache=cache,
+                            free_space=fs, progress=progress, memory=args.memory)
+    finally:
+        progress.close()
     for name, what in report.items():
         print(f"{name}: {what}")
     if args.live:
@@ -703,11 +720,15 @@ def _model_options(p: argparse.ArgumentParser) -> None:
                         "(faster for a non-convex robot; conservative: it can only add "
                         "collisions); default: the robot exactly")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
+    _memory_option(p, "the build")
+    _progress_options(p)
+
+
+def _memory_option(p: argparse.ArgumentParser, what: str) -> None:
     p.add_argument("--memory", type=_size, default=None, metavar="SIZE",
-                   help="memory budget of the build, e.g. 6G (default $CSPACE_MEMORY, else half "
+                   help=f"memory budget of {what}, e.g. 6G (default $CSPACE_MEMORY, else half "
                         "of the memory available); a build over it stops before it starts, "
                         f"exit status {EXIT_MEMORY}")
-    _progress_options(p)
 
 
 def _progress_options(p: argparse.ArgumentParser) -> None:
@@ -773,9 +794,14 @@ class _Formatter(argparse.RawDescriptionHelpFormatter):
         return text
 
 
-def _help(example: str) -> dict:
-    """Subcommand help: defaults shown, one example."""
-    return {"formatter_class": _Formatter, "epilog": f"example:\n  {example}"}
+def _help(example: str, one: str = "", status: str | None = None) -> dict:
+    """Subcommand help: defaults shown, one example, the exit statuses (``one``: what 1
+    means for this command, besides an internal error; ``status``: the whole list)."""
+    status = status or (f"0 done; 1 {one + ' or ' if one else ''}an internal error (a bug: "
+                        f"--debug shows it); 2 bad input or an unwritable output (one line on "
+                        f"stderr); {EXIT_MEMORY} over the memory budget; 130 interrupted")
+    return {"formatter_class": _Formatter,
+            "epilog": f"example:\n  {example}\n\nexit status: {status}"}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -785,6 +811,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
     parser.add_argument("--debug", action="store_true",
                         help="show Python tracebacks (for reporting a bug in cspace)")
+    parser.add_argument("--version", action="version", version=f"cspace {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     p = sub.add_parser("convex-sum", help="exact Minkowski sum of two convex shapes (CVMS)", **_help(
         "cspace convex-sum obstacle.stl robot.stl --reflect-b 0 0 0 -o cobstacle.stl"))
@@ -804,29 +831,31 @@ def main(argv: Sequence[str] | None = None) -> int:
     _progress_options(p)
     p.set_defaults(func=_sum)
     p = sub.add_parser("check", help="cross-check a scene's C-obstacles against FCL", **_help(
-        "cspace check scenes/window.toml -n 2000"))
+        "cspace check scenes/window.toml -n 2000", one="FCL disagreed"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-n", type=_positive_int, default=10000,
                    help="number of random translations")
     p.add_argument("--seed", type=_seed, default=0, help="random seed")
     p.add_argument("--band", type=_non_negative, default=1e-9,
                    help="ignore points this close to the surface")
-    p.add_argument("--robot-hull", action="store_true",
-                   help="check the C-obstacles of the robot's convex hull instead of its exact parts")
+    _model_options(p)
+    _executor_options(p)
     p.set_defaults(func=_check)
     p = sub.add_parser("build", help="model a scene and build its C-obstacles (cached)", **_help(
-        "cspace build scenes/maze.toml --explain -o maze_cobstacles.npz"))
+        "cspace build scenes/maze.toml --explain -o maze_cobstacles.npz",
+        one="a body's C-obstacles could not be built"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="write the C-obstacles' meshes to an .npz file")
     _model_options(p)
     _executor_options(p)
     p.set_defaults(func=_build)
     p = sub.add_parser("plan", help="plan a path with OMPL and exact C-obstacles", **_help(
-        "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html\n"
-        "exit status: 0 a proved path; 1 none found in the time given; 2 bad input; "
-        f"{EXIT_NO_PATH} proved that none exists as the robot may move (--no-turns: at the "
-        "start's orientation; --slices N: over those slices, said so; a robot that may turn "
-        f"freely gets 1, not a proof); {EXIT_MEMORY} over the memory budget"))
+        "cspace plan scenes/comb.toml --seed 1 -o path.txt --html comb.html", status=(
+            "0 a proved path; 1 none found in the time given (not a proof); 2 bad input; "
+            f"{EXIT_NO_PATH} proved that none exists as the robot may move (--no-turns: at the "
+            "start's orientation; --slices N: over those slices, said so; a robot that may "
+            "turn: the ball inside it that no turn changes cannot pass either); "
+            f"{EXIT_MEMORY} over the memory budget; 130 interrupted")))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     _model_options(p)
     p.add_argument("--planner", default="auto",
@@ -838,8 +867,10 @@ def main(argv: Sequence[str] | None = None) -> int:
                         "sampler and the decision again), within --time. A given planner "
                         "plans in SE(3) when the goal's orientation differs from the start's, "
                         "else translations")
-    p.add_argument("--time", type=_positive, default=5.0,
-                   help="planning time budget in seconds")
+    p.add_argument("--time", type=_positive, default=None,
+                   help="planning time budget in seconds (default: Python plan()'s, "
+                        "cspace.planning.plan.DEFAULT_TIME, 10 s; the auto planner stops at its "
+                        "first answer, a path or a proof)")
     p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed (none: a new one each run)")
     p.add_argument("-o", "--output", help="write the path when solved: .txt, .csv or .npy (n x 3, "
                    "n x 7 with quaternions x y z w when it turns), or OMPL.app's .path "
@@ -866,19 +897,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.set_defaults(func=_plan)
     p = sub.add_parser("free-space", help="the exact free space at the start's orientation: "
                        "components, start and goal, the union's surface", **_help(
-                           "cspace free-space scenes/cage.toml -o cage_union.stl"))
+                           "cspace free-space scenes/cage.toml -o cage_union.stl",
+                           one="not done within --time"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="write the union's surface (any format trimesh exports)")
     p.add_argument("--time", type=_positive, default=None, metavar="SECONDS",
                    help="give up after this long (exit status 1); default: no limit")
-    p.add_argument("--memory", type=_size, default=None, metavar="SIZE",
-                   help="memory budget of the union, e.g. 6G (default $CSPACE_MEMORY, else half "
-                        f"of the memory available); past it, exit status {EXIT_MEMORY}")
+    _memory_option(p, "the union")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
     p.set_defaults(func=_free_space)
     p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)", **_help(
-        "cspace view scenes/window.toml -o window.html"))
+        "cspace view scenes/window.toml -o window.html",
+        one="a body's C-obstacles could not be built (the page is written all the same)"))
     p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
     p.add_argument("-o", "--output", help="HTML file to write (default: <scene name>.html)")
     p.add_argument("--live", action="store_true", help="serve the scene with a live meshcat server instead")
@@ -890,6 +921,8 @@ def main(argv: Sequence[str] | None = None) -> int:
                         "convex pieces, triangle pairs, solid bodies against a convex robot)")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
+    _memory_option(p, "the build")
+    _progress_options(p)
     p.add_argument("--screenshot", metavar="PNG", help="also render the HTML with headless Chromium")
     p.set_defaults(func=_view)
     args = parser.parse_args(argv)

@@ -56,6 +56,13 @@ def output_path(path, formats: tuple[str, ...], what: str = "output") -> Path:
         folder = folder.parent
     if not folder.is_dir() or not os.access(folder, os.W_OK | os.X_OK):
         raise OutputError(f"{what} '{p}': cannot create files in '{folder}'")
+    try:  # permissions do not tell everything (/proc, a read-only mount): try one
+        fd, probe = tempfile.mkstemp(prefix=".cspace-check-", dir=folder)
+        os.close(fd)
+        os.unlink(probe)
+    except OSError as exc:
+        raise OutputError(f"{what} '{p}': cannot create files in '{folder}' "
+                          f"({exc.strerror or exc})") from None
     return p
 
 
@@ -63,7 +70,8 @@ def write_atomic(path, write: Callable[[Path], None]) -> Path:
     """Write a file whole or not at all: ``write(tmp)`` then rename ``tmp`` to ``path``.
 
     The temporary file keeps the suffix (writers that choose the format from it work
-    unchanged) and is removed on any failure or interruption.
+    unchanged) and is removed on any failure or interruption; the file gets the mode a new
+    file would (``0666`` less the umask), not the temporary file's ``0600``.
 
     Raises
     ------
@@ -82,6 +90,8 @@ def write_atomic(path, write: Callable[[Path], None]) -> Path:
         raise OutputError(f"cannot write '{p}': {exc.strerror or exc}") from exc
     try:
         write(Path(tmp))
+        # mkstemp makes the file 0600; a file written in place would get the user's umask
+        os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, p)
     except BaseException as exc:
         try:
@@ -92,3 +102,10 @@ def write_atomic(path, write: Callable[[Path], None]) -> Path:
             raise OutputError(f"cannot write '{p}': {exc.strerror or exc}") from exc
         raise
     return p
+
+
+def _umask() -> int:
+    """The process's umask (read by setting it and putting it back)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask

@@ -28,7 +28,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 def main(scene_file: str, slices: int) -> int:
     scene = cspace.load_scene(scene_file)
-    fixed = plan(scene, time=1.0, seed=1)
+    fixed = plan(scene, time=1.0, seed=1, turns=False)  # the start orientation only
     print(f"without turning: solved {fixed.solved} ({fixed.status})")
     r = plan(scene, slices=slices, time=10.0, seed=1, cache=True)
     turns = int((np.diff(r.slices) != 0).sum())

@@ -10,7 +10,7 @@ PUBLIC = {
     "__version__", "Grid", "ClosedMesh", "as_mesh", "ConvexPolytope", "MinkowskiSum",
     "FACET_KINDS", "convex_minkowski_sum", "Superset", "SUPERSET_KINDS", "minkowski_superset",
     "minkowski_sum", "SumPolyhedron", "model_scene", "SceneModel",
-    "Body", "Scene", "load_scene", "SceneError", "CSpaceObstacle", "CSpace", "CspaceError", "InvalidMeshError", "EmptyMeshError",
+    "Body", "Scene", "load_scene", "save_scene", "SceneError", "CSpaceObstacle", "CSpace", "CspaceError", "InvalidMeshError", "EmptyMeshError",
     "NonFiniteError", "OpenMeshError", "NonManifoldError", "DegenerateError",
     "DuplicateFaceError", "NotConvexError", "GridRangeError", "ExactnessError", "BuildError",
     "OutputError", "MeshFileError", "MeshFileNotFoundError", "OperandTypeError",

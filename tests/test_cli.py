@@ -285,3 +285,42 @@ def test_first_plan_on_a_non_convex_scene_is_as_fast_as_the_next(tmp_path):
         assert out.returncode == 0, out.stderr
         assert "solved" in out.stdout and "NOT solved" not in out.stdout
         assert (tmp_path / f"path{run}.txt").read_text().strip()
+
+
+def test_version_and_exit_statuses_in_every_subcommands_help():
+    from cspace import __version__
+
+    r = subprocess.run([sys.executable, "-m", "cspace", "--version"], capture_output=True,
+                       text=True)
+    assert r.returncode == 0 and r.stdout.strip() == f"cspace {__version__}"
+    for cmd in ("convex-sum", "superset", "sum", "check", "build", "plan", "free-space", "view"):
+        r = subprocess.run([sys.executable, "-m", "cspace", cmd, "--help"], capture_output=True,
+                           text=True)
+        assert r.returncode == 0 and "exit status: 0 " in r.stdout, cmd
+        assert "2 bad input" in r.stdout, cmd
+
+
+def test_every_command_that_builds_takes_the_cache_memory_and_progress_flags(tmp_path, capsys):
+    scene = str(SCENES / "comb.toml")
+    assert main(["check", scene, "-n", "500", "-q", "--no-cache", "--memory", "2G"]) == 0
+    assert main(["check", scene, "-n", "500", "-q", "--cache-dir", str(tmp_path)]) == 0
+    assert any(tmp_path.iterdir())  # the check built through that cache
+    out = tmp_path / "comb.html"
+    assert main(["view", scene, "-o", str(out), "-q", "--no-cache", "--memory", "2G"]) == 0
+    assert out.stat().st_size > 10000
+    capsys.readouterr()
+
+
+def test_an_open_robot_is_said_in_the_normal_output(tmp_path):
+    """A robot mesh with two faces removed is planned as a surface: the normal output says
+    so (not only --explain)."""
+    box = trimesh.creation.box((0.3, 0.3, 0.3))
+    box.faces = box.faces[2:]
+    box.export(tmp_path / "robot.obj")
+    (tmp_path / "s.toml").write_text(
+        '[robot]\nmesh = "robot.obj"\n[planning]\nbounds = [[-2, -2, -2], [2, 2, 2]]\n'
+        'start = [-1.5, 0, 0]\ngoal = [1.5, 0, 0]\n[[obstacles]]\nbox = [0.2, 1, 1]\n')
+    r = subprocess.run([sys.executable, "-m", "cspace", "plan", str(tmp_path / "s.toml"),
+                        "--seed", "1", "--no-cache"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    assert "robot robot.obj: modelled as a surface, not a solid (open: 4 boundary edges)" in r.stdout

@@ -90,6 +90,7 @@ def test_unsolved_plan_writes_no_path_and_says_so(tmp_path):
                "--html", tmp_path / "v.html")
     assert r.returncode == 1 and "Traceback" not in r.stderr
     assert "NOT solved" in r.stdout and "no path written" in r.stderr
+    assert "valid" not in r.stdout  # nothing was re-checked
     assert not path.exists()
     import json
 
@@ -189,3 +190,11 @@ def test_a_few_dozen_bad_command_lines(tmp_path):
         assert len(errors) == 1, (args, r.stderr)
     assert sorted(p.name for p in tmp_path.iterdir() if p.name.startswith(("out", "p.", "r.",
                                                                             "v.", "."))) == []
+
+
+def test_an_output_the_system_refuses_is_named_before_any_work():
+    """``/proc`` passes a permission check but takes no new file: ``-o /proc/x.path`` is an
+    error before the scene is even modelled (no planning output at all)."""
+    r = cspace("plan", SCENES / "window.toml", "--seed", "1", "-o", "/proc/x.path")
+    assert r.returncode == 2 and "cannot create files in '/proc'" in r.stderr
+    assert "auto:" not in r.stdout and "solved" not in r.stdout

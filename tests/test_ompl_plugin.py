@@ -217,8 +217,8 @@ def test_seed_reproducible(scenes):
 def test_plan_on_cspace_needs_start_goal(scenes):
     s, cs, _ = scenes["comb"]
     with pytest.raises(ValueError, match="start is required"):
-        plan(cs)
-    r = plan(cs, s.start, s.goal, bounds=s.bounds, seed=1, time=0.5)
+        plan(cs, planner="RRTConnect")
+    r = plan(cs, s.start, s.goal, bounds=s.bounds, seed=1, time=0.5, planner="RRTConnect")
     assert r.solved and r.planner == "RRTConnect" and r.motion == "exact"
     assert r.length >= float(np.linalg.norm(s.goal - s.start))
 

@@ -135,3 +135,30 @@ def test_translations_only_give_the_rest_of_the_budget_to_the_decision(monkeypat
     assert [t["planner"] for t in r.tried] == ["RRTConnect", "decide", "PRM", "decide"]
     assert r.tried[1]["answer"] == "unknown" and r.tried[3]["answer"] == "no path"
     assert not r.solved and r.decision.answer == "no path" and r.time < 10.0
+
+
+def test_the_cage_is_proved_shut_with_default_settings_beside_busy_cores():
+    """Issue #53: ``cspace plan scenes/cage.toml`` with no option (the default time, 10 s,
+    the auto planner) exits 3 with both cores busy (two spinning processes), and Python's
+    ``plan(scene)`` with its defaults (the same) gives the same proof."""
+    import multiprocessing as mp
+
+    spinners = [mp.get_context("spawn").Process(target=_spin, daemon=True) for _ in range(2)]
+    for s in spinners:
+        s.start()
+    try:
+        p = subprocess.run([sys.executable, "-m", "cspace", "plan", str(SCENES / "cage.toml"),
+                            "--seed", "1", "--no-cache"], capture_output=True, text=True,
+                           timeout=300)
+        r = plan(cspace.load_scene(SCENES / "cage.toml"), seed=1)
+    finally:
+        for s in spinners:
+            s.kill()
+    assert p.returncode == 3, (p.stdout[-1500:], p.stderr[-1500:])
+    assert "no path at any orientation, proved" in p.stdout
+    assert not r.solved and "proved" in r.status, r.status
+
+
+def _spin() -> None:  # a busy core
+    while True:
+        pass

@@ -713,3 +713,66 @@ def test_byu_reader(tmp_path):
         (tmp_path / "m.g").write_text(bad)
         with pytest.raises(SceneError, match=match):
             meshfile._read_byu(tmp_path / "m.g")
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (250.0, 150.0, -300.0)], ids=["origin", "far"])
+def test_a_scene_built_in_code_is_written_and_read_back_exactly(tmp_path, offset):
+    """``Scene.from_meshes`` from trimesh objects and arrays (default bounds: the obstacles,
+    start and goal grown by the robot's reach), written by ``save_scene`` as TOML with OBJ
+    meshes, read back by ``load_scene`` with the same vertices, faces, bounds, start, goal and
+    reference point, bit for bit; the file gets the umask's mode, not a temporary file's."""
+    import os
+
+    import cspace
+    from cspace.geometry.transform import euler_xyz
+
+    off = np.asarray(offset)
+    wall = trimesh.creation.box((0.2, 4.0, 3.0))
+    wall.apply_translation(off + [0.1, 0.0, 0.0])
+    post = trimesh.creation.cylinder(0.1, 2.0)
+    post.apply_translation(off + [1.3, 0.7, 0.0])
+    robot = trimesh.creation.icosphere(1, radius=0.3)
+    turn = euler_xyz([10.0, 20.0, 30.0])
+    s = cspace.Scene.from_meshes(robot, {"wall": wall, "post": (post.vertices, post.faces)},
+                                 start=off - [1.0, 0.0, 0.0], goal=off + [1.0, 0.0, 0.0],
+                                 reference_point=[0.0, 0.1, 0.0], start_rotation=turn,
+                                 goal_rotation=euler_xyz([0.0, 90.0, 0.0]), name="in code")
+    reach = np.linalg.norm(s.robot.vertices - s.reference_point, axis=1).max()
+    assert np.allclose(s.bounds[0], np.minimum(wall.bounds[0], s.start) - reach)
+    assert np.allclose(s.reference_point, turn @ [0.0, 0.1, 0.0])
+    assert [b.name for b in s.obstacles] == ["wall", "post"]
+    old = os.umask(0o027)
+    try:
+        path = cspace.save_scene(s, tmp_path / "mine.toml")
+    finally:
+        os.umask(old)
+    assert path.stat().st_mode & 0o777 == 0o640
+    back = load_scene(path)
+    assert back.name == "in code"
+    for key in ("bounds", "start", "goal", "reference_point"):
+        assert np.array_equal(getattr(back, key), getattr(s, key)), key
+    assert np.array_equal(back.robot.vertices, s.robot.vertices)
+    for a, b in zip(back.obstacles, s.obstacles):
+        assert a.name == b.name
+        assert np.array_equal(a.vertices, b.vertices) and np.array_equal(a.faces, b.faces)
+    # the goal's turn relative to the start's, within rounding of the written angles
+    rel = back.goal_rotation @ back.start_rotation.T
+    assert np.abs(rel - s.goal_rotation @ s.start_rotation.T).max() < 1e-12
+
+
+def test_scene_from_meshes_names_what_is_wrong(tmp_path):
+    import cspace
+    from cspace.errors import OutputError
+
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    with pytest.raises(SceneError, match="obstacle-1: expected a mesh"):
+        cspace.Scene.from_meshes(box, [box, 3.0], start=[2, 0, 0], goal=[3, 0, 0])
+    with pytest.raises(SceneError, match="start .* is outside the bounds"):
+        cspace.Scene.from_meshes(box, [box], start=[9, 0, 0], goal=[3, 0, 0],
+                                 bounds=[[-4, -4, -4], [4, 4, 4]])
+    s = cspace.Scene.from_meshes(box, [box], start=[2, 0, 0], goal=[-2, 0, 0])
+    with pytest.raises(OutputError, match="expected .toml"):
+        cspace.save_scene(s, tmp_path / "mine.json")
+    with pytest.raises(OutputError, match="cannot"):
+        cspace.save_scene(s, "/proc/x/mine.toml")
+    assert not list(tmp_path.iterdir())  # nothing half-written

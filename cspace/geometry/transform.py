@@ -12,7 +12,8 @@ import math
 
 import numpy as np
 
-__all__ = ["cos_sin_degrees", "euler_xyz", "axis_angle", "axis_angle_degrees", "transform"]
+__all__ = ["cos_sin_degrees", "euler_xyz", "euler_xyz_degrees", "axis_angle", "axis_angle_degrees",
+           "transform"]
 
 
 def cos_sin_degrees(angle: float) -> tuple[float, float]:
@@ -31,6 +32,20 @@ def euler_xyz(angles_degrees) -> np.ndarray:
     ry = np.array([[cb, 0.0, sb], [0.0, 1.0, 0.0], [-sb, 0.0, cb]])
     rz = np.array([[cc, -sc, 0.0], [sc, cc, 0.0], [0.0, 0.0, 1.0]])
     return rz @ ry @ rx
+
+
+def euler_xyz_degrees(rotation) -> np.ndarray:
+    """The angles ``[a, b, c]`` (degrees) with ``euler_xyz([a, b, c]) == rotation`` up to
+    float64 rounding (scipy's extrinsic ``'xyz'``; exact multiples of 90 where the rotation
+    is a quarter-turn rotation, so that :func:`euler_xyz` gives it back exactly)."""
+    from scipy.spatial.transform import Rotation
+
+    angles = Rotation.from_matrix(np.asarray(rotation, dtype=np.float64)).as_euler(
+        "xyz", degrees=True)
+    snapped = np.round(angles / 90.0) * 90.0
+    if np.array_equal(euler_xyz(snapped), np.asarray(rotation, dtype=np.float64)):
+        return snapped + 0.0
+    return angles
 
 
 def _rodrigues(axis, c: float, s: float) -> np.ndarray:

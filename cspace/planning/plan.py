@@ -33,6 +33,7 @@ from .ompl_plugin import (
 
 __all__ = [
     "MOTIONS",
+    "DEFAULT_TIME",
     "plan_turning",
     "default_slices",
     "PlanResult",
@@ -88,8 +89,14 @@ def _endpoint(cspace: CSpace, q, b: np.ndarray, what: str) -> np.ndarray:
     return a
 
 
-def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
-         time: float = 1.0, seed: int | None = None, simplify: bool = True, bounds=None,
+#: The default planning budget of :func:`plan` and ``cspace plan --time`` (seconds): enough
+#: for the auto planner's proofs of "no path" on a loaded machine (the shipped cage is proved
+#: in about 1.4 s unloaded; ``tests/test_plan_auto.py`` runs it beside spinning processes).
+DEFAULT_TIME = 10.0
+
+
+def plan(scene_or_cspace, start=None, goal=None, *, planner: str | None = None,
+         time: float = DEFAULT_TIME, seed: int | None = None, simplify: bool = True, bounds=None,
          motion: str = "exact", resolution: float = 0.01, optimize: bool = False,
          planner_range: float | None = None, cache=None,
          sampler: str = "uniform", robot_hull: bool = False, slices=None,
@@ -104,15 +111,18 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
         start, goal and bounds default to the scene's) or a built :class:`CSpace`.
     start, goal : (3,) float64, optional
         Reference-point translations; required for a CSpace.
-    planner : str, default 'RRTConnect'
+    planner : str, optional
         A geometric planner bound in ``ompl.geometric`` (:func:`planner_names`), or
-        ``'auto'`` (what ``cspace plan`` does unless told otherwise): RRTConnect, the
+        ``'auto'``. Default: ``'auto'`` (as ``cspace plan``), or RRTConnect when an option
+        only a named planner takes is given (``slices``, ``sampler``, ``motion='discrete'``,
+        ``optimize``). ``'auto'``: RRTConnect, the
         decision by certified cells, then (a scene, ``turns``) the robot turns while it
         moves, in SE(3), every motion certified (without turns: PRM with the narrow-passage
         sampler), each within its share of ``time`` (:data:`AUTO_SHARES`), until one
         solves; ``PlanResult.tried`` lists the attempts (:func:`_plan_auto`).
-    time : float, default 1.0
-        Seconds for ``solve()`` (simplification gets ``min(1, time / 2)`` more).
+    time : float, default :data:`DEFAULT_TIME` (10 s, as ``cspace plan``)
+        Seconds for ``solve()`` (simplification gets ``min(1, time / 2)`` more). The auto
+        planner stops at the first answer (a path or a proof): most problems take far less.
     seed : int, optional
         ``ompl.util.RNG.setSeed(seed)`` before building the planner. Runs are then
         reproducible for the same inputs and call order in a process (OMPL derives every
@@ -173,6 +183,9 @@ def plan(scene_or_cspace, start=None, goal=None, *, planner: str = "RRTConnect",
     """
     ob, og, ou = _ompl()
     names = planner_names()
+    if planner is None:  # auto, unless the options ask for a planner of their own
+        named = sampler != "uniform" or slices is not None or motion != "exact" or optimize
+        planner = "RRTConnect" if named else AUTO
     if planner == AUTO:
         if sampler != "uniform" or slices is not None or motion != "exact" or optimize:
             raise InvalidArgumentError("planner='auto' chooses the sampler and the slices "

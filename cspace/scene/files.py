@@ -146,7 +146,7 @@ from ..geometry.transform import (
 from ..mesh.files import _is_float, read_mesh_file
 from .scene import Body, Scene, _inside
 
-__all__ = ["load_scene"]
+__all__ = ["load_scene", "save_scene"]
 
 
 # --------------------------------------------------------------------------------------
@@ -205,6 +205,77 @@ _SIGNS = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in 
 _QUADS = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
 _BOX_FACES = np.array([(a, b, c) for a, b, c, d in _QUADS] + [(a, c, d) for a, b, c, d in _QUADS],
                       dtype=np.int64)
+
+
+def save_scene(scene: Scene, path) -> Path:
+    """Write a scene as cspace's TOML, with its meshes as OBJ files beside it.
+
+    Parameters
+    ----------
+    scene : Scene
+        Any scene (built in code with :meth:`Scene.from_meshes`, or loaded).
+    path : str or os.PathLike
+        The ``.toml`` file; the meshes go to the folder ``<stem>-meshes`` next to it
+        (``robot.obj`` and one file per obstacle, by index).
+
+    Returns
+    -------
+    Path
+        The file written. :func:`load_scene` reads it back with the same vertices and faces
+        (OBJ coordinates are written with 17 significant digits: exact float64 round trips),
+        bounds, start, goal and reference point. The robot is written as the scene holds it,
+        its start orientation applied (so the file's ``robot.orientation`` is 0); a goal
+        orientation that differs is written as angles relative to it (float64 degrees:
+        within rounding of the rotation). Each file is written whole or not at all.
+    """
+    from ..geometry.transform import euler_xyz_degrees
+    from ..output import output_path, write_atomic
+
+    p = output_path(path, ("toml",), "scene")
+    folder = p.parent / f"{p.stem}-meshes"
+
+    def obj(body: Body, file: Path) -> str:
+        def write(tmp: Path) -> None:
+            with open(tmp, "w") as f:
+                f.write(f"# {body.name} ({body.source})\n")
+                for x, y, z in body.vertices.tolist():
+                    f.write(f"v {x!r} {y!r} {z!r}\n")
+                for a, b, c in (body.faces + 1).tolist():
+                    f.write(f"f {a} {b} {c}\n")
+        write_atomic(file, write)
+        return f"{folder.name}/{file.name}"
+
+    def vec(v) -> str:
+        return "[" + ", ".join(repr(float(x)) for x in np.asarray(v).reshape(-1)) + "]"
+
+    lines = [f"# written by cspace.save_scene", f"name = {_toml_string(scene.name)}", "",
+             "[robot]", f"mesh = {_toml_string(obj(scene.robot, folder / 'robot.obj'))}",
+             f"reference_point = {vec(scene.reference_point)}", "",
+             "[planning]", f"bounds = [{vec(scene.bounds[0])}, {vec(scene.bounds[1])}]",
+             f"start = {vec(scene.start)}", f"goal = {vec(scene.goal)}"]
+    turn = scene.goal_rotation @ scene.start_rotation.T
+    if np.abs(turn - np.eye(3)).max() > 0:
+        lines.append(f"goal_orientation = {vec(euler_xyz_degrees(turn))}")
+    for i, body in enumerate(scene.obstacles):
+        lines += ["", "[[obstacles]]", f"name = {_toml_string(body.name)}",
+                  f"mesh = {_toml_string(obj(body, folder / f'obstacle-{i}.obj'))}"]
+
+    def write(tmp: Path) -> None:
+        tmp.write_text("\n".join(lines) + "\n")
+    return write_atomic(p, write)
+
+
+def _toml_string(text: str) -> str:
+    """A TOML basic string (quotes, backslashes and control characters escaped)."""
+    out = []
+    for ch in str(text):
+        if ch in '"\\':
+            out.append("\\" + ch)
+        elif ord(ch) < 32 or ord(ch) == 127:
+            out.append(f"\\u{ord(ch):04x}")
+        else:
+            out.append(ch)
+    return '"' + "".join(out) + '"'
 
 
 def _box(extents) -> tuple[np.ndarray, np.ndarray]:

@@ -143,11 +143,17 @@ class SceneModel:
 
     def meaning_changes(self, limit: int | None = None) -> list[str]:
         """One line per body whose meaning modelling changed (:attr:`BodyModel.changed`),
-        the first ``limit`` of them and a count of the rest; empty when none did."""
+        the first ``limit`` of them and a count of the rest, and one per robot part that is
+        not a solid (an open surface: it collides only where its surface meets an obstacle,
+        and what it would enclose is free unless it closes up); empty when nothing changed."""
+        lines = [f"robot {p.name}: modelled as a surface, not a solid ({p.reason}): it "
+                 "collides where its surface meets an obstacle"
+                 + ("" if p.encloses is not None else ", an obstacle wholly inside it does not")
+                 for p in self.robot_parts if p.kind == "surface"]
         changed = [b for b in self.bodies if b.changed]
         if not changed:
-            return []
-        lines = [f"meaning changed for {len(changed)} of {len(self.bodies)} bodies:"]
+            return lines
+        lines += [f"meaning changed for {len(changed)} of {len(self.bodies)} bodies:"]
         shown = changed if limit is None else changed[:limit]
         lines += [f"  {b.name}: {b.changed}" for b in shown]
         if len(shown) < len(changed):

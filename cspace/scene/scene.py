@@ -156,6 +156,61 @@ class Scene:
         if self.path is not None:
             object.__setattr__(self, "path", Path(self.path))
 
+    @classmethod
+    def from_meshes(cls, robot, obstacles, start, goal, *, bounds=None,
+                    reference_point=(0.0, 0.0, 0.0), start_rotation=None, goal_rotation=None,
+                    name: str = "scene") -> "Scene":
+        """A scene built in code: a robot, obstacles, a start and a goal.
+
+        Parameters
+        ----------
+        robot : trimesh.Trimesh, (vertices, faces), path or Body
+            The robot in its own frame (scene units), as a mesh object, arrays or a mesh
+            file (any format :func:`cspace.mesh.files.read_mesh_file` reads).
+        obstacles : sequence or dict of the same
+            Obstacles in the world frame; a dict names them (``{"wall": mesh}``), else they
+            are ``obstacle-0``, ``obstacle-1``, ... (a Body keeps its name).
+        start, goal : (3,) float
+            Where the robot's reference point starts and ends, world frame.
+        bounds : (2, 3) float, optional
+            The box the reference point moves in. Default: the box of the obstacles, the
+            start and the goal, grown on every side by the robot's reach (its farthest vertex
+            from the reference point), so that the robot can pass around every obstacle.
+        reference_point : (3,) float, default the origin
+            The point of the robot whose position is planned, in the robot's own frame.
+        start_rotation, goal_rotation : (3, 3) float, optional
+            The robot's orientation at the start (applied to the robot and its reference
+            point, as a TOML ``orientation`` is) and the one asked for at the goal; default
+            the identity, the goal's the start's.
+        name : str
+            Used in reports and error messages.
+
+        Returns
+        -------
+        Scene
+            Checked as any scene (start and goal inside the bounds, rotations proper).
+            :func:`cspace.save_scene` writes it as a TOML file with its meshes.
+        """
+        R = np.eye(3) if start_rotation is None else np.asarray(start_rotation, dtype=np.float64)
+        body = _as_body(robot, "robot")
+        c = np.asarray(reference_point, dtype=np.float64).reshape(3)
+        robot_body = Body(body.name, body.vertices @ R.T, body.faces, body.source)
+        c = R @ c
+        items = obstacles.items() if isinstance(obstacles, dict) else (
+            (None, o) for o in obstacles)
+        bodies = tuple(_as_body(o, f"obstacle-{i}" if key is None else str(key))
+                       for i, (key, o) in enumerate(items))
+        start = np.asarray(start, dtype=np.float64).reshape(3)
+        goal = np.asarray(goal, dtype=np.float64).reshape(3)
+        if bounds is None:
+            pts = [start[None], goal[None]] + [b.vertices for b in bodies]
+            allp = np.concatenate(pts)
+            reach = float(np.linalg.norm(robot_body.vertices - c, axis=1).max())
+            bounds = np.stack([allp.min(axis=0) - reach, allp.max(axis=0) + reach])
+        return cls(name=name, path=None, obstacles=bodies, robot=robot_body,
+                   reference_point=c, bounds=bounds, start=start, goal=goal,
+                   start_rotation=R, goal_rotation=goal_rotation)
+
     def robot_polytope(self, grid=None) -> ConvexPolytope:
         """The robot as an exact convex polytope (robot frame; reference point not subtracted).
 
@@ -221,6 +276,26 @@ class Scene:
             f"bounds={self.bounds.tolist()}, start={self.start.tolist()}, "
             f"goal={self.goal.tolist()})"
         )
+
+
+def _as_body(obj, name: str) -> Body:
+    """A :class:`Body` from a Body, a mesh object (``.vertices``, ``.faces``), a
+    ``(vertices, faces)`` pair or a mesh file path."""
+    import os
+
+    if isinstance(obj, Body):
+        return obj
+    if isinstance(obj, (str, os.PathLike)):
+        from ..mesh.files import read_mesh_file
+
+        m = read_mesh_file(obj, f"{name} ({os.fspath(obj)})")
+        return Body(name, m.vertices, m.faces, os.fspath(obj))
+    if hasattr(obj, "vertices") and hasattr(obj, "faces"):
+        return Body(name, np.asarray(obj.vertices), np.asarray(obj.faces), "array")
+    if isinstance(obj, (tuple, list)) and len(obj) == 2:
+        return Body(name, obj[0], obj[1], "array")
+    raise SceneError(f"{name}: expected a mesh (trimesh.Trimesh, (vertices, faces), a path or "
+                     f"a Body), got {type(obj).__name__}")
 
 
 def _inside(point: np.ndarray, bounds: np.ndarray) -> bool:

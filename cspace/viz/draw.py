@@ -13,7 +13,8 @@ __all__ = ["draw_scene"]
 
 def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
                superset: bool = False, animate: bool = True, cache=None,
-               decision=None, free_space=None, rotations=None) -> dict[str, str]:
+               decision=None, free_space=None, rotations=None, progress=None,
+               memory=None) -> dict[str, str]:
     """Draw a :class:`cspace.scene.scene.Scene`: obstacles, the robot at start and goal, C-obstacles, a path.
 
     The scene is modelled and built as :func:`cspace.scene.model.model_scene` does (exact robot
@@ -35,6 +36,10 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
         Whether to draw the C-obstacles / the superset of a body whose build failed.
     cache : COCache, path, True, or None
         The disk cache the C-obstacles are built through (:func:`cspace.scene.model.model_scene`).
+    progress : callable, optional
+        ``progress(fraction, stage)`` during the build (as ``model_scene``'s).
+    memory : int or str, optional
+        The build's memory budget (as ``model_scene``'s).
     decision : Decision, optional
         A :func:`cspace.planning.decide.decide` answer: with ``'no path'``, the closed
         surface around the start's component when the exact free space proved it
@@ -58,7 +63,7 @@ def draw_scene(view: SceneView, scene, *, path=None, cobstacles: bool = True,
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")  # the scene already warned when it was loaded
-        m = model_scene(scene, cache=cache)
+        m = model_scene(scene, cache=cache, progress=progress, memory=memory)
     report: dict[str, str] = {}
     for body in m.bodies:
         view.add_obstacle(body.name, body.vertices, body.faces)
