@@ -4,7 +4,7 @@ VENV   ?= .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test test-slow test-heavy bench screenshot clean
+.PHONY: demo test test-slow test-heavy bench screenshot docs clean
 
 $(PY):
 	$(PYTHON) -m venv $(VENV)
@@ -44,6 +44,12 @@ bench: $(STAMP)
 	$(PY) benchmarks/bench_hard_cases.py
 	$(PY) benchmarks/bench_cold_start.py
 	$(PY) benchmarks/bench_speed_error.py
+
+# The documentation site (Sphinx, warnings are errors) into docs/_build/html.
+docs: $(STAMP)
+	$(PY) -m pip install -e '.[docs]'
+	$(PY) -m sphinx -E -W --keep-going -b html docs docs/_build/html
+	@echo "open docs/_build/html/index.html"
 
 clean:
 	rm -rf $(VENV) build *.egg-info .pytest_cache

@@ -808,7 +808,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Run the ``cspace`` command line; returns the exit status."""
     from .errors import CspaceError, MemoryBudgetError
 
-    parser = argparse.ArgumentParser(prog="cspace", description="Exact translational C-space obstacles.")
+    parser = argparse.ArgumentParser(
+        prog="cspace", description="Exact C-space obstacles, and OMPL planning that trusts them.")
     parser.add_argument("--debug", action="store_true",
                         help="show Python tracebacks (for reporting a bug in cspace)")
     parser.add_argument("--version", action="version", version=f"cspace {__version__}")

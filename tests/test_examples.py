@@ -56,23 +56,6 @@ def test_penetration_depth(tmp_path):
     assert "moved up by depth + 1e-6 -> in collision: False" in out
 
 
-def test_readme_python_runs_from_a_fresh_clone(tmp_path):
-    # Every ```python block of the README, in order, in one namespace, from the repository's
-    # root (scenes/ is shipped), writing into a temporary folder.
-    import re
-
-    root = Path(__file__).resolve().parents[1]
-    blocks = re.findall(r"```python\n(.*?)```", (root / "README.md").read_text(), flags=re.S)
-    assert len(blocks) >= 4
-    code = "\n".join(blocks).replace('"out/scene.html"', repr(str(tmp_path / "scene.html")))
-    # a fresh interpreter, as a reader's: the Dask cluster the README starts leaves nothing
-    # behind in this test process
-    r = subprocess.run([sys.executable, "-c", code], cwd=root, capture_output=True, text=True,
-                       timeout=300, env={**os.environ, "CSPACE_CACHE": str(tmp_path / "cache")})
-    assert r.returncode == 0, r.stdout + r.stderr[-3000:]
-    assert (tmp_path / "scene.html").exists()
-
-
 def test_plan_with_turns(tmp_path):
     out = run(tmp_path, "plan_with_turns.py")
     assert "without turning: solved False" in out

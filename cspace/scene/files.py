@@ -16,6 +16,10 @@ planned), the box the reference point may move in, and the start and goal positi
 ``.env`` or ``.query``
     Parasol (PPL) problems: the ``.env`` environment, its ``.query`` and ``.robot`` siblings.
 
+Length: one reader per format with the conventions each follows (OMPL.app's, Parasol's, our
+TOML's, documented below and in ``docs/guides/scene-files.md``), and the TOML writer beside
+the reader it must match.
+
 Every malformed input raises :class:`SceneError` whose message names the file and the line
 (line-based formats) or the key (TOML, ``.cfg``) at fault, e.g.
 ``scenes/window.toml: robot.orientaton: unknown key (did you mean 'orientation'?)``.
