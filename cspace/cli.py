@@ -668,6 +668,47 @@ def _view(args: argparse.Namespace) -> int:
     return 0
 
 
+def _benchmark(args: argparse.Namespace) -> int:
+    import sqlite3
+    import subprocess
+    import tempfile
+    from pathlib import Path
+
+    from .planning.benchmark import benchmark
+    from .scene.files import load_scene
+
+    out = _out(args.output, ("log",), "-o")
+    db = _out(args.db, ("db",), "--db")
+    scene = load_scene(args.scene)
+    planners = [p.strip() for p in args.planners.split(",") if p.strip()]
+    logs = benchmark(scene, out, planners=planners, runs=args.runs, time=args.time,
+                     memory_mb=args.max_mem, seed=args.seed, sampled=args.sampled)
+    written = [str(p) for p in logs.values() if p is not None]
+    print(f"wrote {', '.join(written)} (OMPL's benchmark log format)")
+    # OMPL's own statistics script reads them into its database (Planner Arena's input)
+    with tempfile.TemporaryDirectory() as tmp:
+        target = str(db) if db is not None else str(Path(tmp) / "results.db")
+        r = subprocess.run([sys.executable, "-m", "ompl.ompl_benchmark_statistics", *written,
+                            "-d", target], capture_output=True, text=True)
+        if r.returncode != 0:
+            print(f"cspace: error: ompl_benchmark_statistics could not read the logs: "
+                  f"{r.stderr.strip()[-300:]}", file=sys.stderr)
+            return 1
+        with sqlite3.connect(target) as c:
+            rows = c.execute("SELECT e.name, p.name, COUNT(*), SUM(r.solved), AVG(r.time) "
+                             "FROM runs r JOIN plannerConfigs p ON r.plannerid = p.id "
+                             "JOIN experiments e ON r.experimentid = e.id "
+                             "GROUP BY e.name, p.name ORDER BY e.name, p.name").fetchall()
+    for exp, planner, n, solved, t in rows:
+        print(f"  {exp}: {planner.removeprefix('geometric_')}: solved {int(solved or 0)} of "
+              f"{n} runs, mean {t:.3g} s")
+    if db is not None:
+        print(f"wrote {db} (OMPL's benchmark database: plannerarena.org plots it)")
+    else:
+        print(f"  OMPL's database: ompl_benchmark_statistics {' '.join(written)} -d results.db")
+    return 0
+
+
 def _free_space(args: argparse.Namespace) -> int:
     from .planning.free_space import free_space
     from .scene.files import load_scene
@@ -896,6 +937,28 @@ def main(argv: Sequence[str] | None = None) -> int:
                    help="re-check the path with FCL sampled every 1e-3 of the scene size")
     p.add_argument("--result", help="write a JSON summary (model, plan, path, checks)")
     p.set_defaults(func=_plan)
+    p = sub.add_parser("benchmark", help="OMPL benchmark log of planners on a scene, every "
+                       "motion certified (and OMPL.app's sampled way beside it)", **_help(
+                           "cspace benchmark scenes/comb.toml --planners RRTConnect,PRM "
+                           "--runs 20 --time 5 --sampled -o comb.log --db comb.db",
+                           one="OMPL's statistics script could not read the log"))
+    p.add_argument("scene", help="scene file: .toml, OMPL.app .cfg, Parasol .env/.query")
+    p.add_argument("-o", "--output", required=True,
+                   help="the .log to write, in OMPL's benchmark format (ompl_benchmark_statistics "
+                        "reads it; with --sampled also <stem>-sampled.log)")
+    p.add_argument("--planners", default="RRTConnect",
+                   help="comma-separated OMPL geometric planners (poses in SE(3); the robot "
+                        "may turn)")
+    p.add_argument("--runs", type=_positive_int, default=10, help="runs per planner")
+    p.add_argument("--time", type=_positive, default=10.0, help="seconds per run")
+    p.add_argument("--max-mem", type=_positive, default=4096.0, metavar="MB",
+                   help="OMPL's memory limit per run, megabytes")
+    p.add_argument("--seed", type=_seed, default=None, help="OMPL random seed")
+    p.add_argument("--sampled", action="store_true",
+                   help="also run OMPL.app's way (FCL at each pose, motions sampled every 1%% "
+                        "of the extent, nothing proved between) into <stem>-sampled.log")
+    p.add_argument("--db", help="also write OMPL's benchmark database (.db, sqlite) of the logs")
+    p.set_defaults(func=_benchmark)
     p = sub.add_parser("free-space", help="the exact free space at the start's orientation: "
                        "components, start and goal, the union's surface", **_help(
                            "cspace free-space scenes/cage.toml -o cage_union.stl",

@@ -293,7 +293,8 @@ def test_version_and_exit_statuses_in_every_subcommands_help():
     r = subprocess.run([sys.executable, "-m", "cspace", "--version"], capture_output=True,
                        text=True)
     assert r.returncode == 0 and r.stdout.strip() == f"cspace {__version__}"
-    for cmd in ("convex-sum", "superset", "sum", "check", "build", "plan", "free-space", "view"):
+    for cmd in ("convex-sum", "superset", "sum", "check", "build", "plan", "benchmark",
+                "free-space", "view"):
         r = subprocess.run([sys.executable, "-m", "cspace", cmd, "--help"], capture_output=True,
                            text=True)
         assert r.returncode == 0 and "exit status: 0 " in r.stdout, cmd
@@ -324,3 +325,30 @@ def test_an_open_robot_is_said_in_the_normal_output(tmp_path):
                         "--seed", "1", "--no-cache"], capture_output=True, text=True)
     assert r.returncode == 0, r.stderr
     assert "robot robot.obj: modelled as a surface, not a solid (open: 4 boundary edges)" in r.stdout
+
+
+def test_benchmark_writes_logs_that_ompls_statistics_script_reads(tmp_path, capsys):
+    """``cspace benchmark`` runs OMPL's own Benchmark with the certified checks (and, with
+    --sampled, OMPL.app's way beside it); OMPL's statistics script (the real one, as a user
+    runs it) reads both logs into its database, one experiment each, every run recorded."""
+    import sqlite3
+
+    log, db = tmp_path / "comb.log", tmp_path / "comb.db"
+    assert main(["benchmark", str(SCENES / "comb.toml"), "--planners", "RRTConnect,KPIECE1",
+                 "--runs", "2", "--time", "5", "--seed", "1", "--sampled", "-o", str(log),
+                 "--db", str(db)]) == 0
+    out = capsys.readouterr().out
+    assert "comb.certified: RRTConnect: solved 2 of 2 runs" in out
+    assert (tmp_path / "comb-sampled.log").exists()
+    r = subprocess.run([sys.executable, "-m", "ompl.ompl_benchmark_statistics", str(log),
+                        str(tmp_path / "comb-sampled.log"), "-d", str(tmp_path / "again.db")],
+                       capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr
+    for path in (db, tmp_path / "again.db"):
+        with sqlite3.connect(path) as c:
+            rows = c.execute("SELECT e.name, COUNT(*) FROM runs r JOIN experiments e "
+                             "ON r.experimentid = e.id GROUP BY e.name").fetchall()
+        assert sorted(rows) == [("comb.certified", 4), ("comb.sampled", 4)]
+    assert main(["benchmark", str(SCENES / "comb.toml"), "--planners", "NoSuchPlanner",
+                 "-o", str(tmp_path / "x.log")]) == 2
+    assert not (tmp_path / "x.log").exists()
