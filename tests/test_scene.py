@@ -776,3 +776,40 @@ def test_scene_from_meshes_names_what_is_wrong(tmp_path):
     with pytest.raises(OutputError, match="cannot"):
         cspace.save_scene(s, "/proc/x/mine.toml")
     assert not list(tmp_path.iterdir())  # nothing half-written
+
+
+@pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (250.0, 150.0, -300.0)], ids=["origin", "far"])
+def test_contact_names_the_body_and_a_witness_pair(offset):
+    """``CSpace.contact``: the first contact of a straight motion (exact: the parameter
+    ``first_contact`` gives), the body hit first, and a witness pair on the raw meshes (the
+    robot's point and the obstacle's, within the error bound of each other); standing in
+    collision, t = 0 and the pair is a point where the two cross. Checked against geometry
+    the test knows: two boxes along x, the robot moving in +x meets the nearer one's face."""
+    import cspace
+
+    off = np.asarray(offset)
+    near = trimesh.creation.box((0.5, 2.0, 2.0))
+    near.apply_translation(off + [1.0, 0.0, 0.0])  # face at x = 0.75
+    far = trimesh.creation.box((0.5, 2.0, 2.0))
+    far.apply_translation(off + [3.0, 0.0, 0.0])
+    robot = trimesh.creation.box((0.2, 0.2, 0.2))
+    s = cspace.Scene.from_meshes(robot, {"near": near, "far": far}, start=off + [-1, 0, 0],
+                                 goal=off + [-1, 0.5, 0])
+    cs = cspace.CSpace.from_scene(s)
+    a, b = off + [-1.0, 0.1, 0.2], off + [4.0, 0.1, 0.2]
+    c = cs.contact(a, b)
+    assert c.t == cs.first_contact(a, b)
+    assert c.body == "near"
+    bound = cs.obstacles[0].error_bound
+    # the robot's +x face (x = q + 0.1) reaches the near box's face at x = 0.75
+    assert abs(c.position[0] - (off[0] + 0.65)) <= 2 * bound
+    assert c.gap <= 2 * bound
+    assert abs(c.obstacle_point[0] - (off[0] + 0.75)) <= 2 * bound
+    assert abs(c.robot_point[0] - (c.position[0] + 0.1)) <= 1e-9 * (1 + abs(off).max())
+    assert np.abs(c.obstacle_point[1:] - c.robot_point[1:]).max() <= 2 * bound
+    # standing inside the far box's reach: t = 0, a crossing point as both witnesses
+    inside = cs.contact(off + [2.8, 0.0, 0.0])
+    assert inside.t == 0.0 and inside.body == "far" and inside.gap == 0.0
+    assert np.array_equal(inside.robot_point, inside.obstacle_point)
+    free = cs.contact(off + [-1.0, 0.0, 0.0], off + [-1.0, 0.5, 0.0])
+    assert np.isnan(free.t) and free.body is None

@@ -37,6 +37,10 @@ part) pair gets the construction :func:`cspace.cobstacle.pairs.pair_construction
 
 Surface semantics equals FCL's mesh collision: a robot wholly inside an unclosed surface
 meets nothing.
+
+Length: the model (its steps and report) and the C-space it builds (eager and lazy, with
+the queries planners and users ask of it) share the bodies' bookkeeping; split, each half
+would reach into the other's.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ import time
 import warnings
 from dataclasses import dataclass, field
 from fractions import Fraction
+from typing import NamedTuple
 
 import numpy as np
 
@@ -186,7 +191,9 @@ class SceneModel:
             raise BuildError(f"scene {self.scene.name!r}: bodies {missing} were modelled "
                              "without building (build=False)")
         cos = [co for b in kept for co in b.cos]
+        owners = [(b.name, b.source) for b in kept for _ in b.cos]
         return CSpace(cos, bounds=self.scene.bounds, name=self.scene.name, scene=self.scene,
+                      owners=owners,
                       robot_hull=self.robot_hull, memory=self.memory)
 
     def _margin_line(self) -> str:
@@ -587,11 +594,20 @@ class CSpace:
     memory : int, default 0
         Bytes the C-obstacles hold, as the build estimated them (``SceneModel.memory``):
         what a set of orientation slices counts against its budget.
+    owners : sequence of (str, str), optional
+        Per C-obstacle, the modelled body it belongs to and that body's scene body (as
+        :meth:`SceneModel.cspace` gives them): what :meth:`contact` names. Default
+        ``("obstacle-<k>", None)``.
     """
 
     def __init__(self, obstacles, *, bounds=None, name: str = "cspace", scene=None,
-                 robot_hull: bool = False, memory: int = 0):
+                 robot_hull: bool = False, memory: int = 0, owners=None):
         self.obstacles = tuple(obstacles)
+        self.owners = (tuple(tuple(o) for o in owners) if owners is not None
+                       else tuple((f"obstacle-{k}", None) for k in range(len(self.obstacles))))
+        if len(self.owners) != len(self.obstacles):
+            raise InvalidArgumentError(f"{len(self.owners)} owners for "
+                                       f"{len(self.obstacles)} C-obstacles")
         self._union = _UnionOf(self.obstacles)
         self.name = name
         # The scene as loaded (set by SceneModel.cspace): FCL cross-checks judge on its raw
@@ -683,6 +699,73 @@ class CSpace:
         t = self._union.segments(a, b, want_t=True)[1]
         return float(t[0]) if single else t
 
+    def contact(self, q0, q1=None) -> Contact:
+        """What the robot meets first moving straight from ``q0`` to ``q1`` (or standing at
+        ``q0``), as FCL users ask it: where, which obstacle body, and a witness pair.
+
+        Parameters
+        ----------
+        q0, q1 : (3,) float64
+            Reference-point positions, world frame; ``q1`` omitted: the robot at ``q0``.
+
+        Returns
+        -------
+        Contact
+            ``t`` the first-contact parameter (exact, as :meth:`first_contact`; 0 when the
+            robot at ``q0`` already collides; NaN when the motion is free), ``position`` the
+            reference point there, ``body`` the modelled obstacle body whose C-obstacle it
+            meets first (``name#k`` for a part of a scene body split into several), and, when
+            the scene is known, ``robot_point`` and ``obstacle_point``: the closest points of
+            the robot's and that body's raw triangles with the robot at ``position`` (world
+            frame, float), ``gap`` their distance. The contact itself is exact; the witness
+            pair is a float search on the raw meshes: ``gap`` is 0 where they cross and at
+            most about ``error_bound`` where the margin made the contact (a false collision
+            within the bound).
+        """
+        from ..geometry.distance import closest_points
+
+        a = np.asarray(q0, dtype=np.float64).reshape(3)
+        b = a if q1 is None else np.asarray(q1, dtype=np.float64).reshape(3)
+        if isinstance(self, LazyCSpace):  # the pairs the motion's box may meet, built
+            self.build(np.minimum(a, b), np.maximum(a, b))
+        ts = np.array([co.first_contact(a, b) if q1 is not None else
+                       (0.0 if co.contains(a) else np.nan) for co in self.obstacles], float)
+        if not len(ts) or np.isnan(ts).all():
+            return Contact(float("nan"), None, None, None, None, float("nan"))
+        k = int(np.nanargmin(ts))
+        t = float(ts[k])
+        p = a + t * (b - a)
+        name, source = self.owners[k]
+        if self.scene is None or source is None:
+            return Contact(t, p, name, None, None, float("nan"))
+        body = next(o for o in self.scene.obstacles if o.name == source)
+        robot = self.scene.robot
+        R = (robot.vertices - self.scene.reference_point + p)[robot.faces]
+        O = body.vertices[body.faces]
+        # the triangles near each other: boxes within a little more than the error bound
+        slack = 4.0 * self.obstacles[k].error_bound + 1e-12 * float(np.abs(p).max() + 1.0)
+        lo, hi = R.reshape(-1, 3).min(axis=0) - slack, R.reshape(-1, 3).max(axis=0) + slack
+        near_o = O[((O.max(axis=1) >= lo) & (O.min(axis=1) <= hi)).all(axis=1)]
+        if len(near_o):
+            olo = near_o.reshape(-1, 3).min(axis=0) - slack
+            ohi = near_o.reshape(-1, 3).max(axis=0) + slack
+            near_r = R[((R.max(axis=1) >= olo) & (R.min(axis=1) <= ohi)).all(axis=1)]
+        if not len(near_o) or not len(near_r):  # (a hull or a containment made the contact)
+            near_o, near_r = O, R
+        gap, x_r, x_o = closest_points(near_r, near_o)
+        return Contact(t, p, name, x_r, x_o, gap)
+
+
+class Contact(NamedTuple):
+    """:meth:`CSpace.contact`'s answer (world frame, scene units; None or NaN when free)."""
+
+    t: float
+    position: np.ndarray | None
+    body: str | None
+    robot_point: np.ndarray | None
+    obstacle_point: np.ndarray | None
+    gap: float
+
 
 def _one_point(q) -> list | None:
     """``q`` as three finite floats when it is one float64 state ``(3,)`` (a planner's
@@ -769,6 +852,7 @@ class LazyCSpace(CSpace):
             raise BuildError(f"scene {self.name!r}: cannot build the C-obstacle of body "
                              f"{b.name!r} ({b.kind}: {b.reason}): {b.error}")
         self.obstacles += tuple(pair.cos)
+        self.owners += tuple((b.name, b.source) for _ in pair.cos)
         self._built += 1
         return _UnionOf(pair.cos)
 
