@@ -717,9 +717,13 @@ def _free_space(args: argparse.Namespace) -> int:
     out = _out(args.output, MESH_FORMATS, "-o")
     scene = load_scene(args.scene)
     cache = None if args.no_cache else (args.cache_dir or True)
+    progress = _Progress(args.quiet, args.progress)
     try:
-        fs = free_space(model_scene(scene, cache=cache).cspace(), scene.bounds, time=args.time,
-                        memory=args.memory)
+        model = model_scene(scene, cache=cache, progress=progress, memory=args.memory)
+    finally:
+        progress.close()
+    try:
+        fs = free_space(model.cspace(), scene.bounds, time=args.time, memory=args.memory)
     except TimeoutError as e:  # unknown within the budget, as cspace plan's exit status 1
         print(f"{scene.name}: {e}")
         return 1
@@ -967,9 +971,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument("-o", "--output", help="write the union's surface (any format trimesh exports)")
     p.add_argument("--time", type=_positive, default=None, metavar="SECONDS",
                    help="give up after this long (exit status 1); default: no limit")
-    _memory_option(p, "the union")
+    _memory_option(p, "the build and the union")
     p.add_argument("--no-cache", action="store_true", help="do not read or write the disk cache")
     p.add_argument("--cache-dir", help="cache folder (default $CSPACE_CACHE or ~/.cache/cspace)")
+    _progress_options(p)
     p.set_defaults(func=_free_space)
     p = sub.add_parser("view", help="draw a scene with its C-obstacles in meshcat (offline HTML by default)", **_help(
         "cspace view scenes/window.toml -o window.html",

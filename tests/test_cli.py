@@ -308,6 +308,8 @@ def test_every_command_that_builds_takes_the_cache_memory_and_progress_flags(tmp
     assert any(tmp_path.iterdir())  # the check built through that cache
     out = tmp_path / "comb.html"
     assert main(["view", scene, "-o", str(out), "-q", "--no-cache", "--memory", "2G"]) == 0
+    assert main(["free-space", str(SCENES / "cage.toml"), "-q", "--no-cache", "--memory",
+                 "2G"]) == 0
     assert out.stat().st_size > 10000
     capsys.readouterr()
 
