@@ -58,7 +58,7 @@ keys are errors (typos are caught); every number must be finite. A complete exam
     goal = [2, 0, 1]
     goal_orientation = [0, 0, 90]      # optional [roll, pitch, yaw] at the goal (as
                                        # robot.orientation; default: the robot's), reached
-                                       # by planning with orientation slices
+                                       # by planning with turns (SE(3) by default)
 
     [[obstacles]]                      # any number of obstacles, each a box or a mesh
     name = "left-post"                 # optional; default 'obstacle-<index>'; unique
@@ -87,8 +87,8 @@ problem is 3D when ``start.z`` is present. Positions are ``start.x/.y/.z``,
 radians (the axis is normalised, as OMPL's ``setAxisAngle`` does; a zero axis is the
 identity). In 2D (no ``start.z``) the robot turns by ``start.theta`` about z, z is 0 and the
 bounds' z range is ``[0, 0]``. The **start** rotation is applied to the robot; the goal's is
-:attr:`Scene.goal_rotation`, reached by planning with orientation slices (a warning says
-translation-only planning keeps the start's). Bounds are ``volume.min.*`` / ``volume.max.*`` (all of them,
+:attr:`Scene.goal_rotation`, reached by planning in SE(3) (the default planner turns the robot
+while it moves; a warning says translation-only planning keeps the start's). Bounds are ``volume.min.*`` / ``volume.max.*`` (all of them,
 or none); without them they are inferred as OMPL.app does: the bounding box of the world,
 grown to hold the start and goal. The world mesh is one obstacle body (it may hold several
 disjoint parts). The robot's reference point is OMPL.app's robot centre
