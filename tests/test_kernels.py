@@ -661,7 +661,7 @@ def _point_sets():
     corners), coordinates near the kernel's 2**30 range, mostly-coplanar sets with one apex."""
     rng = np.random.default_rng(5)
     out = []
-    for t in range(400):
+    for t in range(200):
         n = int(rng.integers(4, 60))
         kind = t % 5
         if kind == 0:
@@ -704,7 +704,7 @@ def test_hull_of_points_is_the_reference():
         if q is not None:
             proposed += 1
             assert all(np.array_equal(a, b) for a, b in zip(q, got))
-    assert proposed >= 380, proposed
+    assert proposed >= 190, proposed
     # no volume, and beyond the kernel's range
     line = np.array([[0, 0, 0], [1, 1, 1], [2, 2, 2], [3, 3, 3], [5, 5, 5]], dtype=np.int64)
     flat = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [3, 2, 0]], dtype=np.int64)
