@@ -63,6 +63,7 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=REPORT)
     args = ap.parse_args()
     rows = []
+    load = os.getloadavg()[0]
     with tempfile.TemporaryDirectory() as tmp:
         for scene in SCENES:
             rows += [(scene, *r) for r in run_scene(scene, args.runs, args.time, Path(tmp))]
@@ -74,7 +75,10 @@ def main() -> None:
              "poses decided and every motion certified by clearance) and on OMPL.app's way "
              "(`<scene>.sampled`: FCL at each pose, motions sampled every 1% of the extent, nothing proved "
              "between); OMPL's `ompl_benchmark_statistics` reads both logs into the database this report "
-             "reads (and Planner Arena plots). Times are seconds per run, of the solved runs.", "",
+             "reads (and Planner Arena plots). Times are seconds per run, of the solved runs. "
+             f"Load average when it started: {load:.1f} on {os.cpu_count()} cores, "
+             f"{os.getloadavg()[0]:.1f} when it ended (above the cores: other work ran beside it, "
+             "and the times are slower than the machine's; compare within a scene).", "",
              "| scene | experiment | planner | solved | mean s | median s |", "|---|---|---|---|---|---|"]
     for scene, exp, planner, solved, n, times in rows:
         mean = f"{np.mean(times):.3f}" if times else "—"

@@ -135,7 +135,9 @@ def _run(scene, out: Path, planners, runs, time, memory_mb, seed, experiment, *,
         bench.addPlanner(getattr(og, p)(si))
     req = ot.Request()
     req.maxTime, req.maxMem, req.runCount = float(time), float(memory_mb), int(runs)
-    req.displayProgress = False
+    # OMPL would also write each run's console output to ompl_<host>_<time>.console files
+    # in the current folder: not asked for, not written
+    req.displayProgress = req.saveConsoleOutput = False
     bench.benchmark(req)
     write_atomic(out, lambda tmp: bench.saveResultsToFile(str(tmp)))
     del keep
