@@ -274,8 +274,7 @@ def _bodies(A, grid_a, why) -> tuple[list, Grid]:
         used, local = np.unique(union, return_inverse=True)
         body = (grid.to_float(ints[used]), local.reshape(-1, 3))
         try:
-            as_mesh(body, grid=grid, name="A")
-            return [body], grid
+            return [as_mesh(body, grid=grid, name="A")], grid  # validated once, kept
         except (NonManifoldError, SelfIntersectionError):
             V, F = body  # split what is left
         except InvalidMeshError:
@@ -338,8 +337,8 @@ def _no_self_intersection(A: ClosedMesh) -> None:
 
 def _bodies_as_given(V: np.ndarray, F: np.ndarray, grid: Grid) -> list:
     """The bodies of a mesh by its own vertex indices (two boxes concatenated, sharing a
-    face whose triangles differ, before welding joins them), each ``(vertices, faces)``,
-    when there are several and each is a valid closed mesh on ``grid``; else []."""
+    face whose triangles differ, before welding joins them), each validated once as a
+    :class:`ClosedMesh` on ``grid``, when there are several and each is valid; else []."""
     from ..geometry.graphs import component_labels
 
     F = np.asarray(F, dtype=np.int64)
@@ -352,10 +351,9 @@ def _bodies_as_given(V: np.ndarray, F: np.ndarray, grid: Grid) -> list:
         used, local = np.unique(F[face_label == c], return_inverse=True)
         body = (np.asarray(V, dtype=np.float64)[used], local.reshape(-1, 3))
         try:
-            as_mesh(body, grid=grid, name="A")
+            out.append(as_mesh(body, grid=grid, name=f"A: body {len(out) + 1}"))
         except InvalidMeshError:
             return []
-        out.append(body)
     return out if len(out) > 1 else []
 
 
