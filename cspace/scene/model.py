@@ -699,6 +699,10 @@ class CSpace:
         t = self._union.segments(a, b, want_t=True)[1]
         return float(t[0]) if single else t
 
+    def build(self, lo=None, hi=None) -> None:
+        """Nothing to do: every C-obstacle is built (:class:`LazyCSpace` builds those that may
+        meet the box ``[lo, hi]``)."""
+
     def contact(self, q0, q1=None) -> Contact:
         """What the robot meets first moving straight from ``q0`` to ``q1`` (or standing at
         ``q0``), as FCL users ask it: where, which obstacle body, and a witness pair.
@@ -726,8 +730,7 @@ class CSpace:
 
         a = np.asarray(q0, dtype=np.float64).reshape(3)
         b = a if q1 is None else np.asarray(q1, dtype=np.float64).reshape(3)
-        if isinstance(self, LazyCSpace):  # the pairs the motion's box may meet, built
-            self.build(np.minimum(a, b), np.maximum(a, b))
+        self.build(np.minimum(a, b), np.maximum(a, b))  # (lazy: what the motion may meet)
         ts = np.array([co.first_contact(a, b) if q1 is not None else
                        (0.0 if co.contains(a) else np.nan) for co in self.obstacles], float)
         if not len(ts) or np.isnan(ts).all():
