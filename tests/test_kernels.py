@@ -809,3 +809,21 @@ def test_component_labels_are_scipys(seed):
         got, want = component_labels(n, a, b), _component_labels_reference(n, a, b)
         assert got[0] == want[0] and np.array_equal(got[1], want[1])
         assert got[1].dtype == want[1].dtype
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_bfs_predecessors_are_scipys(seed):
+    """The compiled breadth-first tree against scipy's breadth_first_order: the same
+    predecessor for every node (neighbours visited in scipy's order), with repeated edges,
+    loops, unreached nodes and edgeless graphs."""
+    from cspace.geometry.graphs import _bfs_predecessors_reference, bfs_predecessors
+
+    rng = np.random.default_rng(seed)
+    for _ in range(200):
+        n = int(rng.integers(1, 120))
+        m = int(rng.integers(0, 3 * n + 1))
+        a, b = rng.integers(0, n, m), rng.integers(0, n, m)
+        a[::5] = b[::5]  # self loops
+        start = int(rng.integers(0, n))
+        got, want = bfs_predecessors(n, a, b, start), _bfs_predecessors_reference(n, a, b, start)
+        assert got.dtype == want.dtype and np.array_equal(got, want)

@@ -12,8 +12,9 @@ where its pure-Python reference lives (same name, leading underscore or ``_refer
   ``cvms._convex_minkowski_sum_reference``) and :mod:`cspace.mesh.convex` (the polytope of an
   exactly convex closed mesh, ``ConvexPolytope.from_convex_mesh``; reference ``ClosedMesh``
   then ``convex_within_bound``);
-- ``graph`` — :mod:`cspace.geometry.graphs` (connected components by union-find; reference
-  ``graphs._component_labels_reference``, scipy's);
+- ``graph`` — :mod:`cspace.geometry.graphs` (connected components by union-find and
+  breadth-first trees; references ``graphs._component_labels_reference`` and
+  ``graphs._bfs_predecessors_reference``, scipy's);
 - ``meshquery`` — :mod:`cspace.mesh.query` (references in :mod:`cspace.mesh.query_reference`);
 - ``pairquery`` — :mod:`cspace.cobstacle.pairs` (triangle pairs found by two box trees; reference
   :mod:`cspace.cobstacle.pairs_reference`, every pair enumerated, tested in

@@ -51,3 +51,34 @@ def component_labels(Py_ssize_t n, const int64_t[::1] a, const int64_t[::1] b):
                 count += 1
             labels[i] = labels[ra]
     return int(count), labels_arr
+
+
+def bfs_predecessors(Py_ssize_t n, const int64_t[::1] indptr, const int64_t[::1] indices,
+                     Py_ssize_t start):
+    """``(n,)`` int32 predecessor of each node in the breadth-first tree from ``start`` over
+    the adjacency ``indices[indptr[v]:indptr[v + 1]]`` of each node ``v``, in that order
+    (-9999 for ``start`` and unreached nodes, as scipy's ``breadth_first_order``)."""
+    cdef Py_ssize_t head = 0, tail = 1, k
+    cdef int64_t v, w
+    pred_arr = np.full(n, -9999, dtype=np.int32)
+    queue_arr = np.zeros(max(n, 1), dtype=np.int64)
+    seen_arr = np.zeros(n, dtype=np.uint8)
+    cdef int[::1] pred = pred_arr
+    cdef int64_t[::1] queue = queue_arr
+    cdef unsigned char[::1] seen = seen_arr
+    if not 0 <= start < n:
+        return None
+    queue[0] = start
+    seen[start] = 1
+    with nogil:
+        while head < tail:
+            v = queue[head]
+            head += 1
+            for k in range(indptr[v], indptr[v + 1]):
+                w = indices[k]
+                if not seen[w]:
+                    seen[w] = 1
+                    pred[w] = <int>v
+                    queue[tail] = w
+                    tail += 1
+    return pred_arr
