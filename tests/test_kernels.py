@@ -467,6 +467,38 @@ def test_general_ear_clipping_is_identical(monkeypatch):
         assert len(triangulation._clip_general(P, ring)) == 8
 
 
+def test_hole_bridging_is_identical(monkeypatch):
+    """Every face with holes that three sums bridge (a grate's faces with many holes, a
+    torus's), run by the compiled kernel and the reference: the same polygon and ids; and a
+    square with two holes, one shadowing the other, at huge scales (Python-integer path)."""
+    from cspace.mesh.convex import ConvexPolytope
+    from cspace.geometry.exact import Grid
+    from cspace.mesh.closed import ClosedMesh
+    from zoo import box_points, grate, icosphere_points
+
+    seen = _spy_kernel(monkeypatch, "bridge_holes")
+    for (v, f), b in [(grate(3), box_points(0.3, 0.2, 0.25)),
+                      (grate(2), icosphere_points(1, radius=0.2)),
+                      (torus(sections=12, ring=8), box_points(0.1, 0.1, 0.1))]:
+        grid = Grid.for_points(v, b)
+        minkowski_sum(ClosedMesh.from_arrays(v, f, grid=grid),
+                      ConvexPolytope.from_points(b, grid=grid), workers=1)
+    monkeypatch.undo()
+    assert any(len(pending) > 3 for _, _, pending in seen)  # faces with several holes
+    for P, ids, pending in seen:
+        want = triangulation._bridge_holes_reference(P, ids, pending)
+        assert compiled_planar.bridge_holes(P, ids, pending) == want
+    for s, w in ((1, 1), (2**40 + 1, 1), (3, 2**61 + 1)):
+        def ring(pts, first):
+            return [_hnorm(x * s, y * s, w) for x, y in pts], list(range(first, first + len(pts)))
+        outer = ring([(0, 0), (20, 0), (20, 8), (0, 8)], 0)
+        holes = [ring([(12, 2), (12, 6), (16, 6), (16, 2)], 4),
+                 ring([(4, 3), (4, 5), (8, 5), (8, 3)], 8)]
+        want = triangulation._bridge_holes_reference(*outer, holes)
+        assert compiled_planar.bridge_holes(*outer, holes) == want
+        assert len(want[0]) == 4 + 2 * 6
+
+
 @pytest.mark.parametrize("n,k,leaf", [(257, 3, 3), (600, 13, 4), (5, 3, 4), (64, 3, 1)])
 def test_box_tree_build_is_identical(n, k, leaf):
     """BoxTree's compiled median split against boxes._tree_reference: the same order, node

@@ -100,6 +100,39 @@ def _bridge_ok(P, i, H, j, others) -> bool:
     return True
 
 
+def _bridge_holes_reference(P: list, ids: list, pending: list) -> tuple[list, list]:
+    """(Reference of ``cspace.geometry._kernels.planar.bridge_holes``.) Join each hole of
+    ``pending`` (``(points, ids)`` pairs) to the polygon ``(P, ids)`` by a segment between two
+    mutually visible vertex occurrences (exact cone and crossing tests; holes that only see
+    other holes wait for a later round), nearest pairs first; returns the bridged
+    ``(P, ids)``."""
+    P, ids, pending = list(P), list(ids), list(pending)
+    while pending:
+        others = [P] + [hp for hp, _ in pending]
+        done = False
+        for hi, (HP, Hid) in enumerate(pending):
+            # nearest pairs first (a heuristic order: any visible pair is correct)
+            fp = [(x / w, y / w) for x, y, w in P]
+            fh = [(x / w, y / w) for x, y, w in HP]
+            cands = sorted(
+                ((fh[j][0] - fp[i][0]) * (fh[j][0] - fp[i][0])
+                 + (fh[j][1] - fp[i][1]) * (fh[j][1] - fp[i][1]), i, j)
+                for i in range(len(P)) for j in range(len(HP))
+            )
+            for _, i, j in cands:
+                if _bridge_ok(P, i, HP, j, others):
+                    P = P[: i + 1] + HP[j:] + HP[:j] + [HP[j], P[i]] + P[i + 1:]
+                    ids = ids[: i + 1] + Hid[j:] + Hid[:j] + [Hid[j], ids[i]] + ids[i + 1:]
+                    pending.pop(hi)
+                    done = True
+                    break
+            if done:
+                break
+        if not done:  # pragma: no cover - a visible pair always exists
+            raise AssertionError("no bridge found for a hole")
+    return P, ids
+
+
 def _ear_ok(poly, i) -> bool:
     """The general ear test (repeated vertices allowed, e.g. after bridging holes)."""
     n = len(poly)
@@ -283,35 +316,11 @@ def triangulate_rings(H, rings: list) -> list:
     (poly, convex), holes = rings[0], [h for h, _ in rings[1:] if h]
     if not poly:
         return []
-    P = [H[v] for v in poly]
-    ids = list(poly)
     pending = [([H[v] for v in h], list(h)) for h in holes]
-    pending_holes = bool(pending)
-    while pending:
-        others = [P] + [hp for hp, _ in pending]
-        done = False
-        for hi, (HP, Hid) in enumerate(pending):
-            # nearest pairs first (a heuristic order: any visible pair is correct)
-            fp = [(x / w, y / w) for x, y, w in P]
-            fh = [(x / w, y / w) for x, y, w in HP]
-            cands = sorted(
-                ((fh[j][0] - fp[i][0]) ** 2 + (fh[j][1] - fp[i][1]) ** 2, i, j)
-                for i in range(len(P)) for j in range(len(HP))
-            )
-            for _, i, j in cands:
-                if _bridge_ok(P, i, HP, j, others):
-                    P = P[: i + 1] + HP[j:] + HP[:j] + [HP[j], P[i]] + P[i + 1:]
-                    ids = ids[: i + 1] + Hid[j:] + Hid[:j] + [Hid[j], ids[i]] + ids[i + 1:]
-                    pending.pop(hi)
-                    done = True
-                    break
-            if done:
-                break
-        if not done:  # pragma: no cover - a visible pair always exists
-            raise AssertionError("no bridge found for a hole")
+    P, ids = _compiled.bridge_holes([H[v] for v in poly], list(poly), pending)
     tris = None
     if len(set(ids)) == len(ids):
-        if convex and not pending_holes:
+        if convex and not holes:
             # strictly convex corners: a fan (the straight runs go back in below)
             tris = [(ids[0], ids[k], ids[k + 1]) for k in range(1, len(P) - 1)]
         else:

@@ -962,3 +962,167 @@ def one_facet_plane(list corners, list tl, list pinned, list cut3, int ax, c, in
         segs.append(proj[k])
         labels.append((-1, k))
     return one_facet_faces(segs, labels, c, src, known, lift)
+
+
+# Bridging a face's holes to its outer polygon (the loop of
+# cspace.minkowski.triangulation._bridge_holes_reference): every direction below starts at one
+# point ``o``, so the signs of the reference's integer cross and dot products of ``_hdir``
+# vectors (positive multiples of ``u - o``) are ``orient(o, u, v)`` and the sign of
+# ``(u - o) . (v - o)``.
+
+cdef struct _Cand:
+    double d
+    Py_ssize_t i, j
+
+
+cdef int _cand_cmp(const void* pa, const void* pb) noexcept nogil:
+    cdef const _Cand* a = <const _Cand*> pa
+    cdef const _Cand* b = <const _Cand*> pb
+    if a.d < b.d:
+        return -1
+    if a.d > b.d:
+        return 1
+    if a.i != b.i:
+        return -1 if a.i < b.i else 1
+    if a.j != b.j:
+        return -1 if a.j < b.j else 1
+    return 0
+
+
+cdef inline int _odot(_Points P, Py_ssize_t o, Py_ssize_t u, Py_ssize_t v) except -2:
+    """Sign of ``(u - o) . (v - o)`` (``_dot_sign`` is that of ``(o - u) . (v - o)``)."""
+    return -_dot_sign(P, u, o, v)
+
+
+cdef inline int _half_from(_Points P, Py_ssize_t o, Py_ssize_t a, Py_ssize_t d) except -2:
+    cdef int c = P.orient(o, a, d)
+    return 0 if (c > 0 or (c == 0 and _odot(P, o, a, d) > 0)) else 1
+
+
+cdef bint _in_cone_from(_Points P, Py_ssize_t o, Py_ssize_t d, Py_ssize_t a,
+                        Py_ssize_t b) except -1:
+    """The reference's ``_in_cone(_hdir(o, d), _hdir(o, a), _hdir(o, b))``."""
+    cdef int hd = _half_from(P, o, a, d), hb
+    if hd == 0 and P.orient(o, a, d) == 0:
+        return False
+    hb = _half_from(P, o, a, b)
+    if hb == 0 and P.orient(o, a, b) == 0:
+        return True
+    if hd != hb:
+        return hd < hb
+    return P.orient(o, d, b) > 0
+
+
+cdef bint _on_segment(_Points P, Py_ssize_t x, Py_ssize_t p, Py_ssize_t q) except -1:
+    """The reference's ``_hon_segment(x, p, q)``."""
+    if P.orient(p, q, x) != 0:
+        return False
+    if p == q:
+        return x == p
+    return P.between(p, q, x, 0 if P.cmp(p, q, 0) != 0 else 1)
+
+
+cdef bint _bridge_ok_c(_Points P, Py_ssize_t* poly, Py_ssize_t n, Py_ssize_t i,
+                       Py_ssize_t* hole, Py_ssize_t m, Py_ssize_t j, Py_ssize_t* ea,
+                       Py_ssize_t* eb, Py_ssize_t ne) except -1:
+    """The reference's ``_bridge_ok`` over the edges ``ea[k] -> eb[k]`` of every ring."""
+    cdef Py_ssize_t o = poly[i], h = hole[j], k, a, b
+    if o == h:
+        return False
+    if not _in_cone_from(P, o, h, poly[i + 1 if i + 1 < n else 0], poly[i - 1 if i > 0 else n - 1]):
+        return False
+    if not _in_cone_from(P, h, o, hole[j + 1 if j + 1 < m else 0], hole[j - 1 if j > 0 else m - 1]):
+        return False
+    for k in range(ne):
+        a, b = ea[k], eb[k]
+        if a != o and a != h and _on_segment(P, a, o, h):
+            return False
+        if (P.orient(a, b, o) * P.orient(a, b, h) < 0
+                and P.orient(o, h, a) * P.orient(o, h, b) < 0):
+            return False
+    return True
+
+
+def bridge_holes(list Ps, list ids, list pending):
+    """``cspace.minkowski.triangulation._bridge_holes_reference`` (identical outputs): join each
+    hole of ``pending`` (``(points, ids)`` pairs) to the polygon ``(Ps, ids)`` by a bridge
+    between mutually visible occurrences, nearest pairs first; returns the bridged
+    ``(points, ids)``. Raises AssertionError when no hole can be bridged (never for a face)."""
+    cdef _Points P = _Points(len(Ps) + 1)
+    cdef Py_ssize_t n, m, hi, k, r, i, j, ne, nc, c
+    cdef Py_ssize_t* poly = NULL
+    cdef Py_ssize_t* hole = NULL
+    cdef Py_ssize_t* ea = NULL
+    cdef Py_ssize_t* eb = NULL
+    cdef _Cand* cands = NULL
+    cdef bint done
+    cdef double dx, dy
+    poly_ids = [P.add(<tuple> p) for p in Ps]
+    holes = [([P.add(<tuple> p) for p in hp], list(hid)) for hp, hid in pending]
+    ids = list(ids)
+    try:
+        while holes:
+            # every ring's edges, the polygon's first (the reference's ``others``)
+            ne = len(poly_ids) + sum(len(h) for h, _ in holes)
+            free(ea)
+            free(eb)
+            ea = <Py_ssize_t*> malloc((ne + 1) * sizeof(Py_ssize_t))
+            eb = <Py_ssize_t*> malloc((ne + 1) * sizeof(Py_ssize_t))
+            if not (ea and eb):
+                raise MemoryError()
+            c = 0
+            for ring in [poly_ids] + [h for h, _ in holes]:
+                r = len(ring)
+                for k in range(r):
+                    ea[c] = <Py_ssize_t> ring[k]
+                    eb[c] = <Py_ssize_t> ring[k + 1 if k + 1 < r else 0]
+                    c += 1
+            n = len(poly_ids)
+            free(poly)
+            poly = <Py_ssize_t*> malloc((n + 1) * sizeof(Py_ssize_t))
+            if not poly:
+                raise MemoryError()
+            for k in range(n):
+                poly[k] = <Py_ssize_t> poly_ids[k]
+            done = False
+            for hi in range(len(holes)):
+                hole_ids, hid = holes[hi]
+                m = len(hole_ids)
+                free(hole)
+                free(cands)
+                hole = <Py_ssize_t*> malloc((m + 1) * sizeof(Py_ssize_t))
+                cands = <_Cand*> malloc((n * m + 1) * sizeof(_Cand))
+                if not (hole and cands):
+                    raise MemoryError()
+                for k in range(m):
+                    hole[k] = <Py_ssize_t> hole_ids[k]
+                nc = 0
+                for i in range(n):
+                    for j in range(m):
+                        dx = P.x[hole[j]] - P.x[poly[i]]
+                        dy = P.y[hole[j]] - P.y[poly[i]]
+                        cands[nc].d = dx * dx + dy * dy
+                        cands[nc].i = i
+                        cands[nc].j = j
+                        nc += 1
+                qsort(cands, nc, sizeof(_Cand), _cand_cmp)
+                for k in range(nc):
+                    i, j = cands[k].i, cands[k].j
+                    if _bridge_ok_c(P, poly, n, i, hole, m, j, ea, eb, ne):
+                        poly_ids = (poly_ids[:i + 1] + hole_ids[j:] + hole_ids[:j]
+                                    + [hole_ids[j], poly_ids[i]] + poly_ids[i + 1:])
+                        ids = ids[:i + 1] + hid[j:] + hid[:j] + [hid[j], ids[i]] + ids[i + 1:]
+                        holes.pop(hi)
+                        done = True
+                        break
+                if done:
+                    break
+            if not done:
+                raise AssertionError("no bridge found for a hole")
+        return [P.h[k] for k in poly_ids], ids
+    finally:
+        free(poly)
+        free(hole)
+        free(ea)
+        free(eb)
+        free(cands)
