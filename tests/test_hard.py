@@ -379,7 +379,9 @@ def test_turned_combs_and_grates_keep_the_stated_bound(shape, teeth, seed, offse
 def _two_boxes(kind: str):
     """Two closed unit boxes given as one mesh, sharing a face: concatenated (each box its own
     vertices; the shared square's diagonals cross), welded with the same triangles on the
-    shared square (they cancel), or a 2 x 2 box resting on a unit one (no vertex shared)."""
+    shared square (they cancel), welded with each box's own diagonal on it (the square's
+    edges have four faces each: non-manifold), or a 2 x 2 box resting on a unit one (no
+    vertex shared)."""
     import trimesh
 
     a = trimesh.creation.box((1.0, 1.0, 1.0))
@@ -394,21 +396,28 @@ def _two_boxes(kind: str):
         b.apply_translation([1.0, 0.0, 0.0])
         boxes = [(-0.5, -0.5, -0.5, 0.5, 0.5, 0.5), (0.5, -0.5, -0.5, 1.5, 0.5, 0.5)]
     m = trimesh.util.concatenate([a, b])
-    if kind == "welded":
+    if kind.startswith("welded"):
         m.merge_vertices()
     return np.asarray(m.vertices), np.asarray(m.faces), np.array(boxes)
 
 
 @pytest.mark.parametrize("offset", [(0.0, 0.0, 0.0), (250.0, 150.0, -300.0)], ids=["origin", "far"])
-@pytest.mark.parametrize("kind", ["concatenated", "welded", "big on small"])
+@pytest.mark.parametrize("kind", ["concatenated", "welded", "welded, triangulated differently",
+                                  "big on small"])
 def test_closed_bodies_sharing_a_face_are_summed_as_their_union(kind, offset):
     """Issue #51: two closed boxes sharing a face, given as one mesh, are a valid solid (their
     union), not a refused one. Welded with the same triangles on the shared square, the two
     copies of each cancel (interior) and the union's boundary is summed as one body;
-    otherwise the bodies' sums are united exactly: one surface either way. Checked against
+    welded with each box's own diagonal on the square, the faces at its non-manifold edges
+    pair into the two closed boxes; otherwise too the bodies' sums are united exactly: one
+    surface either way. Checked against
     the exact sum of the raw boxes (each box ⊕ -R is a box: exact bounds), at the origin
     and far."""
     V, F, boxes = _two_boxes(kind)
+    if kind == "welded, triangulated differently":  # as the test says: 4 edges, 4 faces each
+        from cspace.mesh.components import edge_uses
+
+        assert (edge_uses(F, len(V))[1] == 4).sum() == 4
     V = V + offset
     boxes = boxes + np.tile(offset, 2)
     R = np.array([[x, y, z] for x in (-0.1, 0.15) for y in (-0.2, 0.1) for z in (-0.05, 0.1)])

@@ -187,6 +187,89 @@ def edge_uses(F: np.ndarray, n: int):
     return inv.reshape(-1), count
 
 
+def radial_pairs(ints: np.ndarray, F: np.ndarray, edge: np.ndarray,
+                 count: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Faces ``(a, b)`` that bound one wedge of solid at a non-manifold edge, decided exactly.
+
+    Around an edge ``u -> v`` (axis ``d = v - u``), a face using it as ``u -> v`` has its
+    outward normal ``d x r`` (``r`` towards its third corner) turned ahead of it, so the solid
+    lies just behind it (it *closes* a wedge); a face using ``v -> u`` *opens* one. With the
+    faces in angular order about ``d`` (exact integer signs on the grid coordinates ``ints``;
+    at one angle, closing faces first: coplanar faces of two bodies that touch bound nothing
+    between them), each opening face pairs with the next face, which must close. An edge whose
+    faces do not alternate so (solids overlapping, a face repeated) or has a face with no area
+    is left unpaired, as before. Every pair is one wedge: the faces of one closed body
+    through that edge.
+
+    Parameters
+    ----------
+    ints : (n, 3) int64
+    F : (m, 3) int64
+    edge, count : from :func:`edge_uses`.
+
+    Returns
+    -------
+    a, b : (k,) int64
+        Face indices.
+    """
+    from functools import cmp_to_key
+
+    half = np.nonzero(count[edge] > 2)[0]
+    if not len(half):
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    half = half[np.argsort(edge[half], kind="stable")]
+    cuts = np.nonzero(np.diff(edge[half]))[0] + 1
+    P = ints.tolist()
+    out_a, out_b = [], []
+
+    def sub(x, y):
+        return (x[0] - y[0], x[1] - y[1], x[2] - y[2])
+
+    def dot(x, y):
+        return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]
+
+    def triple(d, x, y):  # d . (x × y)
+        return (d[0] * (x[1] * y[2] - x[2] * y[1]) + d[1] * (x[2] * y[0] - x[0] * y[2])
+                + d[2] * (x[0] * y[1] - x[1] * y[0]))
+
+    for group in np.split(half, cuts):
+        f, c = (group // 3).tolist(), (group % 3).tolist()
+        u0, v0 = int(F[f[0], c[0]]), int(F[f[0], (c[0] + 1) % 3])
+        d = sub(P[v0], P[u0])
+        dd = dot(d, d)
+        rows = []
+        for fi, ci in zip(f, c):
+            r = sub(P[int(F[fi, (ci + 2) % 3])], P[u0])
+            if dot(r, r) * dd == dot(r, d) ** 2:  # no area: no angle
+                rows = None
+                break
+            rows.append((fi, int(F[fi, ci]) == u0, r))  # (face, closes, direction)
+        if rows is None or 2 * sum(closes for _, closes, _ in rows) != len(rows):
+            continue
+        r0 = rows[0][2]
+
+        def side(r, r0=r0, d=d, dd=dd):  # 0: angle in [0, pi) from r0, 1: [pi, 2 pi)
+            t = triple(d, r0, r)
+            return 0 if t > 0 or (t == 0 and dot(r0, r) * dd - dot(r0, d) * dot(r, d) > 0) else 1
+
+        def cmp(x, y, d=d):
+            sx, sy = side(x[2]), side(y[2])
+            if sx != sy:
+                return sx - sy
+            t = triple(d, x[2], y[2])
+            if t:
+                return -1 if t > 0 else 1
+            return (not x[1]) - (not y[1])  # one angle: closing faces first
+
+        ring = sorted(rows, key=cmp_to_key(cmp))
+        k0 = next(k for k, row in enumerate(ring) if not row[1])
+        ring = ring[k0:] + ring[:k0]
+        if all(not ring[k][1] and ring[k + 1][1] for k in range(0, len(ring), 2)):
+            out_a += [ring[k][0] for k in range(0, len(ring), 2)]
+            out_b += [ring[k + 1][0] for k in range(0, len(ring), 2)]
+    return np.array(out_a, dtype=np.int64), np.array(out_b, dtype=np.int64)
+
+
 def split_parts(ints: np.ndarray, F: np.ndarray, two_sided=None) -> list[np.ndarray]:
     """Face index arrays of the bodies of step 3, in order of their first face.
 
@@ -201,7 +284,11 @@ def split_parts(ints: np.ndarray, F: np.ndarray, two_sided=None) -> list[np.ndar
     first = np.full(len(count), m, dtype=np.int64)
     np.minimum.at(first, edge, face)
     link = count[edge] == 2
-    ncomp, label = component_labels(m, face[link], first[edge][link])
+    # At a non-manifold edge, faces that bound one wedge of solid are linked too (two closed
+    # boxes welded along a face each side triangulates differently stay two closed boxes).
+    pa, pb = radial_pairs(ints, F, edge, count)
+    ncomp, label = component_labels(m, np.concatenate([face[link], pa]),
+                                    np.concatenate([first[edge][link], pb]))
     if ncomp == 1:  # one body (most are): nothing to nest
         return [np.arange(m)]
     boundary = np.zeros(ncomp, dtype=bool)
