@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation
 from test_robot_parts import _box, _open, _u_robot
-from zoo import l_shape, pierced_box, torus
+from zoo import comb, grate, l_shape, pierced_box, torus
 
 from cspace.scene.scene import Body, Scene
 
@@ -75,6 +75,13 @@ def _folded_l(size: float = 1.0) -> Mesh:
     return case.vertices, case.faces
 
 
+def _centred(mesh: Mesh, span: float) -> Mesh:
+    """``mesh`` scaled so that its longest side is ``span`` and centred on the origin."""
+    V = np.asarray(mesh[0], float)
+    V = (V - (V.min(axis=0) + V.max(axis=0)) / 2) * (span / np.ptp(V, axis=0).max())
+    return V, np.asarray(mesh[1], np.int64)
+
+
 L_BRACKET = l_shape(arm=2)
 POST = _box((0.3, 0.3, 2.0))
 SMALL_BOX = _box((0.5, 0.3, 0.4))
@@ -110,6 +117,12 @@ CASES = {c.name: c for c in [
     Case("needle through a box", (pierced_box("needle", 1e-9),), SMALL_BOX),
     Case("box cut by a sheet", (pierced_box("cut", 1e-9),), SMALL_BOX),
     Case("robot with a needle", (POST,), _scaled(pierced_box("needle", 1e-9), 0.3)),
+    # Many parallel slots and holes exactly one voxel wide, turned by the moves (issue #51:
+    # a turned comb's sum once missed the stated bound): combs of 4 and 16 teeth and a grate
+    # of 4 x 4 holes, with a robot about a slot's width.
+    Case("comb, 4 teeth", (_centred(comb(4, 2), 2.4),), _box((0.25, 0.3, 0.2))),
+    Case("comb, 16 teeth", (_centred(comb(16, 2), 3.0),), _box((0.08, 0.1, 0.12))),
+    Case("grate, 4 x 4 holes", (_centred(grate(4), 2.7),), _box((0.2, 0.25, 0.3))),
 ]}
 
 

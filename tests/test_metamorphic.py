@@ -43,6 +43,9 @@ EXPECTED = {
     "needle through a box": {"CVMS", "triangle pairs"},  # the box; the needle's segments
     "box cut by a sheet": {"triangle pairs"},
     "robot with a needle": {"CVMS", "triangle pairs"},  # its box part; its needle
+    "comb, 4 teeth": {"NCC-CVMS"},
+    "comb, 16 teeth": {"NCC-CVMS"},
+    "grate, 4 x 4 holes": {"NCC-CVMS"},
 }
 
 
