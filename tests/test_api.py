@@ -42,3 +42,21 @@ def test_errors_subclass_the_builtin_they_stand_for():
                  "GridRangeError", "SceneError"):
         err = getattr(cspace, name)
         assert issubclass(err, cspace.CspaceError) and issubclass(err, ValueError), name
+
+
+def test_reprs_fit_on_a_few_lines():
+    """What a user prints in a session (a scene, its model and bodies, the C-space, a sum, a
+    hull) says what it is in a few short lines, never the arrays it holds."""
+    import numpy as np
+    import trimesh
+
+    box = trimesh.creation.box((1.0, 1.0, 1.0))
+    scene = cspace.Scene.from_meshes(trimesh.creation.box((0.1, 0.1, 0.1)), [box],
+                                     start=(-1.0, -1.0, -1.0), goal=(1.0, 1.0, 1.0))
+    model = cspace.model_scene(scene)
+    hull = cspace.ConvexPolytope.from_points(np.asarray(box.vertices))
+    total = cspace.minkowski_sum((box.vertices, box.faces), 0.1 * box.vertices)
+    for obj in (scene, model, *model.bodies, model.cspace(), hull, total):
+        text = repr(obj)
+        assert text.count("\n") <= 3 and len(text) <= 400, text[:200]
+        assert "array(" not in text, text[:200]

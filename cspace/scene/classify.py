@@ -90,6 +90,11 @@ class BodyModel:
     _sheet: bool = field(default=False, repr=False)  # every triangle listed with both windings
     _kept: bool = field(default=False, repr=False)  # what snapping took, kept (_snapped_body)
 
+    def __repr__(self) -> str:
+        return (f"BodyModel({self.name!r}, kind={self.kind!r}, vertices={len(self.vertices)}, "
+                f"faces={len(self.faces)}, C-obstacles={len(self.cos)}"
+                + (f", error={self.error!r}" if self.error else "") + ")")
+
     @property
     def cos(self) -> list:
         """Every C-obstacle built for this body (over all robot parts)."""

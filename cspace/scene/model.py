@@ -138,6 +138,15 @@ class SceneModel:
     margin: Margin | None = None
     memory: int = 0  # bytes its C-obstacles hold, as estimated before the build (_memory_check)
 
+    def __repr__(self) -> str:
+        kinds: dict = {}
+        for b in self.bodies:
+            kinds[b.kind] = kinds.get(b.kind, 0) + 1
+        parts = ", ".join(f"{n} {k}" for k, n in kinds.items()) or "none"
+        return (f"SceneModel({getattr(self.scene, 'name', '?')!r}, bodies: {parts}, "
+                f"robot parts={len(self.robot_parts)}, robot_hull={self.robot_hull}, "
+                f"grid step=2**{self.grid.exponent})")
+
     @property
     def error_bound(self) -> float:
         """How far (scene units) a translation reported in collision can be from the scene's
