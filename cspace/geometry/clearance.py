@@ -40,7 +40,7 @@ from ._kernels import load
 from .boxes import BoxTree
 from .distance import _segment_segment_d2, shorter_edge_normals
 
-__all__ = ["MeshClearance", "ERROR_BOUND", "SLIVER"]
+__all__ = ["MeshClearance", "ERROR_BOUND", "SLIVER", "node_boxes"]
 
 _kernel = load("clearance")
 
@@ -62,6 +62,40 @@ def sliver_radii(T: np.ndarray) -> np.ndarray:
         r = np.where(perimeter > 0, area2 / perimeter, 0.0)
     sliver = r <= SLIVER * e.max(axis=1)
     return np.where(sliver, r * (1 + 1e-12) + 1e-300, -1.0)
+
+
+def node_boxes(tree: BoxTree, T: np.ndarray) -> np.ndarray:
+    """``(nodes, 15)``: each node's oriented box over the corners of its triangles ``T (n, 3,
+    3)``: centre, three orthonormal axes (rows; the principal directions of the corners), and
+    half-extents, each rounded up so that the box holds every corner despite the float
+    arithmetic (the axes are orthonormal within ~1e-15; 1e-9 of the box's reach covers it).
+
+    A node's triangles are ``tree.order[lo:hi]``: a leaf's range, an inner node's its
+    children's union (the tree partitions ``order`` in place, so it is contiguous)."""
+    n = len(tree.first)
+    lo = np.zeros(n, dtype=np.int64)
+    hi = np.zeros(n, dtype=np.int64)
+    leaf = tree.count > 0
+    lo[leaf] = tree.first[leaf]
+    hi[leaf] = tree.first[leaf] + tree.count[leaf]
+    for k in range(n - 1, -1, -1):  # children after their parent
+        if not leaf[k]:
+            a = tree.first[k]
+            lo[k], hi[k] = min(lo[a], lo[a + 1]), max(hi[a], hi[a + 1])
+    P = np.asarray(T, dtype=np.float64)[tree.order].reshape(-1, 3)  # corners in tree order
+    out = np.zeros((n, 15))
+    for k in range(n):
+        X = P[3 * lo[k]: 3 * hi[k]]
+        mean = X.mean(axis=0)
+        _, axes = np.linalg.eigh(np.cov((X - mean).T) if len(X) > 1 else np.eye(3))
+        axes = axes.T  # rows
+        proj = (X - mean) @ axes.T
+        a, b = proj.min(axis=0), proj.max(axis=0)
+        centre = mean + ((a + b) / 2) @ axes
+        reach = float(np.abs(X).max()) + float(np.abs(centre).max())
+        half = (b - a) / 2 * (1 + 1e-9) + 1e-9 * reach
+        out[k] = np.concatenate([centre, axes.reshape(-1), half])
+    return out
 
 
 class MeshClearance:
@@ -111,7 +145,8 @@ class MeshClearance:
             OT, sliver_radii(OT), _unit(shorter_edge_normals(OT.reshape(-1, 3, 3))),
             _unit(shorter_edge_normals(RT)), o_tree.order, np.ascontiguousarray(o_tree.lo[:, :3]),
             np.ascontiguousarray(o_tree.hi[:, :3]), o_tree.first, o_tree.count,
-            RV, RF, sliver_radii(RT), r_tree.order, r_tree.first, r_tree.count)
+            RV, RF, sliver_radii(RT), r_tree.order, r_tree.first, r_tree.count,
+            node_boxes(r_tree, RT), node_boxes(o_tree, OT.reshape(-1, 3, 3)))
         self._arrays = (OT, RV, RF)
 
     def __repr__(self) -> str:

@@ -5,10 +5,15 @@ early), and the certified motion check built on it (adaptive bisection).
 
 The obstacles are a :class:`cspace.geometry.boxes.BoxTree` of their triangles' boxes (world
 frame); the robot is a box tree of its triangles built in its own frame (relative to the
-reference point), whose boxes each query refits to the robot's vertices moved to its pose
-(cheaper than the pairs a looser, rotation-free bound would let through). A node pair's lower
-bound is the gap between their boxes; pairs are visited depth first, the nearer child first,
-and pruned when their bound reaches the least distance found so far (at first the cap).
+reference point). Every node of both trees also has an oriented box (``obb``: centre, three
+orthonormal axes along the principal directions of its triangles' corners, half-extents that
+hold every corner), so a query moves only what it visits: a robot node's box is turned to the
+pose when first reached, a robot vertex when a leaf pair first needs it. A node pair's lower
+bound is the largest gap between the two boxes' projections on the six axes of the two boxes
+(the separating-axis test; any unit axis's gap is a lower bound of the distance); pairs are
+visited depth first, the nearer child first, and pruned when their bound reaches the least
+distance found so far (at first the cap). Tube-like and turned parts, whose axis-aligned boxes
+overlap widely, are pruned far earlier than by axis-aligned boxes.
 
 Per triangle pair (:func:`_tri_tri`, reference ``clearance._pair_distances_reference``): the
 least of the nine edge-edge distances and the six corner-to-interior distances, 0 when an edge
@@ -215,9 +220,12 @@ cdef class ClearanceKernel:
     cdef const int64_t[::1] r_order
     cdef const int64_t[::1] r_first
     cdef const int64_t[::1] r_count
+    cdef const double[:, ::1] r_obb   # robot nodes' oriented boxes, its frame (module docstring)
+    cdef const double[:, ::1] o_obb   # obstacle nodes' oriented boxes, world frame
     cdef double[:, ::1] wv      # robot vertices moved to this query's pose
-    cdef double[:, ::1] rlo     # the robot tree's boxes refitted to them
-    cdef double[:, ::1] rhi
+    cdef double[:, ::1] wobb    # robot nodes' oriented boxes turned to it
+    cdef int64_t[::1] v_stamp   # the query that moved each vertex / turned each node's box
+    cdef int64_t[::1] n_stamp
     cdef double R[9]
     cdef double q[3]
     cdef public int64_t queries
@@ -226,9 +234,10 @@ cdef class ClearanceKernel:
     cdef object _boxes
 
     def __init__(self, OT, o_r, o_n, r_n, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
-                 r_first, r_count):
+                 r_first, r_count, r_obb, o_obb):
         self._keep = (OT, o_r, o_n, r_n, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
-                      r_first, r_count)
+                      r_first, r_count, r_obb, o_obb)
+        self.r_obb, self.o_obb = r_obb, o_obb
         self.OT, self.o_r, self.o_order, self.o_lo, self.o_hi = OT, o_r, o_order, o_lo, o_hi
         self.o_first, self.o_count = o_first, o_count
         self._boxes = (np.ascontiguousarray(np.asarray(OT).reshape(-1, 3, 3).min(axis=1)),
@@ -239,9 +248,10 @@ cdef class ClearanceKernel:
         self._boxes = self._boxes + (od,)
         self.RV, self.RF, self.r_r, self.r_order = RV, RF, r_r, r_order
         self.r_first, self.r_count = r_first, r_count
-        self.wv = np.empty((RV.shape[0], 3))
-        self.rlo = np.empty((r_first.shape[0], 3))
-        self.rhi = np.empty((r_first.shape[0], 3))
+        self.wv = np.zeros((RV.shape[0], 3))
+        self.wobb = np.zeros((r_first.shape[0], 12))
+        self.v_stamp = np.full(RV.shape[0], -1, dtype=np.int64)
+        self.n_stamp = np.full(r_first.shape[0], -1, dtype=np.int64)
         self.queries = 0
         self.pairs = 0
 
@@ -251,31 +261,24 @@ cdef class ClearanceKernel:
         out[1] = R[3] * p[0] + R[4] * p[1] + R[5] * p[2] + self.q[1]
         out[2] = R[6] * p[0] + R[7] * p[1] + R[8] * p[2] + self.q[2]
 
-    cdef void _refit(self) noexcept nogil:
-        """Move every robot vertex to this query's pose and refit the robot tree's boxes to
-        them (children come after their parent: from the last node up)."""
-        cdef Py_ssize_t v, k, a, t, c, i
-        for v in range(self.RV.shape[0]):
+    cdef inline double* _vertex(self, Py_ssize_t v) noexcept nogil:
+        """Robot vertex ``v`` moved to this query's pose (moved once per query)."""
+        if self.v_stamp[v] != self.queries:
             self._move(&self.RV[v, 0], &self.wv[v, 0])
-        for k in range(self.r_count.shape[0] - 1, -1, -1):
-            if self.r_count[k] > 0:
-                for c in range(3):
-                    self.rlo[k, c] = INFINITY
-                    self.rhi[k, c] = -INFINITY
-                for a in range(self.r_first[k], self.r_first[k] + self.r_count[k]):
-                    t = self.r_order[a]
-                    for i in range(3):
-                        v = self.RF[t, i]
-                        for c in range(3):
-                            if self.wv[v, c] < self.rlo[k, c]:
-                                self.rlo[k, c] = self.wv[v, c]
-                            if self.wv[v, c] > self.rhi[k, c]:
-                                self.rhi[k, c] = self.wv[v, c]
-            else:
-                a = self.r_first[k]
-                for c in range(3):
-                    self.rlo[k, c] = self.rlo[a, c] if self.rlo[a, c] < self.rlo[a + 1, c] else self.rlo[a + 1, c]
-                    self.rhi[k, c] = self.rhi[a, c] if self.rhi[a, c] > self.rhi[a + 1, c] else self.rhi[a + 1, c]
+            self.v_stamp[v] = self.queries
+        return &self.wv[v, 0]
+
+    cdef inline double* _node_box(self, Py_ssize_t i) noexcept nogil:
+        """Robot node ``i``'s oriented box turned to this query's pose: centre, then its three
+        axes (turned once per query)."""
+        cdef double* w = &self.wobb[i, 0]
+        if self.n_stamp[i] != self.queries:
+            self._move(&self.r_obb[i, 0], w)
+            self._turn(&self.r_obb[i, 3], &w[3])
+            self._turn(&self.r_obb[i, 6], &w[6])
+            self._turn(&self.r_obb[i, 9], &w[9])
+            self.n_stamp[i] = self.queries
+        return w
 
     cdef inline void _turn(self, const double* p, double* out) noexcept nogil:
         cdef double* R = self.R
@@ -284,33 +287,52 @@ cdef class ClearanceKernel:
         out[2] = R[6] * p[0] + R[7] * p[1] + R[8] * p[2]
 
     cdef inline double _bound(self, Py_ssize_t i, Py_ssize_t j) noexcept nogil:
-        """Lower bound of the distance between robot node ``i`` (moved) and obstacle node
-        ``j``: the gap between their boxes (the robot's refitted at this pose)."""
-        cdef double d2 = 0.0, t
-        cdef int c
-        for c in range(3):
-            t = self.o_lo[j, c] - self.rhi[i, c]
-            if t > 0:
-                d2 += t * t
-            else:
-                t = self.rlo[i, c] - self.o_hi[j, c]
-                if t > 0:
-                    d2 += t * t
-        return sqrt(d2)
+        """Lower bound of the distance between robot node ``i`` (at this pose) and obstacle
+        node ``j`` from their oriented boxes. On each axis ``u`` of box ``A``, every point of
+        ``B`` lies outside ``A``'s slab by at least the gap ``g_u`` between their projections
+        (0 when they overlap), so every point of ``B`` is at least ``sqrt(sum g_u^2)`` from
+        ``A`` (the distance to a box is the root of the squared slab distances on its axes);
+        the larger of that root over ``A``'s axes and over ``B``'s (for axis-aligned boxes: the
+        gap between them). 0 when no axis separates."""
+        cdef double* A = self._node_box(i)
+        cdef const double* B = &self.o_obb[j, 0]
+        cdef const double* ha = &self.r_obb[i, 12]
+        cdef const double* hb = &B[12]
+        cdef double M[9]
+        cdef double d[3]
+        cdef double ga = 0.0, gb = 0.0, g
+        cdef int k, m
+        for k in range(3):
+            d[k] = A[k] - B[k]
+        for k in range(3):
+            for m in range(3):
+                M[3 * k + m] = fabs(_dot(&A[3 + 3 * k], &B[3 + 3 * m]))
+        for k in range(3):  # the robot box's axes
+            g = (fabs(_dot(&A[3 + 3 * k], d)) - ha[k]
+                 - (hb[0] * M[3 * k] + hb[1] * M[3 * k + 1] + hb[2] * M[3 * k + 2]))
+            if g > 0:
+                ga += g * g
+        for m in range(3):  # the obstacle box's axes
+            g = (fabs(_dot(&B[3 + 3 * m], d)) - hb[m]
+                 - (ha[0] * M[m] + ha[1] * M[3 + m] + ha[2] * M[6 + m]))
+            if g > 0:
+                gb += g * g
+        return sqrt(ga if ga > gb else gb)
 
     cdef double _leaves(self, Py_ssize_t i, Py_ssize_t j, double best, double grow) noexcept nogil:
         cdef double A[9]
         cdef double lo[3]
         cdef double hi[3]
         cdef double n[3]
-        cdef Py_ssize_t a, b, t, o, k, v
+        cdef Py_ssize_t a, b, t, o, k
+        cdef double* w
         cdef double d, g, g2, na, s0, s1, s2, thr
         cdef bint flat_a
         for a in range(self.r_first[i], self.r_first[i] + self.r_count[i]):
             t = self.r_order[a]
             for k in range(3):
-                v = self.RF[t, k]
-                A[3 * k], A[3 * k + 1], A[3 * k + 2] = self.wv[v, 0], self.wv[v, 1], self.wv[v, 2]
+                w = self._vertex(self.RF[t, k])
+                A[3 * k], A[3 * k + 1], A[3 * k + 2] = w[0], w[1], w[2]
             for k in range(3):
                 lo[k] = min(A[k], min(A[3 + k], A[6 + k]))
                 hi[k] = max(A[k], max(A[3 + k], A[6 + k]))
@@ -372,8 +394,7 @@ cdef class ClearanceKernel:
             self.R[k] = R[k]
         for k in range(3):
             self.q[k] = q[k]
-        self.queries += 1
-        self._refit()
+        self.queries += 1  # also this query's stamp: nothing moved for it yet
         b1 = self._bound(0, 0)
         if b1 * grow >= best:
             return best / grow
@@ -391,8 +412,8 @@ cdef class ClearanceKernel:
                 continue
             # Split the robot node unless it is a leaf or clearly the smaller one.
             split_robot = self.o_count[j] > 0 or (
-                self.r_count[i] == 0 and _half_diagonal(&self.rlo[i, 0], &self.rhi[i, 0])
-                >= _half_diagonal(&self.o_lo[j, 0], &self.o_hi[j, 0]))
+                self.r_count[i] == 0 and _half_diagonal(&self.r_obb[i, 12])
+                >= _half_diagonal(&self.o_obb[j, 12]))
             if split_robot:
                 i1, i2 = self.r_first[i], self.r_first[i] + 1
                 b1, b2 = self._bound(i1, j), self._bound(i2, j)
@@ -533,9 +554,9 @@ cdef class ClearanceKernel:
         return self._query(R, q, cap * grow, grow)
 
 
-cdef inline double _half_diagonal(const double* lo, const double* hi) noexcept nogil:
-    cdef double x = hi[0] - lo[0], y = hi[1] - lo[1], z = hi[2] - lo[2]
-    return 0.5 * sqrt(x * x + y * y + z * z)
+cdef inline double _half_diagonal(const double* h) noexcept nogil:
+    """Half the diagonal of a box with half-extents ``h``."""
+    return sqrt(h[0] * h[0] + h[1] * h[1] + h[2] * h[2])
 
 
 cdef inline double _angle(const double* p0, const double* p1) noexcept nogil:
