@@ -199,7 +199,8 @@ cdef class ClearanceKernel:
     shorter edges (robot frame; only non-slivers' are used),
     the obstacle tree (``order, lo, hi, first, count``); ``RV (v, 3)`` robot vertices minus
     the reference point, ``RF (k, 3)``, ``r_r (k,)`` and the robot tree's ``order, first,
-    count`` (its boxes are refitted to the moved vertices at each query).
+    count``; ``r_obb`` and ``o_obb`` (``(nodes, 15)``: centre, axes, half-extents) the two
+    trees' oriented boxes (:func:`cspace.geometry.clearance.node_boxes`).
     """
 
     cdef const double[:, ::1] OT
