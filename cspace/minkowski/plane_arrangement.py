@@ -583,27 +583,56 @@ class Arrangement2D:
                 return (Fraction(0), Fraction(0))
             h0 = self._H[0]
             return (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))
-        V, origin = self.vertices, self.half_edge_origin
+        H, origin = self._H, self.half_edge_origin
         ids = {origin[h] for h in face.outer}
         ids.update(origin[h] for c in face.holes for h in c)
         ids.update(face.isolated)
-        ys = [V[v][1] for v in ids]
-        y0 = min(ys)
-        y1 = min(y for y in ys if y > y0)
+        # Exact y's are Fractions only where the floats (each y = Y / W correctly rounded, so
+        # a smaller float means a smaller y) do not decide: the lowest y and the next one up.
+        fy = {v: H[v][1] / H[v][2] for v in ids}
+        low = min(fy.values())
+        first = [Fraction(H[v][1], H[v][2]) for v in ids if fy[v] == low]
+        y0 = min(first)
+        above = [y for y in first if y > y0]
+        rest = [fy[v] for v in ids if fy[v] > low]
+        if rest:
+            nxt = min(rest)
+            above += [Fraction(H[v][1], H[v][2]) for v in ids if fy[v] == nxt]
+        y1 = min(above)
         ym = (y0 + y1) / 2
+        fm, N, D = float(ym), ym.numerator, ym.denominator
+
+        def below(v) -> bool:  # y(v) < ym; never equal (no vertex lies strictly between)
+            return fy[v] < fm or (fy[v] == fm and H[v][1] * D < N * H[v][2])
+
+        # Each crossing of the line y = ym as an integer ratio ``num / den`` (den > 0), with
+        # its float for sorting; equal floats are ordered exactly.
         xs = []
         for h in face.outer:
-            a, b = V[origin[h]], V[origin[h ^ 1]]
-            if (a[1] < ym) != (b[1] < ym):
-                x = a[0] + (ym - a[1]) * (b[0] - a[0]) / (b[1] - a[1])
-                xs.append((x, 1 if b[1] > a[1] else -1))
-        xs.sort()
+            u, v = origin[h], origin[h ^ 1]
+            if below(u) != below(v):
+                (Xa, Ya, Wa), (Xb, Yb, Wb) = H[u], H[v]
+                dy = Yb * Wa - Ya * Wb  # (by - ay) Wa Wb
+                num = Xa * D * dy + (N * Wa - Ya * D) * (Xb * Wa - Xa * Wb)
+                den = D * Wa * dy
+                if den < 0:
+                    num, den = -num, -den
+                xs.append((num / den, num, den, 1 if dy > 0 else -1))
+        xs.sort(key=lambda t: t[0])
+        for k in range(len(xs) - 1):  # float ties: exact order (rare)
+            if xs[k][0] == xs[k + 1][0]:
+                xs.sort(key=lambda t: (t[0], Fraction(t[1], t[2])))
+                break
+
+        def less(a, b) -> bool:
+            return a[0] < b[0] or (a[0] == b[0] and a[1] * b[2] < b[1] * a[2])
+
         # winding of a point at x: edges to the right going up count +1 (ccw), down -1
-        w = sum(d for _, d in xs)
-        for (xa, da), (xb, _) in zip(xs, xs[1:]):
-            w -= da
-            if w != 0 and xa < xb:
-                return ((xa + xb) / 2, ym)
+        w = sum(t[3] for t in xs)
+        for a, b in zip(xs, xs[1:]):
+            w -= a[3]
+            if w != 0 and less(a, b):
+                return ((Fraction(a[1], a[2]) + Fraction(b[1], b[2])) / 2, ym)
         raise AssertionError("no interior sample found")  # pragma: no cover
 
     # ---------------------------------------------------------------- queries
