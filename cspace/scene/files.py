@@ -548,9 +548,9 @@ def _load_cfg(path: Path, notes: list[str]) -> Scene:
 
     r_start, r_goal = rotation("start"), rotation("goal")
     if not np.allclose(r_start, r_goal, rtol=0.0, atol=1e-12):
-        notes.append(f"{path}: [problem] the goal rotation differs from the start rotation; "
-                     "translation-only planning keeps the start orientation (plan with "
-                     "orientation slices to reach it)")
+        notes.append(f"{path}: [problem] the goal rotation differs from the start rotation: "
+                     "planning turns the robot on its way (the default); translation-only "
+                     "planning (--no-turns) keeps the start orientation")
 
     base = path.parent
     world_path = (base / text("world")).resolve()
@@ -802,8 +802,8 @@ def _load_parasol(path: Path, notes: list[str]) -> Scene:
     (start_line, start, r_start), (goal_line, goal, r_goal) = configs[0], configs[-1]
     if not np.allclose(r_start, r_goal, rtol=0.0, atol=1e-12):
         notes.append(f"{query_path}:{goal_line}: the goal orientation differs from the start's "
-                     f"(line {start_line}); translation-only planning keeps the start orientation "
-                     "(plan with orientation slices to reach it)")
+                     f"(line {start_line}): planning turns the robot on its way (the default); "
+                     "translation-only planning (--no-turns) keeps the start orientation")
 
     robot = Body(Path(robot_name).name, _transform(robot_v, r_start), robot_f, str(mesh_path))
     reference = _transform(centre[None], r_start)[0]

@@ -28,7 +28,15 @@ from ..ompl_plugin import _bounds, _box_bounds, _ompl, planner_names
 from ..solve import PlanResult, _seed, _solve
 from .clearance import PoseClearance, quaternion_matrix
 
-__all__ = ["plan_se3", "certify_path", "relative_goal"]
+__all__ = ["plan_se3", "certify_path", "relative_goal", "RANGE"]
+
+#: The default step of planners that have one (``setRange``), in units of the robot's reach
+#: ``ρ`` (its farthest point from the reference point). OMPL's default, a fifth of the state
+#: space's extent, makes long motions that a narrow passage certifies only in many halvings,
+#: and rarely; a quarter of the robot's reach solved every problem of
+#: ``benchmarks/bench_se3.py`` that the default solved, and the alpha puzzle, several times
+#: faster (its SE(3) section).
+RANGE = 0.25
 
 _CLASSES: dict = {}
 
@@ -185,7 +193,8 @@ def plan_se3(scene, *, planner: str = "RRTConnect", time: float = 10.0, seed: in
     bounds : (2, 3) float64, optional
         Where the reference point may be; default the scene's.
     planner_range : float, optional
-        ``planner.setRange`` for planners that have it.
+        ``planner.setRange`` for planners that have it (scene units); default
+        :data:`RANGE` times the robot's reach ``ρ``.
     poses : PoseClearance, optional
         Reuse one (its distance trees are built in milliseconds; a caller planning several
         times may keep it).
@@ -243,7 +252,7 @@ def plan_se3(scene, *, planner: str = "RRTConnect", time: float = 10.0, seed: in
     left = time - (_time.perf_counter() - t0)
     status, exact, raw, simp, solve_time = _solve(
         si, _fill(q0, Q0), _fill(q1, Q1), planner=planner, time=max(left - shortcut, 1e-3) * 0.97,
-        optimize=False, planner_range=planner_range, simplify=simplify, read=read, dim=7,
+        optimize=False, planner_range=RANGE * poses.rho if planner_range is None else planner_range, simplify=simplify, read=read, dim=7,
         simplify_time=shortcut)
     rows = simp if simp is not None else raw
     report = certify_path(poses, rows[:, :3], rows[:, 3:]) if len(rows) else {

@@ -7,10 +7,13 @@ orientations, within one budget.
    at most :data:`BRIDGE_FIRST_CAP` seconds (a plate through a slot on edge, a T through a
    slot at the goal's orientation: found in a second, where sampling takes tens of seconds
    or more);
-2. :func:`cspace.planning.se3.plan.plan_se3` (RRTConnect in SE(3), certified motions; the
-   problems OMPL.app's planner solves are solved here) for :data:`SE3_FIRST` of what is left;
+2. :func:`cspace.planning.se3.plan.plan_se3` (RRTConnect in SE(3), certified motions, its
+   step a quarter of the robot's reach; the problems OMPL.app's planner solves are solved
+   here) for :data:`SE3_FIRST` of what is left;
 3. the bridge again for :data:`BRIDGE` of what is left (the orientations it has not decided);
-4. ``plan_se3`` again with the rest.
+4. ``plan_se3`` again with the rest, its step :data:`SECOND_RANGE` of the reach (another
+   search, with shorter steps: on ``benchmarks/bench_se3.py``'s problems each of the two
+   steps was the faster one on some problem and seed).
 
 Each attempt is appended to ``tried``.
 """
@@ -26,7 +29,8 @@ from .bridge import slice_bridge
 from .clearance import PoseClearance
 from .plan import plan_se3
 
-__all__ = ["plan_turning_se3", "BRIDGE_FIRST", "BRIDGE_FIRST_CAP", "SE3_FIRST", "BRIDGE"]
+__all__ = ["plan_turning_se3", "BRIDGE_FIRST", "BRIDGE_FIRST_CAP", "SE3_FIRST", "BRIDGE",
+           "SECOND_RANGE"]
 
 #: The quick bridge's share of the turning stage's budget, and its cap in seconds.
 BRIDGE_FIRST = 0.1
@@ -35,6 +39,9 @@ BRIDGE_FIRST_CAP = 3.0
 SE3_FIRST = 0.4
 #: The bridge's share of what the first SE(3) attempt leaves.
 BRIDGE = 0.6
+#: The second SE(3) attempt's step, in units of the robot's reach (the first's is
+#: :data:`cspace.planning.se3.plan.RANGE`).
+SECOND_RANGE = 0.1
 
 
 def plan_turning_se3(scene, *, time: float, seed=None, bounds=None, cache=None, memory=None,
@@ -61,8 +68,11 @@ def plan_turning_se3(scene, *, time: float, seed=None, bounds=None, cache=None, 
             budget = SE3_FIRST * left if "se3" in stages[n + 1:] else left
         ts = _time.perf_counter()
         if stage == "se3":
-            r = plan_se3(scene, time=budget, seed=seed, bounds=b, poses=poses,
-                         planner_range=planner_range)
+            second = "se3" in stages[:n]
+            step = (planner_range if planner_range is not None
+                    else SECOND_RANGE * poses.rho if second else None)
+            r = plan_se3(scene, time=budget, seed=seed,
+                         bounds=b, poses=poses, planner_range=step)
             tried.append({"planner": "RRTConnect", "sampler": "uniform", "slices": None,
                           "space": "SE3", "time": budget, "seconds": r.time,
                           "solved": r.solved})
