@@ -187,6 +187,7 @@ def main(argv=None) -> int:
     ap.add_argument("--seeds", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--only", default=None, help="problems whose name contains this")
     args = ap.parse_args(argv)
+    load0 = os.getloadavg()
     with tempfile.TemporaryDirectory() as tmp:
         scenes = problems(Path(tmp))
         if args.only:
@@ -203,7 +204,9 @@ def main(argv=None) -> int:
             "at one orientation joined by turns, `RRTConnect SE(3)` sampling with certified "
             "motions); OMPL.app's way: `plan_sampled` (RRTConnect in SE(3), FCL at states, "
             "discrete motions at resolution 0.01). Colliding poses: cspace's FCL oracle along "
-            "every motion of the returned path (poses colliding / poses checked).", ""]
+            "every motion of the returned path (poses colliding / poses checked). Load average "
+            "(1 min) at the start {:.2f}, at the end {:.2f}: other jobs share the cores.".format(
+                load0[0], os.getloadavg()[0]), ""]
     body = planners + ["", "### Clearance queries at 300 random poses near each start", "",
                        "Per query. cspace: `MeshClearance` (distance; capped at 1e-3 of the "
                        "scene size, as the validity check does; a lower bound within a factor 4, "
