@@ -297,11 +297,20 @@ AUTO_DECIDE_ALONE = 0.85
 #: in seconds (the cage's and the bottle's take a fraction of a second).
 AUTO_BALL = 0.25
 AUTO_BALL_CAP = 5.0
+#: ``planner='auto'`` on a scene whose robot may turn: after the first translation attempt,
+#: RRTConnect in SE(3) (certified motions) gets this share of the budget, at most this many
+#: seconds, before the decisions: a passage that needs a turn (a twisting corridor, the
+#: alpha puzzle's easier seeds) is often found in a second or two, where the decisions and the
+#: fixed-orientation passages before it took some 7 s of a 30 s budget on the twisting corners
+#: of ``benchmarks/bench_se3.py``.
+AUTO_SE3_QUICK = 0.1
+AUTO_SE3_QUICK_CAP = 3.0
 
 
 def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: bool, bounds,
                cache, robot_hull: bool, memory, turns: bool, planner_range) -> PlanResult:
-    """``plan(..., planner='auto')``: RRTConnect (most problems: milliseconds), then the
+    """``plan(..., planner='auto')``: RRTConnect (most problems: milliseconds), on a scene
+    whose robot may turn a short RRTConnect in SE(3) (:data:`AUTO_SE3_QUICK`), then the
     decision by certified cells (a path through free cells; or a proof that there is none at
     this orientation, which skips the samplers). Then, on a scene whose robot may turn
     (``turns``): after a proof at the start's orientation, the proof over all orientations
@@ -327,6 +336,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         bounds = scene.bounds if bounds is None else bounds
     tried: list = []
     r = None
+    poses = None  # the SE(3) clearance, once made (shared by the SE(3) attempts)
     d, d_budget = None, 0.0
     alone = not (turns and scene is not None)  # translations only: no turns to plan after
     # A goal orientation other than the start's: translations at the start's cannot reach it
@@ -361,6 +371,23 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
                       "seconds": r.time, "solved": r.solved})
         if r.solved:
             break
+        if n == 0 and not alone:  # the robot may turn: a short SE(3) attempt first
+            from .se3.clearance import PoseClearance
+            from .se3.plan import plan_se3
+
+            b = _bounds(bounds)
+            poses = PoseClearance(scene, b)
+            budget = min(AUTO_SE3_QUICK * time, AUTO_SE3_QUICK_CAP,
+                         time - (_time.perf_counter() - t0))
+            if budget > 0:
+                quick = plan_se3(scene, time=budget, seed=seed, bounds=b, poses=poses,
+                                 planner_range=planner_range)
+                tried.append({"planner": "RRTConnect", "sampler": "uniform", "slices": None,
+                              "space": "SE3", "time": budget, "seconds": quick.time,
+                              "solved": quick.solved})
+                if quick.solved:
+                    r = quick
+                    break
     left = time - (_time.perf_counter() - t0)
     if (not (r is not None and r.solved) and alone
             and d is not None and d.answer == "unknown" and left > d_budget):
@@ -397,7 +424,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         decided = d is not None and d.answer != "unknown"
         r = plan_turning_se3(scene, time=left, seed=seed, bounds=bounds, cache=cache,
                              memory=memory, tried=tried, planner_range=planner_range,
-                             skip=((0.0, 0.0, 0.0, 1.0),) if decided else ())
+                             skip=((0.0, 0.0, 0.0, 1.0),) if decided else (), poses=poses)
     if d is not None and d.answer == "no path" and not (r is not None and r.solved):
         r = r if r is not None and r.certified is not None else _decided(cs, d, bounds)
     return replace(r, tried=tried, time=_time.perf_counter() - t0, decision=d)

@@ -45,15 +45,17 @@ SECOND_RANGE = 0.1
 
 
 def plan_turning_se3(scene, *, time: float, seed=None, bounds=None, cache=None, memory=None,
-                     tried: list | None = None, planner_range=None, skip=()
+                     tried: list | None = None, planner_range=None, skip=(), poses=None
                      ) -> PlanResult:
     """The certified SE(3) path of the first attempt that solves (module docstring), else an
     SE(3) attempt's unsolved result (one of a millisecond when the budget left none). ``skip``: relative orientations whose translations
-    were already decided (not bridged again)."""
+    were already decided (not bridged again); ``poses``: the scene's
+    :class:`~cspace.planning.se3.clearance.PoseClearance` in these bounds, when the caller has
+    one."""
     t0 = _time.perf_counter()
     tried = tried if tried is not None else []
     b = np.asarray(scene.bounds if bounds is None else bounds, dtype=np.float64).reshape(2, 3)
-    poses = PoseClearance(scene, b)
+    poses = poses if poses is not None else PoseClearance(scene, b)
     done = set()  # orientations the bridge has decided
     r = None
     stages = ["bridge", "se3", "bridge", "se3"]
