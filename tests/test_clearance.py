@@ -14,10 +14,12 @@ import trimesh
 from scipy.spatial.transform import Rotation, Slerp
 
 from cspace.geometry._kernels import load
+from cspace.geometry.boxes import BoxTree
 from cspace.geometry.clearance import (
     MeshClearance,
     _distance_reference,
     _pair_distances_reference,
+    node_boxes,
     sliver_radii,
 )
 
@@ -85,6 +87,30 @@ def test_pair_distance_is_zero_for_crossing_triangles_and_exact_for_parallel_one
                          np.ascontiguousarray(rows[:, 1].reshape(-1, 9)),
                          -np.ones(2), -np.ones(2))
     assert d[0] == 0.0 and d[1] == pytest.approx(0.5, abs=1e-15)
+
+
+@pytest.mark.parametrize("leaf", [1, 3, 8])
+@pytest.mark.parametrize("offset", [0.0, 250.0, -3e5])
+def test_every_node_box_holds_its_triangles(leaf, offset):
+    """The query prunes a node pair by its oriented boxes: each node's box must hold every
+    corner of the triangles under it (a needle-thin sliver, a flat patch and a random
+    cloud, far from the origin too), with orthonormal axes."""
+    rng = np.random.default_rng(leaf)
+    T = np.concatenate([rng.normal(size=(300, 3, 3)) * 0.2 + rng.uniform(-5, 5, (300, 1, 3)),
+                        np.array([[[0, 0, 0], [1, 1e-9, 0], [2, 2e-9, 1e-12]]]),  # a sliver
+                        rng.normal(size=(40, 3, 3)) * [1.0, 1.0, 0.0]]) + offset  # flat
+    tree = BoxTree(T.min(axis=1), T.max(axis=1), leaf)
+    B = node_boxes(tree, T, chunk=997)  # several chunks
+    c, axes, half = B[:, :3], B[:, 3:12].reshape(-1, 3, 3), B[:, 12:]
+    assert np.abs(np.einsum("kij,klj->kil", axes, axes) - np.eye(3)).max() < 1e-12
+    # each node's triangles: a leaf's own, an inner node's its children's
+    under = [None] * len(tree.first)
+    for k in range(len(tree.first) - 1, -1, -1):
+        f = tree.first[k]
+        under[k] = (tree.order[f: f + tree.count[k]] if tree.count[k]
+                    else np.concatenate([under[f], under[f + 1]]))
+        P = T[under[k]].reshape(-1, 3)
+        assert (np.abs((P - c[k]) @ axes[k].T) <= half[k]).all(), k
 
 
 def test_query_matches_brute_force_over_every_pair():

@@ -64,14 +64,18 @@ def sliver_radii(T: np.ndarray) -> np.ndarray:
     return np.where(sliver, r * (1 + 1e-12) + 1e-300, -1.0)
 
 
-def node_boxes(tree: BoxTree, T: np.ndarray) -> np.ndarray:
+def node_boxes(tree: BoxTree, T: np.ndarray, chunk: int = 1 << 20) -> np.ndarray:
     """``(nodes, 15)``: each node's oriented box over the corners of its triangles ``T (n, 3,
     3)``: centre, three orthonormal axes (rows; the principal directions of the corners), and
     half-extents, each rounded up so that the box holds every corner despite the float
     arithmetic (the axes are orthonormal within ~1e-15; 1e-9 of the box's reach covers it).
+    Any orthonormal axes give a valid box (the extents are the corners' own projections), so
+    the covariance's rounding costs tightness only.
 
     A node's triangles are ``tree.order[lo:hi]``: a leaf's range, an inner node's its
-    children's union (the tree partitions ``order`` in place, so it is contiguous)."""
+    children's union (the tree partitions ``order`` in place, so it is contiguous). Vectorised:
+    the covariances from prefix sums over the corners in tree order, the projections over
+    every (node, corner) pair in chunks of at most ``chunk`` rows."""
     n = len(tree.first)
     lo = np.zeros(n, dtype=np.int64)
     hi = np.zeros(n, dtype=np.int64)
@@ -83,19 +87,38 @@ def node_boxes(tree: BoxTree, T: np.ndarray) -> np.ndarray:
             a = tree.first[k]
             lo[k], hi[k] = min(lo[a], lo[a + 1]), max(hi[a], hi[a + 1])
     P = np.asarray(T, dtype=np.float64)[tree.order].reshape(-1, 3)  # corners in tree order
-    out = np.zeros((n, 15))
-    for k in range(n):
-        X = P[3 * lo[k]: 3 * hi[k]]
-        mean = X.mean(axis=0)
-        _, axes = np.linalg.eigh(np.cov((X - mean).T) if len(X) > 1 else np.eye(3))
-        axes = axes.T  # rows
-        proj = (X - mean) @ axes.T
-        a, b = proj.min(axis=0), proj.max(axis=0)
-        centre = mean + ((a + b) / 2) @ axes
-        reach = float(np.abs(X).max()) + float(np.abs(centre).max())
-        half = (b - a) / 2 * (1 + 1e-9) + 1e-9 * reach
-        out[k] = np.concatenate([centre, axes.reshape(-1), half])
-    return out
+    origin = P.mean(axis=0)
+    X = P - origin  # centred: less cancellation in the second moments
+    S1 = np.concatenate([np.zeros((1, 3)), np.cumsum(X, axis=0)])
+    S2 = np.concatenate([np.zeros((1, 9)),
+                         np.cumsum((X[:, :, None] * X[:, None, :]).reshape(-1, 9), axis=0)])
+    a, b = 3 * lo, 3 * hi
+    m = (b - a).astype(np.float64)
+    mean = (S1[b] - S1[a]) / m[:, None]
+    cov = ((S2[b] - S2[a]) / m[:, None]).reshape(-1, 3, 3) - mean[:, :, None] * mean[:, None, :]
+    _, vec = np.linalg.eigh(cov)
+    axes = np.ascontiguousarray(np.swapaxes(vec, 1, 2))  # rows
+    amin = np.zeros((n, 3))
+    amax = np.zeros((n, 3))
+    reach = np.zeros(n)
+    counts = b - a
+    k0 = 0
+    while k0 < n:  # nodes k0..k1-1, at most ``chunk`` (node, corner) rows (a node at least)
+        k1 = k0 + max(1, int(np.searchsorted(np.cumsum(counts[k0:]), chunk, side="right")))
+        c = counts[k0:k1]
+        node = np.repeat(np.arange(k0, k1), c)
+        first = np.concatenate([[0], np.cumsum(c)[:-1]])
+        idx = np.repeat(a[k0:k1], c) + (np.arange(int(c.sum())) - np.repeat(first, c))
+        D = X[idx] - mean[node]
+        proj = np.einsum("kj,kij->ki", D, axes[node])
+        amin[k0:k1] = np.minimum.reduceat(proj, first, axis=0)
+        amax[k0:k1] = np.maximum.reduceat(proj, first, axis=0)
+        reach[k0:k1] = np.maximum.reduceat(np.abs(P[idx]).max(axis=1), first)
+        k0 = k1
+    centre = origin + mean + np.einsum("ki,kij->kj", (amin + amax) / 2, axes)
+    reach = reach + np.abs(centre).max(axis=1)
+    half = (amax - amin) / 2 * (1 + 1e-9) + 1e-9 * reach[:, None]
+    return np.concatenate([centre, axes.reshape(n, 9), half], axis=1)
 
 
 class MeshClearance:
@@ -114,6 +137,10 @@ class MeshClearance:
         The largest ``|q|`` a query will ask for (the bounds' farthest corner): with the
         obstacles' and robot's extents it sets the scene magnitude ``M`` of
         :attr:`error_bound`.
+    leaf : int, default 1
+        Triangles per leaf of both trees (with oriented node boxes, one a leaf measured
+        fastest: on the alpha puzzle and the bug trap a full distance 1.5-2.5x faster than
+        with 8, a capped one up to 2x).
 
     Attributes
     ----------
@@ -125,7 +152,7 @@ class MeshClearance:
     """
 
     def __init__(self, obstacle_vertices, obstacle_faces, robot_vertices, robot_faces, *,
-                 reach: float = 0.0, leaf: int = 8):
+                 reach: float = 0.0, leaf: int = 1):
         OV = np.ascontiguousarray(obstacle_vertices, dtype=np.float64).reshape(-1, 3)
         OF = np.ascontiguousarray(obstacle_faces, dtype=np.int64).reshape(-1, 3)
         RV = np.ascontiguousarray(robot_vertices, dtype=np.float64).reshape(-1, 3)
