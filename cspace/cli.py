@@ -351,7 +351,7 @@ def _plan(args: argparse.Namespace) -> int:
                if t["planner"] == "bridge" else
                f"{t['planner']} in SE(3), certified motions" if t.get("space") == "SE3"
                else f"{t['planner']} ({t['sampler']} sampler)")
-        said = t.get("answer") or ("solved" if t["solved"] else "no path")
+        said = t.get("answer") or ("solved" if t["solved"] else "not found")
         print(f"  auto: {how}: {said} in {t['seconds']:.2f} s of {t['time']:.2f} s")
     if (d := r.decision) is not None and d.answer == "no path":
         wall = ("the separating surface is the certificate" if d.separation is not None else
