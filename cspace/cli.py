@@ -349,6 +349,8 @@ def _plan(args: argparse.Namespace) -> int:
                "decision (exact free space, cells)" if t["planner"] == "decide" else
                "passages at fixed orientations, turns where there is room (SE(3))"
                if t["planner"] == "bridge" else
+               "a tunnel along the ball's path, joined to start and goal (SE(3))"
+               if t["planner"] == "tunnel" else
                f"{t['planner']} in SE(3), certified motions" if t.get("space") == "SE3"
                else f"{t['planner']} ({t['sampler']} sampler)")
         said = t.get("answer") or ("solved" if t["solved"] else "not found")

@@ -339,6 +339,7 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     tried: list = []
     r = None
     poses = None  # the SE(3) clearance, once made (shared by the SE(3) attempts)
+    guide = None  # the path of the ball inside the robot, when decided
     d, d_budget = None, 0.0
     alone = not (turns and scene is not None)  # translations only: no turns to plan after
     # A goal orientation other than the start's: translations at the start's cannot reach it
@@ -405,18 +406,20 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
     if (d is not None and d.answer == "no path" and turns and scene is not None and left > 0):
         # No translation at the start's orientation. The ball inside the robot that no turn
         # changes: if even it cannot pass, nothing can, at any orientation.
-        from .se3.ball import no_path_at_any_orientation
+        from .se3.ball import ball_decision
 
         budget = min(AUTO_BALL * left, AUTO_BALL_CAP)
         tb = _time.perf_counter()
-        proof = no_path_at_any_orientation(scene, time=budget, bounds=bounds, cache=cache,
-                                           memory=memory)
+        ball = ball_decision(scene, time=budget, bounds=bounds, cache=cache, memory=memory)
         tried.append({"planner": "decide", "sampler": None, "slices": None, "time": budget,
-                      "robot": "inscribed ball", "answer": "no path" if proof else "unknown",
+                      "robot": "inscribed ball",
+                      "answer": ball.answer if ball is not None else "unknown",
                       "seconds": _time.perf_counter() - tb, "solved": False})
-        if proof is not None:
+        if ball is not None and ball.answer == "no path":
             return replace(_decided(cs, d, bounds), tried=tried, time=_time.perf_counter() - t0,
-                           decision=proof, status="No path at any orientation (proved)")
+                           decision=ball, status="No path at any orientation (proved)")
+        if ball is not None and ball.answer == "path":
+            guide = ball.path  # the turning stage looks for a tunnel along it
     left = time - (_time.perf_counter() - t0)
     # The turning stage runs with what is left, or (nothing left and nothing tried: a goal
     # turned, a tiny budget) for a millisecond, so there is always a result.
@@ -426,7 +429,8 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
         decided = d is not None and d.answer != "unknown"
         r = plan_turning_se3(scene, time=left, seed=seed, bounds=bounds, cache=cache,
                              memory=memory, tried=tried, planner_range=planner_range,
-                             skip=((0.0, 0.0, 0.0, 1.0),) if decided else (), poses=poses)
+                             skip=((0.0, 0.0, 0.0, 1.0),) if decided else (), poses=poses,
+                             guide=guide)
     if d is not None and d.answer == "no path" and not (r is not None and r.solved):
         r = r if r is not None and r.certified is not None else _decided(cs, d, bounds)
     return replace(r, tried=tried, time=_time.perf_counter() - t0, decision=d)

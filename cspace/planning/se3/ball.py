@@ -22,7 +22,7 @@ import numpy as np
 from ...mesh.query import MeshCO
 from .clearance import _parts
 
-__all__ = ["inscribed_radius", "no_path_at_any_orientation"]
+__all__ = ["inscribed_radius", "ball_decision", "no_path_at_any_orientation"]
 
 
 def inscribed_radius(scene) -> float:
@@ -56,9 +56,13 @@ def ball_scene(scene, r: float):
     return dataclasses.replace(scene, robot=robot)
 
 
-def no_path_at_any_orientation(scene, *, time: float, bounds=None, cache=None, memory=None):
-    """The decision for the ball inside the robot (module docstring) when it is ``'no path'``
-    (a proof over all orientations), else None. ``time`` bounds the build and the decision."""
+def ball_decision(scene, *, time: float, bounds=None, cache=None, memory=None):
+    """The translation decision (:func:`cspace.planning.decide.decide`) for the ball inside
+    the robot (module docstring), or None when the robot holds no ball about its reference
+    point or ``time`` is spent first. Its ``'no path'`` is a proof over all orientations
+    (:func:`no_path_at_any_orientation`); its ``'path'`` shows where a passage is (the turning
+    stage looks for a tunnel along it: :mod:`cspace.planning.se3.tunnel`). ``time`` bounds the
+    build and the decision."""
     import time as _time
 
     from ...scene.model import CSpace
@@ -76,7 +80,12 @@ def no_path_at_any_orientation(scene, *, time: float, bounds=None, cache=None, m
     b = np.asarray(scene.bounds if bounds is None else bounds, dtype=np.float64)
     d = decide(cs, np.asarray(scene.start, float), np.asarray(scene.goal, float), bounds=b,
                time=left)
-    if d.answer != "no path":
-        return None
     return dataclasses.replace(d, reason=f"{d.reason}; for a ball of radius {r:.4g} about the "
                                "reference point, inside the robot at every orientation")
+
+
+def no_path_at_any_orientation(scene, *, time: float, bounds=None, cache=None, memory=None):
+    """:func:`ball_decision` when it is ``'no path'`` (a proof over all orientations), else
+    None."""
+    d = ball_decision(scene, time=time, bounds=bounds, cache=cache, memory=memory)
+    return d if d is not None and d.answer == "no path" else None
