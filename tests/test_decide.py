@@ -240,9 +240,11 @@ def test_turns_between_slices_do_not_open_the_cage(tmp_path):
     # budgets far above the proofs' (each ends at its proof): load cannot change the answer
     r = plan(scene, planner="auto", time=60.0, seed=1)
     assert not r.solved and r.decision.answer == "no path"
-    assert [(t["planner"], t.get("robot"), t.get("answer")) for t in r.tried] == [
-        ("RRTConnect", None, None), ("decide", None, "no path"),
-        ("decide", "inscribed ball", "no path")]
+    # translations, a short SE(3) attempt, the decision, the ball's proof
+    assert [(t["planner"], t.get("space"), t.get("robot"), t.get("answer"))
+            for t in r.tried] == [
+        ("RRTConnect", None, None, None), ("RRTConnect", "SE3", None, None),
+        ("decide", None, None, "no path"), ("decide", None, "inscribed ball", "no path")]
     assert r.status == "No path at any orientation (proved)"
     p = subprocess.run([sys.executable, "-m", "cspace", "plan", str(path), "--time", "60",
                         "--seed", "1", "--no-cache"], capture_output=True, text=True,
