@@ -16,7 +16,8 @@ Problems: the shipped plate (a tunnel passed only on edge) and piano (its goal t
 degrees), the plate turned, scaled and moved to (250, 150, -300); OMPL.app-style Collada
 problems (tests/real_problems.py): the slot wall (a T through a slot at the goal's
 orientation) and the twisting corner (hallways 22 and 18: the T turns as it moves round the
-corner); the Parasol alpha puzzle and bug trap with their own queries.
+corner; an apartment-class world whose doors the piano passes only turned); the Parasol
+alpha puzzle and bug trap with their own queries.
 
 Writes the section between the markers in ``benchmarks/reports/planning.md``. Run:
 ``python benchmarks/bench_se3.py [--time 30] [--seeds 1 2]``.
@@ -71,6 +72,8 @@ def problems(tmp: Path) -> dict:
         for w in (22.0, 18.0):
             out[f"twisting corner, hallway {w:g} (Collada, 15k triangles)"] = cspace.load_scene(
                 rp.twisting_corner(tmp / f"corner{w:g}", width=w).cfg)
+        out["apartment, doors 40 (Collada, 40k triangles, piano)"] = cspace.load_scene(
+            rp.apartment(tmp / "apartment", door=40.0).cfg)
         if DATA.is_dir():
             out["Parasol alpha 1.6"] = cspace.load_scene(DATA / "alpha1.6" / "alpha.query")
             out["Parasol bug trap"] = cspace.load_scene(DATA / "bug_trap1.0" / "bug-trap.query")
