@@ -170,8 +170,7 @@ class MeshClearance:
         self.n_obstacle_triangles, self.n_robot_triangles = len(OF), len(RF)
         self._k = _kernel.ClearanceKernel(
             OT, sliver_radii(OT), _unit(shorter_edge_normals(OT.reshape(-1, 3, 3))),
-            _unit(shorter_edge_normals(RT)), o_tree.order, np.ascontiguousarray(o_tree.lo[:, :3]),
-            np.ascontiguousarray(o_tree.hi[:, :3]), o_tree.first, o_tree.count,
+            _unit(shorter_edge_normals(RT)), o_tree.order, o_tree.first, o_tree.count,
             RV, RF, sliver_radii(RT), r_tree.order, r_tree.first, r_tree.count,
             node_boxes(r_tree, RT), node_boxes(o_tree, OT.reshape(-1, 3, 3)))
         self._arrays = (OT, RV, RF)

@@ -197,7 +197,7 @@ cdef class ClearanceKernel:
     ``OT (m, 9)`` obstacle triangles, ``o_r (m,)`` their sliver inradii (-1: not a sliver),
     ``o_n (m, 3)`` and ``r_n (k, 3)`` the obstacle and robot triangles' unit normals from their
     shorter edges (robot frame; only non-slivers' are used),
-    the obstacle tree (``order, lo, hi, first, count``); ``RV (v, 3)`` robot vertices minus
+    the obstacle tree (``order, first, count``); ``RV (v, 3)`` robot vertices minus
     the reference point, ``RF (k, 3)``, ``r_r (k,)`` and the robot tree's ``order, first,
     count``; ``r_obb`` and ``o_obb`` (``(nodes, 15)``: centre, axes, half-extents) the two
     trees' oriented boxes (:func:`cspace.geometry.clearance.node_boxes`).
@@ -206,8 +206,6 @@ cdef class ClearanceKernel:
     cdef const double[:, ::1] OT
     cdef const double[::1] o_r
     cdef const int64_t[::1] o_order
-    cdef const double[:, ::1] o_lo
-    cdef const double[:, ::1] o_hi
     cdef const int64_t[::1] o_first
     cdef const int64_t[::1] o_count
     cdef const double[:, ::1] ob_lo   # each obstacle triangle's box
@@ -234,12 +232,12 @@ cdef class ClearanceKernel:
     cdef object _keep
     cdef object _boxes
 
-    def __init__(self, OT, o_r, o_n, r_n, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
+    def __init__(self, OT, o_r, o_n, r_n, o_order, o_first, o_count, RV, RF, r_r, r_order,
                  r_first, r_count, r_obb, o_obb):
-        self._keep = (OT, o_r, o_n, r_n, o_order, o_lo, o_hi, o_first, o_count, RV, RF, r_r, r_order,
+        self._keep = (OT, o_r, o_n, r_n, o_order, o_first, o_count, RV, RF, r_r, r_order,
                       r_first, r_count, r_obb, o_obb)
         self.r_obb, self.o_obb = r_obb, o_obb
-        self.OT, self.o_r, self.o_order, self.o_lo, self.o_hi = OT, o_r, o_order, o_lo, o_hi
+        self.OT, self.o_r, self.o_order = OT, o_r, o_order
         self.o_first, self.o_count = o_first, o_count
         self._boxes = (np.ascontiguousarray(np.asarray(OT).reshape(-1, 3, 3).min(axis=1)),
                        np.ascontiguousarray(np.asarray(OT).reshape(-1, 3, 3).max(axis=1)))
