@@ -382,9 +382,12 @@ def _plan_auto(scene_or_cspace, start, goal, *, time: float, seed, simplify: boo
             poses = PoseClearance(scene, b)
             budget = min(AUTO_SE3_QUICK * time, AUTO_SE3_QUICK_CAP,
                          time - (_time.perf_counter() - t0))
-            if budget > 0:
+            try:
                 quick = plan_se3(scene, time=budget, seed=seed, bounds=b, poses=poses,
-                                 planner_range=planner_range)
+                                 planner_range=planner_range) if budget > 0 else None
+            except InvalidArgumentError:  # an end within the clearance's error bound of an
+                quick = None  # obstacle: the translations decide it exactly, as before
+            if quick is not None:
                 tried.append({"planner": "RRTConnect", "sampler": "uniform", "slices": None,
                               "space": "SE3", "time": budget, "seconds": quick.time,
                               "solved": quick.solved})
