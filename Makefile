@@ -27,8 +27,14 @@ screenshot: $(STAMP)
 	$(PY) examples/view_convex.py --out out/convex_demo.html --screenshot docs/convex_demo.png
 	$(PY) examples/decide_scenes.py --out out --screenshot docs
 
+# The default suite in TEST_WORKERS processes (pytest-xdist), then the tests marked `last` in
+# one process of their own: they leave Dask's threads and spawn's resource tracker behind,
+# which a worker's later fork tests would see.
+TEST_WORKERS ?= 2
+
 test: $(STAMP)
-	$(PY) -m pytest
+	$(PY) -m pytest -n $(TEST_WORKERS) -m "not slow and not last"
+	$(PY) -m pytest -m "last and not slow"
 
 test-slow: $(STAMP)
 	$(PY) -m pytest -m "slow and not heavy"

@@ -65,5 +65,6 @@ def pytest_configure(config):
 def pytest_collection_modifyitems(session, config, items):
     """Tests marked ``last`` run after all others: a Dask client leaves a thread in this
     process (so cspace no longer forks its workers) and spawned pools leave a resource
-    tracker child, which the fork tests would otherwise see."""
+    tracker child, which the fork tests would otherwise see. (``make test`` runs the others in
+    pytest-xdist's workers and these in a process of their own, for the same reason.)"""
     items.sort(key=lambda item: item.get_closest_marker("last") is not None)
