@@ -189,14 +189,16 @@ def _captured_arrangements(monkeypatch, cases) -> list:
 
 
 def test_arrangement_core_is_identical_on_minkowski_sums(monkeypatch):
-    """Every arrangement of three sums with cut triangles (crossing points with large
+    """Every arrangement of four sums with cut triangles (crossing points with large
     denominators, shared edges, collinear overlaps): the compiled core and the reference
     agree on all of them."""
     from zoo import icosphere_points
 
     ico = icosphere_points(1, radius=0.3)
+    from zoo import grate
+
     cases = [(star(), ico), (torus(sections=12, ring=8), ico),
-             ((random_rotation(l_shape()[0], seed=4), l_shape()[1]), ico)]
+             ((random_rotation(l_shape()[0], seed=4), l_shape()[1]), ico), (grate(3), ico)]
     seen = _captured_arrangements(monkeypatch, cases)
     assert len(seen) > 100
     big = 0
@@ -249,17 +251,18 @@ def _plane_jobs(v, f, b):
 
 
 def _count_one_facet_calls(monkeypatch) -> dict:
-    """Make the arrangements stage call the one-facet kernel through a counter: ``calls``
-    and ``declined`` (returned None)."""
+    """Make the arrangements stage call the one-facet kernel through a counter: ``calls``,
+    ``declined`` (returned None) and ``bridged`` (read a face holding a dangling cut)."""
     from cspace.minkowski import arrangements
 
-    count = {"calls": 0, "declined": 0}
+    count = {"calls": 0, "declined": 0, "bridged": 0}
     real = compiled_planar.one_facet_plane
 
     def counted(*args):
         out = real(*args)
         count["calls"] += 1
         count["declined"] += out is None
+        count["bridged"] += out is not None and any(f[4] is not None for f in out[1])
         return out
 
     class Spy:
@@ -299,40 +302,54 @@ def test_plane_arrangements_are_identical_on_minkowski_sums(monkeypatch):
 
 
 def test_plane_arrangements_are_identical_where_the_kernel_declines(monkeypatch, shared_data):
-    """The one-facet kernel declines planes whose cuts end inside the facet or close a loop
-    in it; those take the Python path. The small sums hold none; Parasol's bug trap
-    against a box holds a few: every plane still matches the reference."""
+    """The one-facet kernel reads planes whose cuts end inside the facet (a bridge in a face)
+    and declines those whose cuts close a loop in it; those take the Python path. The small
+    sums hold neither; Parasol's bug trap against a box holds bridges, against a 20-facet
+    hull loops: every plane still matches the reference."""
     from zoo import scaled_robots
 
     from cspace.mesh.closed import ClosedMesh
 
     count = _count_one_facet_calls(monkeypatch)
     trap = ClosedMesh.load(shared_data / "parasol_open_ppl_env/bug_trap1.0/trap.obj")
-    box = scaled_robots(float(np.ptp(trap.vertices, axis=0).max()))["box"]
-    _same_planes(_plane_jobs(trap.vertices, trap.faces, box))
-    assert count["calls"] > 1000 and count["declined"] >= 1
+    robots = scaled_robots(float(np.ptp(trap.vertices, axis=0).max()))
+    for robot in ("box", "hull20"):
+        _same_planes(_plane_jobs(trap.vertices, trap.faces, robots[robot]))
+    assert count["calls"] > 2000 and count["declined"] >= 1 and count["bridged"] >= 1
 
 
-def test_one_facet_kernel_declines_loops_and_dangling_cuts():
+def test_one_facet_kernel_reads_dangling_cuts_and_declines_loops():
     """A triangle (its edges labelled as pinned facet edges) with a cut across it is read by
-    the kernel; with a closed loop of cuts inside it (two components), or a cut ending
-    inside it (a bridge), the kernel returns None and the Python path decides."""
+    the kernel; a cut ending inside it (a bridge: the face's cycle runs along both of its
+    sides) too, with the reference's strict inner point of that face; with a closed loop of
+    cuts inside it (two components) the kernel returns None and the Python path decides."""
+    from cspace.geometry.homogeneous import _hom
+    from cspace.minkowski.arrangements import _lift
+    from cspace.minkowski.plane_arrangement import Arrangement2D, ring_sample
+
     tri = [((0, 0, 1), (12, 0, 1)), ((12, 0, 1), (0, 12, 1)), ((0, 12, 1), (0, 0, 1))]
     labels = [(0, 0), (0, 1), (0, 2)]
-    lift = lambda h: (h[0], h[1], 0, h[2])  # noqa: E731 - the plane z = 0
+    key, ax = (0, 0, 1, 0), 2  # the plane z = 0, projected along z
     across = [((0, 3, 1), (9, 3, 1))]
     lifted, faces = compiled_planar.one_facet_faces(tri + across, labels + [(-1, 0)], 2, 7, {},
-                                                    lift)
+                                                    key, ax)
     assert sorted(len(r[0]) for _, r, _, _, _ in faces) == [3, 4]
     assert all(c == 2 and src == 7 and pt is None for c, _, _, src, pt in faces)
     assert [t is not None for _, r, t, _, _ in faces] == [len(r[0]) == 3 for _, r, _, _, _ in faces]
-    assert all(len(p) == 4 for p in lifted)
-    loop = [((2, 2, 1), (4, 2, 1)), ((4, 2, 1), (2, 4, 1)), ((2, 4, 1), (2, 2, 1))]
+    assert all(len(p) == 4 and p[2] == 0 for p in lifted)
     dangling = [((0, 3, 1), (3, 3, 1))]
-    for cuts in (loop, dangling):
-        segs = tri + cuts
-        assert compiled_planar.one_facet_faces(segs, labels + [(-1, k) for k in range(len(cuts))],
-                                               2, 7, {}, lift) is None
+    segs = tri + dangling
+    lifted, faces = compiled_planar.one_facet_faces(segs, labels + [(-1, 0)], 2, 7, {}, key, ax)
+    ((c, (ring,), tris, src, point),) = faces
+    assert len(ring) == 6 and tris is None  # (0, 3) twice: the cut's two sides
+    arr = Arrangement2D(segs, canonical=True)
+    assert point == _lift(_hom(ring_sample(arr._H, ring)), key, ax)
+    X, Y, Z, W = point
+    assert Z == 0 and 0 < X < 12 * W and 0 < Y and X + Y < 12 * W and Y != 3 * W
+    assert compiled_planar.ring_inner_point(arr._H, ring) == _hom(ring_sample(arr._H, ring))
+    loop = [((2, 2, 1), (4, 2, 1)), ((4, 2, 1), (2, 4, 1)), ((2, 4, 1), (2, 2, 1))]
+    assert compiled_planar.one_facet_faces(tri + loop, labels + [(-1, k) for k in range(3)],
+                                           2, 7, {}, key, ax) is None
 
 
 @pytest.mark.parametrize("big", [2**30, 2**52, 2**62, 2**200])

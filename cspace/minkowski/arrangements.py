@@ -62,7 +62,8 @@ _planar = load("planar")
 
 
 def _lift(H, key, ax: int) -> tuple:
-    """Canonical homogeneous 3D point of the projected point ``H = (x, y, w)`` of plane ``key``."""
+    """Canonical homogeneous 3D point of the projected point ``H = (x, y, w)`` of plane ``key``
+    (the reference of the compiled one-facet planes' lift)."""
     x, y, w = H
     n0, n1, n2, d = key
     n = (n0, n1, n2)
@@ -163,8 +164,7 @@ class _PlaneJobs:
             c = self.weight[tl[0]] * self.sign[tl[0]] * self.sigma[p]
             if compiled:  # most planes: set up, arranged and read in one compiled call
                 done = _planar.one_facet_plane(self.corners, tl, self.pinned, self.cuts.segments[p],
-                                               ax, c, self.facet[tl[0]],
-                                               lambda h: _lift(h, key, ax))
+                                               ax, c, self.facet[tl[0]], tuple(key))
                 if done is not None:
                     return done
         polys = [[(q[a], q[b], 1) for q in self.corners[t]] for t in tl]

@@ -338,6 +338,70 @@ def _harea(H: list, origin: list, cycle: list) -> tuple[int, int]:
     return num, den
 
 
+def ring_sample(H: list, ring: list, others=()) -> tuple:
+    """A point strictly inside the bounded face whose outer cycle visits the vertices ``ring``
+    (ids into the canonical homogeneous points ``H``) and whose holes and isolated vertices are
+    ``others``: an exact Fraction pair. Shared by :meth:`Arrangement2D._sample` and the
+    compiled one-facet planes (``_kernels.planar.one_facet_faces``).
+
+    Let ``y0`` be the lowest y of the outer boundary and ``y1`` the next distinct y among the
+    face's boundary vertices and isolated vertices (holes lie strictly above ``y0``). In the
+    open slab
+    ``y0 < y < y1`` only outer-boundary edges are present and none ends there, so on the line
+    ``y = (y0 + y1) / 2`` some gap between consecutive crossings lies in the face: the first
+    gap with non-zero winding of the outer cycle.
+    """
+    ids = set(ring)
+    ids.update(others)
+    # Exact y's are Fractions only where the floats (each y = Y / W correctly rounded, so
+    # a smaller float means a smaller y) do not decide: the lowest y and the next one up.
+    fy = {v: H[v][1] / H[v][2] for v in ids}
+    low = min(fy.values())
+    first = [Fraction(H[v][1], H[v][2]) for v in ids if fy[v] == low]
+    y0 = min(first)
+    above = [y for y in first if y > y0]
+    rest = [fy[v] for v in ids if fy[v] > low]
+    if rest:
+        nxt = min(rest)
+        above += [Fraction(H[v][1], H[v][2]) for v in ids if fy[v] == nxt]
+    y1 = min(above)
+    ym = (y0 + y1) / 2
+    fm, N, D = float(ym), ym.numerator, ym.denominator
+
+    def below(v) -> bool:  # y(v) < ym; never equal (no vertex lies strictly between)
+        return fy[v] < fm or (fy[v] == fm and H[v][1] * D < N * H[v][2])
+
+    # Each crossing of the line y = ym as an integer ratio ``num / den`` (den > 0), with
+    # its float for sorting; equal floats are ordered exactly.
+    xs = []
+    for k, u in enumerate(ring):
+        v = ring[k + 1] if k + 1 < len(ring) else ring[0]
+        if below(u) != below(v):
+            (Xa, Ya, Wa), (Xb, Yb, Wb) = H[u], H[v]
+            dy = Yb * Wa - Ya * Wb  # (by - ay) Wa Wb
+            num = Xa * D * dy + (N * Wa - Ya * D) * (Xb * Wa - Xa * Wb)
+            den = D * Wa * dy
+            if den < 0:
+                num, den = -num, -den
+            xs.append((num / den, num, den, 1 if dy > 0 else -1))
+    xs.sort(key=lambda t: t[0])
+    for k in range(len(xs) - 1):  # float ties: exact order (rare)
+        if xs[k][0] == xs[k + 1][0]:
+            xs.sort(key=lambda t: (t[0], Fraction(t[1], t[2])))
+            break
+
+    def less(a, b) -> bool:
+        return a[0] < b[0] or (a[0] == b[0] and a[1] * b[2] < b[1] * a[2])
+
+    # winding of a point at x: edges to the right going up count +1 (ccw), down -1
+    w = sum(t[3] for t in xs)
+    for a, b in zip(xs, xs[1:]):
+        w -= a[3]
+        if w != 0 and less(a, b):
+            return ((Fraction(a[1], a[2]) + Fraction(b[1], b[2])) / 2, ym)
+    raise AssertionError("no interior sample found")  # pragma: no cover
+
+
 class Arrangement2D:
     """Exact planar subdivision induced by a set of segments with rational endpoints.
 
@@ -569,71 +633,17 @@ class Arrangement2D:
         return b
 
     def _sample(self, face: Face):
-        """A point strictly inside a bounded face.
-
-        Let ``y0`` be the lowest y of the outer boundary and ``y1`` the next distinct y among the
-        face's boundary vertices and isolated vertices (holes lie strictly above ``y0``). In the
-        open slab
-        ``y0 < y < y1`` only outer-boundary edges are present and none ends there, so on the line
-        ``y = (y0 + y1) / 2`` some gap between consecutive crossings lies in the face: the first
-        gap with non-zero winding of the outer cycle.
-        """
+        """A point strictly inside a bounded face (:func:`ring_sample` of its outer cycle,
+        its holes' and isolated vertices bounding the slab)."""
         if face is self.unbounded:  # left of the smallest point
             if not self._H:
                 return (Fraction(0), Fraction(0))
             h0 = self._H[0]
             return (Fraction(h0[0], h0[2]) - 1, Fraction(h0[1], h0[2]))
-        H, origin = self._H, self.half_edge_origin
-        ids = {origin[h] for h in face.outer}
-        ids.update(origin[h] for c in face.holes for h in c)
-        ids.update(face.isolated)
-        # Exact y's are Fractions only where the floats (each y = Y / W correctly rounded, so
-        # a smaller float means a smaller y) do not decide: the lowest y and the next one up.
-        fy = {v: H[v][1] / H[v][2] for v in ids}
-        low = min(fy.values())
-        first = [Fraction(H[v][1], H[v][2]) for v in ids if fy[v] == low]
-        y0 = min(first)
-        above = [y for y in first if y > y0]
-        rest = [fy[v] for v in ids if fy[v] > low]
-        if rest:
-            nxt = min(rest)
-            above += [Fraction(H[v][1], H[v][2]) for v in ids if fy[v] == nxt]
-        y1 = min(above)
-        ym = (y0 + y1) / 2
-        fm, N, D = float(ym), ym.numerator, ym.denominator
-
-        def below(v) -> bool:  # y(v) < ym; never equal (no vertex lies strictly between)
-            return fy[v] < fm or (fy[v] == fm and H[v][1] * D < N * H[v][2])
-
-        # Each crossing of the line y = ym as an integer ratio ``num / den`` (den > 0), with
-        # its float for sorting; equal floats are ordered exactly.
-        xs = []
-        for h in face.outer:
-            u, v = origin[h], origin[h ^ 1]
-            if below(u) != below(v):
-                (Xa, Ya, Wa), (Xb, Yb, Wb) = H[u], H[v]
-                dy = Yb * Wa - Ya * Wb  # (by - ay) Wa Wb
-                num = Xa * D * dy + (N * Wa - Ya * D) * (Xb * Wa - Xa * Wb)
-                den = D * Wa * dy
-                if den < 0:
-                    num, den = -num, -den
-                xs.append((num / den, num, den, 1 if dy > 0 else -1))
-        xs.sort(key=lambda t: t[0])
-        for k in range(len(xs) - 1):  # float ties: exact order (rare)
-            if xs[k][0] == xs[k + 1][0]:
-                xs.sort(key=lambda t: (t[0], Fraction(t[1], t[2])))
-                break
-
-        def less(a, b) -> bool:
-            return a[0] < b[0] or (a[0] == b[0] and a[1] * b[2] < b[1] * a[2])
-
-        # winding of a point at x: edges to the right going up count +1 (ccw), down -1
-        w = sum(t[3] for t in xs)
-        for a, b in zip(xs, xs[1:]):
-            w -= a[3]
-            if w != 0 and less(a, b):
-                return ((Fraction(a[1], a[2]) + Fraction(b[1], b[2])) / 2, ym)
-        raise AssertionError("no interior sample found")  # pragma: no cover
+        origin = self.half_edge_origin
+        others = [origin[h] for c in face.holes for h in c]
+        others += face.isolated
+        return ring_sample(self._H, [origin[h] for h in face.outer], others)
 
     # ---------------------------------------------------------------- queries
 

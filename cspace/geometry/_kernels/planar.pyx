@@ -25,9 +25,10 @@ overflows. Comparisons of one coordinate use the rounded values alone when they 
 (rounding to nearest is monotone) and the exact ratio when they tie.
 """
 
-from libc.math cimport fabs
+from libc.math cimport INFINITY, fabs
 from libc.stdlib cimport calloc, free, malloc, qsort, realloc
 
+from fractions import Fraction
 from math import gcd
 
 cdef double _U = 2.0 ** -53
@@ -888,16 +889,111 @@ def projected_segments(list segs3, int ax):
     return out
 
 
-def one_facet_faces(list segs, list labels, c, int src, dict known, lift):
+def ring_inner_point(list H, list ring):
+    """Canonical homogeneous ``(X, Y, W)`` of the point strictly inside the face bounded by
+    the cycle through vertices ``ring`` (ids into the canonical points ``H``) that
+    ``cspace.minkowski.plane_arrangement.ring_sample(H, ring)`` gives (its reference:
+    identical outputs, ``tests/test_kernels.py``): on the line midway between the lowest
+    and the next y of the ring's vertices, the midpoint of the first gap between crossings
+    of non-zero winding. Floats (each ``Y / W`` correctly rounded, so a smaller float means
+    a smaller y) order the y's and crossings; ties go to the exact ratios."""
+    cdef Py_ssize_t n = len(ring), k, u, v, m
+    cdef double low = INFINITY, nxt = INFINITY, f, fm
+    cdef list fy = [], xs = []
+    cdef list h
+    for k in range(n):
+        p = H[ring[k]]
+        f = p[1] / p[2]
+        fy.append(f)
+        if f < low:
+            low = f
+    for k in range(n):
+        f = fy[k]
+        if f > low and f < nxt:
+            nxt = f
+    # the exact lowest y and the next distinct one (as the reference: Fractions, few)
+    first = [Fraction(H[ring[k]][1], H[ring[k]][2]) for k in range(n) if fy[k] == low]
+    y0 = min(first)
+    above = [y for y in first if y > y0]
+    if nxt != INFINITY:
+        above += [Fraction(H[ring[k]][1], H[ring[k]][2]) for k in range(n) if fy[k] == nxt]
+    y1 = min(above)
+    ym = (y0 + y1) / 2
+    fm = float(ym)
+    N, D = ym.numerator, ym.denominator
+    below = []
+    for k in range(n):  # y < ym; never equal (no vertex lies strictly between)
+        p = H[ring[k]]
+        f = fy[k]
+        below.append(f < fm or (f == fm and p[1] * D < N * p[2]))
+    for k in range(n):
+        m = k + 1 if k + 1 < n else 0
+        if below[k] != below[m]:
+            Xa, Ya, Wa = H[ring[k]]
+            Xb, Yb, Wb = H[ring[m]]
+            dy = Yb * Wa - Ya * Wb  # (by - ay) Wa Wb
+            num = Xa * D * dy + (N * Wa - Ya * D) * (Xb * Wa - Xa * Wb)
+            den = D * Wa * dy
+            if den < 0:
+                num, den = -num, -den
+            xs.append((num / den, num, den, 1 if dy > 0 else -1))
+    xs.sort(key=_first)
+    for k in range(len(xs) - 1):  # float ties: exact order (rare)
+        if xs[k][0] == xs[k + 1][0]:
+            xs.sort(key=_exact_key)
+            break
+    w = 0
+    for t in xs:
+        w += t[3]
+    for k in range(len(xs) - 1):
+        a, b = xs[k], xs[k + 1]
+        w -= a[3]
+        if w != 0 and (a[0] < b[0] or (a[0] == b[0] and a[1] * b[2] < b[1] * a[2])):
+            x = (Fraction(a[1], a[2]) + Fraction(b[1], b[2])) / 2
+            bx, by = x.denominator, D
+            W = bx * by // gcd(bx, by)
+            return (x.numerator * (W // bx), N * (W // by), W)
+    raise AssertionError("no interior sample found")
+
+
+def _first(t):
+    return t[0]
+
+
+def _exact_key(t):
+    return (t[0], Fraction(t[1], t[2]))
+
+
+cdef tuple _lift(tuple h, tuple key, int ax):
+    """``cspace.minkowski.arrangements._lift`` (its reference): the canonical homogeneous 3D
+    point of the projected point ``h = (x, y, w)`` of plane ``key = (n0, n1, n2, d)``."""
+    cdef int a = (ax + 1) % 3, b = (ax + 2) % 3
+    x, y, w = h
+    na, nb, nx, d = key[a], key[b], key[ax], key[3]
+    P = [0, 0, 0]
+    P[a], P[b] = x * nx, y * nx
+    P[ax] = d * w - na * x - nb * y
+    W = w * nx
+    if W < 0:
+        P[0], P[1], P[2], W = -P[0], -P[1], -P[2], -W
+    g = gcd(P[0], P[1], P[2], W)
+    return (P[0] // g, P[1] // g, P[2] // g, W // g)
+
+
+def one_facet_faces(list segs, list labels, c, int src, dict known, tuple key, int ax):
     """The sub-facets of a plane covered by one convex superset facet whose whole boundary is
     among ``segs`` (``cspace.minkowski.arrangements._PlaneJobs.arrange``'s one-facet case;
     that Python path is the reference and gives identical outputs): ``(lifted, faces)``, or
-    None where the arrangement is not one component free of isolated vertices and bridges
-    (a closed loop of cuts inside the facet, a dangling cut): the Python path then runs.
+    None where the arrangement is not one component free of isolated vertices (a closed loop
+    of cuts inside the facet): the Python path then runs.
 
     Every bounded face lies in the facet, so each is one sub-facet of coverage ``c`` whose
     boundary is its one outer cycle (with one component every other cycle bounds the
-    unbounded face); ``lifted[v]`` is ``known[H[v]]`` or ``lift(H[v])``."""
+    unbounded face); ``lifted[v]`` is ``known[H[v]]`` or the point lifted to plane ``key``
+    (projected along axis ``ax``). A face holding a
+    bridge (a cut that ends inside the facet: its cycle runs along both sides of it) gets
+    the lifted :func:`ring_inner_point`, the point strictly inside it that the reference
+    makes; the others need none."""
     cdef Py_ssize_t k, h, nh, ncyc, roots = 0
     (H, _vl, _E, _el, origin, isolated, _nxt, cycles, cyc_of, signs,
      comp) = arrangement_core(segs, labels)
@@ -914,27 +1010,29 @@ def one_facet_faces(list segs, list labels, c, int src, dict known, lift):
     # bounded face: a bounded face holds a bridge exactly when a half-edge and its twin lie
     # in the same positive cycle.
     nh = len(cyc_of)
+    bridged = set()
     for h in range(0, nh, 2):
         k = cyc_of[h]
         if k == <Py_ssize_t> cyc_of[h + 1] and signs[k] > 0:
-            return None
+            bridged.add(k)
     lifted = []
     for p in H:
         q = known.get(p)
-        lifted.append(q if q is not None else lift(p))
+        lifted.append(q if q is not None else _lift(p, key, ax))
     faces = []
     if c:
         for k in range(ncyc):
             if signs[k] > 0:
                 ring = [origin[h] for h in cycles[k]]
-                faces.append((c, [ring], [tuple(ring)] if len(ring) == 3 else None, src, None))
+                point = _lift(ring_inner_point(H, ring), key, ax) if k in bridged else None
+                faces.append((c, [ring], [tuple(ring)] if len(ring) == 3 else None, src, point))
     return lifted, faces
 
 
-def one_facet_plane(list corners, list tl, list pinned, list cut3, int ax, c, int src, lift):
+def one_facet_plane(list corners, list tl, list pinned, list cut3, int ax, c, int src, tuple key):
     """A one-facet plane from its inputs (``_PlaneJobs.arrange``'s data: the corners of
     triangles ``tl``, the pinned flags by ``3 t + j``, the cuts ``cut3`` as homogeneous 3D
-    points, the projection axis ``ax``): the pinned facet edges and the projected cuts are
+    points, the projection axis ``ax``, the plane's ``key``): the pinned facet edges and the projected cuts are
     arranged and read by :func:`one_facet_faces` (None where it declines). The Python
     reference is the same path in ``arrange(p, compiled=False)``; with one facet no edge is
     of the minority orientation, so exactly the pinned edges join the cuts."""
@@ -961,7 +1059,7 @@ def one_facet_plane(list corners, list tl, list pinned, list cut3, int ax, c, in
         known[py] = y
         segs.append(proj[k])
         labels.append((-1, k))
-    return one_facet_faces(segs, labels, c, src, known, lift)
+    return one_facet_faces(segs, labels, c, src, known, key, ax)
 
 
 # Bridging a face's holes to its outer polygon (the loop of
