@@ -416,7 +416,11 @@ def test_triangulation_steps_are_identical_on_minkowski_sums(monkeypatch):
         seen.append((H, [list(r) for r in rings]))
         return real(H, rings)
 
+    from cspace.minkowski import membership
+
+    # faces are triangulated where an output or membership step asks (membership's import)
     monkeypatch.setattr(triangulation, "triangulate_rings", spy)
+    monkeypatch.setattr(membership, "triangulate_rings", spy)
     ico = icosphere_points(1, radius=0.3)
     for (v, f), b in [(star(), ico), (comb(3, 2), ico), (torus(sections=12, ring=8), ico)]:
         from cspace.mesh.convex import ConvexPolytope

@@ -562,6 +562,8 @@ def test_sampled_coverage_matches_polygon_coverage(tris, weights):
     weights = weights[: len(tris)]
     ref = polygon_coverage(tris, weights)
     got = sampled_coverage(tris, weights, _covered_edges(tris))
+    py = sampled_coverage(tris, weights, _covered_edges(tris), compiled=False)
+    assert (got.coverage, got.support, got.points) == (py.coverage, py.support, py.points)
     assert len(got.arrangement.faces) == len(ref.arrangement.faces)
     for f, face in enumerate(got.arrangement.faces):
         g = ref.arrangement.locate(face.sample)
@@ -580,6 +582,23 @@ def test_sampled_coverage_without_inner_edges():
     # a point exactly on the diagonal, pushed to each side by its sign
     cov = sampled_coverage(tris, [1, 3], ring(square(0, 0, 4)) + [((0, 0), (4, 4))])
     assert sorted(cov.coverage) == [1, 3]
+
+
+def test_sampled_coverage_reads_faces_with_holes_and_dangling_edges_as_the_reference():
+    """Faces with holes, dangling edges and isolated vertices (points read by the compiled
+    loop through ``ring_inner_point`` with the holes' vertices): the same points, coverage
+    and support as the Python loop, each point strictly inside its face."""
+    big = [(0, 0), (20, 0), (20, 20), (0, 20)]
+    tris = [[(0, 0), (20, 0), (20, 20)], [(0, 0), (20, 20), (0, 20)], [(5, 5), (9, 5), (5, 9)]]
+    segs = (ring(big) + [((0, 0), (20, 20))] + ring(tris[2]) + [((12, 3), (12, 8))]
+            + [((16, 13), (16, 13))] + ring([(2, 12), (4, 12), (4, 14), (2, 14)]))
+    got = sampled_coverage(tris, [1, 1, 2], segs)
+    py = sampled_coverage(tris, [1, 1, 2], segs, compiled=False)
+    assert (got.coverage, got.support, got.points) == (py.coverage, py.support, py.points)
+    arr = got.arrangement
+    assert any(face.holes for face in arr.faces) and any(face.isolated for face in arr.faces)
+    for f, (X, Y, W) in enumerate(got.points):
+        assert arr.locate((Fr(X, W), Fr(Y, W))) == f
 
 
 def test_sampled_coverage_certificate():

@@ -16,7 +16,11 @@ import numpy as np
 
 from ..geometry.homogeneous import _dot, _hdir, _hpoint, _hturn
 from .plane_arrangement import Arrangement2D
+from ..geometry._kernels import load
+from ..geometry.homogeneous import _hom
 from .triangulation import inner_point
+
+_planar = load("planar")
 
 __all__ = [
     "Coverage",
@@ -51,11 +55,14 @@ class Coverage:
         Unsigned coverage of each bounded face: ``sum_i |weights[i] * winding(polygon_i)|``
         for simple polygons; non-zero exactly where some polygon of non-zero weight covers
         the face, even where opposite polygons cancel in :attr:`coverage`.
+    points : list or None
+        Where :func:`sampled_coverage` read each face (its :func:`sample_point`), else None.
     """
 
     arrangement: Arrangement2D
     coverage: list
     support: list = None
+    points: list = None
 
     def of(self, f: int) -> int:
         return 0 if f < 0 else self.coverage[f]
@@ -208,7 +215,50 @@ def _rational_sum(terms: list) -> tuple[int, int]:
     return terms[0] if terms else (0, 1)
 
 
-def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: bool = False) -> Coverage:
+def sample_point(arr: Arrangement2D, f: int) -> tuple[int, int, int]:
+    """The canonical homogeneous point strictly inside bounded face ``f`` at which
+    :func:`sampled_coverage` reads it: the centroid of a triangle without holes or isolated
+    vertices, else the face's :attr:`~cspace.minkowski.plane_arrangement.Face.sample`
+    (no triangulation: most faces are never output)."""
+    face = arr.faces[f]
+    if not face.holes and not face.isolated and len(face.outer) == 3:
+        return inner_point(arr, f)
+    return _hom(face.sample)
+
+
+def _face_coverage(arr: Arrangement2D, polys: list, turn: list, weights: list,
+                   boxes: list) -> tuple[list, list, dict, list]:
+    """The per-face loop of :func:`sampled_coverage` (the reference of the compiled
+    ``_kernels.planar.face_coverage``): coverage and support of each face at its
+    :func:`sample_point`, twice the integral of the coverage as ``{den: num}``, and the
+    points."""
+    box = np.array(boxes, dtype=np.float64).reshape(-1, 4) if len(polys) > _FEW_POLYGONS else None
+    nf = len(arr.faces)
+    coverage, support, points = [0] * nf, [0] * nf, [None] * nf
+    terms: dict = {}
+    for f, face in enumerate(arr.faces):
+        X, Y, w = points[f] = sample_point(arr, f)
+        xf, yf = X / w, Y / w
+        # conservative box filter: floats are within an ulp; integer boxes, margin 1
+        if box is None:
+            near = [i for i, b in enumerate(boxes) if b[0] <= xf <= b[1] and b[2] <= yf <= b[3]]
+        else:
+            near = np.nonzero((box[:, 0] <= xf) & (xf <= box[:, 1])
+                              & (box[:, 2] <= yf) & (yf <= box[:, 3]))[0].tolist()
+        c = s = 0
+        for i in near:
+            if pushed_inside(polys[i], turn[i], X, Y, w):
+                c += weights[i] * turn[i]
+                s += abs(weights[i])
+        coverage[f], support[f] = c, s
+        if c:  # integral += c * face.area, as twice the areas
+            n, d = arr._face_area2(face)
+            terms[d] = terms.get(d, 0) + c * n
+    return coverage, support, terms, points
+
+
+def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: bool = False,
+                     compiled: bool = True) -> Coverage:
     """Net and unsigned coverage of the faces of the arrangement of ``segments`` by convex
     oriented polygons, read at one point per face.
 
@@ -235,7 +285,8 @@ def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: boo
     Coverage
         ``coverage[f] = sum_i weights[i] * winding(polygon_i, q_f)`` and ``support[f] =
         sum_i |weights[i] * winding(polygon_i, q_f)|`` at ``q_f = sample_f + eps * (1, eps)``
-        (the push moves a sample lying on a polygon edge off it, into the face).
+        (``sample_f``: :func:`sample_point`; the push moves a sample lying on a polygon edge
+        off it, into the face). ``compiled=False`` runs the per-face loop's Python reference.
     """
     polys = [[(int(p[0]), int(p[1])) for p in poly] for poly in polygons]
     weights = [int(w) for w in weights]
@@ -250,33 +301,20 @@ def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: boo
         area2 += weights[i] * a2
         xs, ys = [p[0] for p in poly], [p[1] for p in poly]
         boxes.append((min(xs) - 1, max(xs) + 1, min(ys) - 1, max(ys) + 1))
-    box = np.array(boxes, dtype=np.float64).reshape(-1, 4) if len(polys) > _FEW_POLYGONS else None
-    nf = len(arr.faces)
-    coverage, support = [0] * nf, [0] * nf
-    terms: dict = {}  # twice the integral of the coverage: sum of num / den, by den
-    for f, face in enumerate(arr.faces):
-        X, Y, w = inner_point(arr, f)
-        xf, yf = X / w, Y / w
-        # conservative box filter: floats are within an ulp; integer boxes, margin 1
-        if box is None:
-            near = [i for i, b in enumerate(boxes) if b[0] <= xf <= b[1] and b[2] <= yf <= b[3]]
-        else:
-            near = np.nonzero((box[:, 0] <= xf) & (xf <= box[:, 1])
-                              & (box[:, 2] <= yf) & (yf <= box[:, 3]))[0].tolist()
-        c = s = 0
-        for i in near:
-            if pushed_inside(polys[i], turn[i], X, Y, w):
-                c += weights[i] * turn[i]
-                s += abs(weights[i])
-        coverage[f], support[f] = c, s
-        if c:  # integral += c * face.area, as twice the areas
-            n, d = arr._face_area2(face)
-            terms[d] = terms.get(d, 0) + c * n
+    if compiled:
+        cycles = arr._cycles
+        face_cycles = [[cycles[c] for c in face._cycles] for face in arr.faces]
+        others = [[v for c in face.holes for v in arr.cycle_vertices(c)] + face.isolated
+                  for face in arr.faces]
+        coverage, support, terms, points = _planar.face_coverage(
+            arr._H, arr.half_edge_origin, face_cycles, others, polys, turn, weights, boxes)
+    else:
+        coverage, support, terms, points = _face_coverage(arr, polys, turn, weights, boxes)
     num, den = _rational_sum(list(terms.items()))
     if num != area2 * den:
         raise ValueError("the coverage is not constant on the faces: the segments miss a place "
                          "where it changes")
-    return Coverage(arr, coverage, support)
+    return Coverage(arr, coverage, support, points)
 
 
 def merge_coplanar(polygons, weights=None) -> MergeResult:

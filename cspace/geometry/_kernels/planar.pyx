@@ -889,38 +889,47 @@ def projected_segments(list segs3, int ax):
     return out
 
 
-def ring_inner_point(list H, list ring):
+def ring_inner_point(list H, list ring, others=()):
     """Canonical homogeneous ``(X, Y, W)`` of the point strictly inside the face bounded by
     the cycle through vertices ``ring`` (ids into the canonical points ``H``) that
-    ``cspace.minkowski.plane_arrangement.ring_sample(H, ring)`` gives (its reference:
-    identical outputs, ``tests/test_kernels.py``): on the line midway between the lowest
-    and the next y of the ring's vertices, the midpoint of the first gap between crossings
-    of non-zero winding. Floats (each ``Y / W`` correctly rounded, so a smaller float means
+    ``cspace.minkowski.plane_arrangement.ring_sample(H, ring, others)`` gives (its reference:
+    identical outputs, ``tests/test_kernels.py``; ``others``: the face's hole and isolated
+    vertices): on the line midway between the lowest and the next y of the ring's and the
+    others' vertices, the midpoint of the first gap between crossings of non-zero winding. Floats (each ``Y / W`` correctly rounded, so a smaller float means
     a smaller y) order the y's and crossings; ties go to the exact ratios."""
     cdef Py_ssize_t n = len(ring), k, u, v, m
     cdef double low = INFINITY, nxt = INFINITY, f, fm
     cdef list fy = [], xs = []
-    cdef list h
-    for k in range(n):
-        p = H[ring[k]]
+    cdef list every = ring + list(others) if others else ring
+    cdef Py_ssize_t ne = len(every)
+    for k in range(ne):
+        p = H[every[k]]
         f = p[1] / p[2]
         fy.append(f)
         if f < low:
             low = f
-    for k in range(n):
+    for k in range(ne):
         f = fy[k]
         if f > low and f < nxt:
             nxt = f
-    # the exact lowest y and the next distinct one (as the reference: Fractions, few)
-    first = [Fraction(H[ring[k]][1], H[ring[k]][2]) for k in range(n) if fy[k] == low]
-    y0 = min(first)
-    above = [y for y in first if y > y0]
-    if nxt != INFINITY:
-        above += [Fraction(H[ring[k]][1], H[ring[k]][2]) for k in range(n) if fy[k] == nxt]
-    y1 = min(above)
-    ym = (y0 + y1) / 2
-    fm = float(ym)
-    N, D = ym.numerator, ym.denominator
+    # the exact lowest y and the next distinct one, as integer ratios (W > 0)
+    y0 = None
+    for k in range(ne):
+        if fy[k] == low:
+            p = H[every[k]]
+            if y0 is None or p[1] * y0[1] < y0[0] * p[2]:
+                y0 = (p[1], p[2])
+    y1 = None
+    for k in range(ne):
+        if fy[k] == low or (nxt != INFINITY and fy[k] == nxt):
+            p = H[every[k]]
+            if p[1] * y0[1] > y0[0] * p[2] and (y1 is None or p[1] * y1[1] < y1[0] * p[2]):
+                y1 = (p[1], p[2])
+    num = y0[0] * y1[1] + y1[0] * y0[1]
+    den = 2 * y0[1] * y1[1]
+    g = gcd(num, den)
+    N, D = num // g, den // g  # ym = N / D, in lowest terms (as the reference's Fraction)
+    fm = N / D
     below = []
     for k in range(n):  # y < ym; never equal (no vertex lies strictly between)
         p = H[ring[k]]
@@ -949,11 +958,81 @@ def ring_inner_point(list H, list ring):
         a, b = xs[k], xs[k + 1]
         w -= a[3]
         if w != 0 and (a[0] < b[0] or (a[0] == b[0] and a[1] * b[2] < b[1] * a[2])):
-            x = (Fraction(a[1], a[2]) + Fraction(b[1], b[2])) / 2
-            bx, by = x.denominator, D
-            W = bx * by // gcd(bx, by)
-            return (x.numerator * (W // bx), N * (W // by), W)
+            num = a[1] * b[2] + b[1] * a[2]
+            den = 2 * a[2] * b[2]
+            g = gcd(num, den)
+            xn, bx = num // g, den // g
+            W = bx * D // gcd(bx, D)
+            return (xn * (W // bx), N * (W // D), W)
     raise AssertionError("no interior sample found")
+
+
+cdef bint _pushed_inside(list poly, int turn, X, Y, W) except -1:
+    """``cspace.minkowski.coverage.pushed_inside`` (its reference): is ``(X/W, Y/W) + eps (1,
+    eps)`` inside the convex integer polygon ``poly`` of orientation ``turn``?"""
+    cdef Py_ssize_t n = len(poly), k
+    cdef int side
+    for k in range(n):
+        a = poly[k]
+        b = poly[k + 1 if k + 1 < n else 0]
+        ux, uy = b[0] - a[0], b[1] - a[1]
+        d = ux * (Y - a[1] * W) - uy * (X - a[0] * W)
+        if d:
+            side = 1 if d > 0 else -1
+        else:  # on the line: the push (1, eps) decides, first along x, then along y
+            side = -1 if uy > 0 else (1 if uy < 0 else (1 if ux > 0 else -1))
+        if side != turn:
+            return False
+    return True
+
+
+def face_coverage(list H, list origin, list face_cycles, list others, list polys, list turn,
+                  list weights, list boxes):
+    """The per-face loop of ``cspace.minkowski.coverage.sampled_coverage`` (its reference;
+    identical outputs): each bounded face, given by its half-edge cycles (``face_cycles[f]``,
+    the outer one first) and its hole and isolated vertices ``others[f]``, is read at
+    ``coverage.sample_point``'s point (the centroid of a triangle without holes, else
+    :func:`ring_inner_point`) pushed by ``eps (1, eps)``: ``coverage[f]``, ``support[f]`` and
+    twice the integral of the coverage as ``{den: num}`` terms, and the points read.
+    ``boxes[i]``: polygon ``i``'s box, widened by 1 (floats within an ulp of the point's
+    coordinates stay conservative)."""
+    cdef Py_ssize_t nf = len(face_cycles), npoly = len(polys), f, i, k
+    cdef double xf, yf
+    cdef int tr
+    cdef list coverage = [0] * nf, support = [0] * nf, points = [None] * nf
+    cdef dict terms = {}
+    cdef list outer, cyc
+    cdef tuple b
+    for f in range(nf):
+        cyc = face_cycles[f]
+        outer = cyc[0]
+        if len(cyc) == 1 and len(outer) == 3 and not others[f]:
+            (xa, ya, wa) = H[origin[outer[0]]]
+            (xb, yb, wb) = H[origin[outer[1]]]
+            (xc, yc, wc) = H[origin[outer[2]]]
+            X, Y, W = _hnorm((xa * wb * wc + xb * wa * wc + xc * wa * wb,
+                              ya * wb * wc + yb * wa * wc + yc * wa * wb, 3 * wa * wb * wc))
+        else:
+            X, Y, W = ring_inner_point(H, [origin[h] for h in outer], others[f])
+        points[f] = (X, Y, W)
+        xf, yf = X / W, Y / W
+        c = s = 0
+        for i in range(npoly):
+            b = boxes[i]
+            if not (<double> b[0] <= xf <= <double> b[1] and <double> b[2] <= yf <= <double> b[3]):
+                continue
+            tr = turn[i]
+            if _pushed_inside(polys[i], tr, X, Y, W):
+                c += weights[i] * tr
+                s += abs(weights[i])
+        coverage[f], support[f] = c, s
+        if c:  # integral += c * face area, as twice the areas
+            num, den = 0, 1
+            for k in range(len(cyc)):
+                n_, d_ = _harea(H, origin, cyc[k])
+                num, den = num * d_ + n_ * den, den * d_
+            terms[den] = terms.get(den, 0) + c * num
+    return coverage, support, terms, points
 
 
 def _first(t):
