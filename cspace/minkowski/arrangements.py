@@ -194,7 +194,8 @@ class _PlaneJobs:
             weights = [self.weight[t] for t in tl]
             try:
                 cov = sampled_coverage(polys, weights, seg2, lab2, canonical=True,
-                                       compiled=compiled)
+                                       compiled=compiled,
+                                       source_turn=[self.sign[t] * self.sigma[p] for t in tl])
             except ValueError:  # pragma: no cover - the certificate failed: cut by every edge
                 cov = polygon_coverage(polys, weights, segs)
             arr = cov.arrangement
@@ -210,7 +211,7 @@ class _PlaneJobs:
             # membership point, so triangles not made already wait until asked (_face_tris).
             tris = known_triangles(arr, f)
             src = self.facet[tl[0]] if one else self._source_facet(
-                p, arr, f, tl, cov.points[f] if cov.points else None)
+                p, arr, f, tl, cov.first[f] if cov.first else None)
             # where the centroid of the first triangle is a strict inner point, it too is made
             # only when asked (_face_point)
             point = None if plain_interior(arr, f) else _lift(strict_inner_point(arr, f), key, ax)
@@ -233,12 +234,12 @@ class _PlaneJobs:
         pinned = self.pinned
         return all(k is None or pinned[k] for k in once.values())
 
-    def _source_facet(self, p: int, arr, f: int, tl: list, point=None) -> int:
+    def _source_facet(self, p: int, arr, f: int, tl: list, first=None) -> int:
         """A superset facet whose triangle covers (part of) face ``f``: one whose edge bounds
         the face from the covered side, else the first in plane order covering the face's
-        inner point (``point``, where its coverage was read, or its :func:`sample_point`).
-        (A face may be covered by several coplanar facets of one orientation: the merge of
-        step 2; it names one of them.)"""
+        inner point (``first``: its index in ``tl`` as the coverage found it, -1 for none;
+        else tested here at its :func:`sample_point`). (A face may be covered by several
+        coplanar facets of one orientation: the merge of step 2; it names one of them.)"""
         if len(tl) == 1:
             return self.facet[tl[0]]
         ax = self.axis[p]
@@ -261,10 +262,15 @@ class _PlaneJobs:
                 same = d_tri[0] * d_face[0] + d_tri[1] * d_face[1] > 0
                 if same == (self.sign[t] * ccw > 0):
                     return self.facet[t]
-        X, Y, W = point if point is not None else sample_point(arr, f)
-        for t in tl:
-            if pushed_inside([(c[a], c[b]) for c in self.corners[t]], self.sign[t] * ccw, X, Y, W):
-                return self.facet[t]
+        if first is not None:
+            if first >= 0:
+                return self.facet[tl[first]]
+        else:
+            X, Y, W = sample_point(arr, f)
+            for t in tl:
+                if pushed_inside([(c[a], c[b]) for c in self.corners[t]], self.sign[t] * ccw,
+                                 X, Y, W):
+                    return self.facet[t]
         raise ExactnessError(f"face {f} of plane {p} is covered by no superset triangle")  # pragma: no cover
 
 

@@ -10,14 +10,14 @@ from __future__ import annotations
 
 from collections import deque
 from dataclasses import dataclass
+from fractions import Fraction
 from math import gcd
 
 import numpy as np
 
-from ..geometry.homogeneous import _dot, _hdir, _hpoint, _hturn
-from .plane_arrangement import Arrangement2D
 from ..geometry._kernels import load
-from ..geometry.homogeneous import _hom
+from ..geometry.homogeneous import _dot, _hdir, _hom, _hpoint, _hturn
+from .plane_arrangement import Arrangement2D
 from .triangulation import inner_point
 
 _planar = load("planar")
@@ -57,12 +57,16 @@ class Coverage:
         the face, even where opposite polygons cancel in :attr:`coverage`.
     points : list or None
         Where :func:`sampled_coverage` read each face (its :func:`sample_point`), else None.
+    first : list or None
+        Per face, the first polygon holding that point, oriented by :func:`sampled_coverage`'s
+        ``source_turn`` (-1: none; None where not asked).
     """
 
     arrangement: Arrangement2D
     coverage: list
     support: list = None
     points: list = None
+    first: list = None
 
     def of(self, f: int) -> int:
         return 0 if f < 0 else self.coverage[f]
@@ -227,14 +231,14 @@ def sample_point(arr: Arrangement2D, f: int) -> tuple[int, int, int]:
 
 
 def _face_coverage(arr: Arrangement2D, polys: list, turn: list, weights: list,
-                   boxes: list) -> tuple[list, list, dict, list]:
+                   boxes: list, source_turn=None) -> tuple[list, list, dict, list, list]:
     """The per-face loop of :func:`sampled_coverage` (the reference of the compiled
     ``_kernels.planar.face_coverage``): coverage and support of each face at its
-    :func:`sample_point`, twice the integral of the coverage as ``{den: num}``, and the
-    points."""
+    :func:`sample_point`, twice the integral of the coverage as ``{den: num}``, the points,
+    and the first polygon holding each point oriented by ``source_turn`` (-1: none)."""
     box = np.array(boxes, dtype=np.float64).reshape(-1, 4) if len(polys) > _FEW_POLYGONS else None
     nf = len(arr.faces)
-    coverage, support, points = [0] * nf, [0] * nf, [None] * nf
+    coverage, support, points, first = [0] * nf, [0] * nf, [None] * nf, [-1] * nf
     terms: dict = {}
     for f, face in enumerate(arr.faces):
         X, Y, w = points[f] = sample_point(arr, f)
@@ -247,18 +251,24 @@ def _face_coverage(arr: Arrangement2D, polys: list, turn: list, weights: list,
                               & (box[:, 2] <= yf) & (yf <= box[:, 3]))[0].tolist()
         c = s = 0
         for i in near:
-            if pushed_inside(polys[i], turn[i], X, Y, w):
+            inside = pushed_inside(polys[i], turn[i], X, Y, w)
+            if inside:
                 c += weights[i] * turn[i]
                 s += abs(weights[i])
+            if first[f] < 0 and source_turn is not None:
+                if source_turn[i] != turn[i]:
+                    inside = pushed_inside(polys[i], source_turn[i], X, Y, w)
+                if inside:
+                    first[f] = i
         coverage[f], support[f] = c, s
         if c:  # integral += c * face.area, as twice the areas
             n, d = arr._face_area2(face)
             terms[d] = terms.get(d, 0) + c * n
-    return coverage, support, terms, points
+    return coverage, support, terms, points, first
 
 
 def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: bool = False,
-                     compiled: bool = True) -> Coverage:
+                     compiled: bool = True, source_turn=None) -> Coverage:
     """Net and unsigned coverage of the faces of the arrangement of ``segments`` by convex
     oriented polygons, read at one point per face.
 
@@ -286,7 +296,9 @@ def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: boo
         ``coverage[f] = sum_i weights[i] * winding(polygon_i, q_f)`` and ``support[f] =
         sum_i |weights[i] * winding(polygon_i, q_f)|`` at ``q_f = sample_f + eps * (1, eps)``
         (``sample_f``: :func:`sample_point`; the push moves a sample lying on a polygon edge
-        off it, into the face). ``compiled=False`` runs the per-face loop's Python reference.
+        off it, into the face). ``compiled=False`` runs the per-face loop's Python reference;
+        with ``source_turn`` (an orientation per polygon) :attr:`Coverage.first` names, per
+        face, the first polygon so oriented that holds the pushed point.
     """
     polys = [[(int(p[0]), int(p[1])) for p in poly] for poly in polygons]
     weights = [int(w) for w in weights]
@@ -306,15 +318,23 @@ def sampled_coverage(polygons, weights, segments, labels=None, *, canonical: boo
         face_cycles = [[cycles[c] for c in face._cycles] for face in arr.faces]
         others = [[v for c in face.holes for v in arr.cycle_vertices(c)] + face.isolated
                   for face in arr.faces]
-        coverage, support, terms, points = _planar.face_coverage(
-            arr._H, arr.half_edge_origin, face_cycles, others, polys, turn, weights, boxes)
+        coverage, support, terms, points, first = _planar.face_coverage(
+            arr._H, arr.half_edge_origin, face_cycles, others, polys, turn, weights, boxes,
+            source_turn)
+        # a face holding a bridge or an isolated vertex was read at its strict sample: keep
+        # it (strict_inner_point asks for it again)
+        for f in arr._cluttered:
+            if f >= 0:
+                X, Y, W = points[f]
+                arr.faces[f].sample = (Fraction(X, W), Fraction(Y, W))
     else:
-        coverage, support, terms, points = _face_coverage(arr, polys, turn, weights, boxes)
+        coverage, support, terms, points, first = _face_coverage(arr, polys, turn, weights,
+                                                                 boxes, source_turn)
     num, den = _rational_sum(list(terms.items()))
     if num != area2 * den:
         raise ValueError("the coverage is not constant on the faces: the segments miss a place "
                          "where it changes")
-    return Coverage(arr, coverage, support, points)
+    return Coverage(arr, coverage, support, points, first if source_turn is not None else None)
 
 
 def merge_coplanar(polygons, weights=None) -> MergeResult:

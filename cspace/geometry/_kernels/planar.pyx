@@ -967,42 +967,83 @@ def ring_inner_point(list H, list ring, others=()):
     raise AssertionError("no interior sample found")
 
 
-cdef bint _pushed_inside(list poly, int turn, X, Y, W) except -1:
+cdef bint _pushed_inside(list poly, int turn, X, Y, W, double xf, double yf) except -1:
     """``cspace.minkowski.coverage.pushed_inside`` (its reference): is ``(X/W, Y/W) + eps (1,
-    eps)`` inside the convex integer polygon ``poly`` of orientation ``turn``?"""
+    eps)`` inside the convex integer polygon ``poly`` of orientation ``turn``? ``xf, yf``:
+    ``X / W`` and ``Y / W`` correctly rounded, for a float filter of each side's sign.
+
+    Filter: with ``u = 2**-53``, ``xf = x (1 + d1)``, ``|d1| <= u``, the side
+    ``ux (y - ay) - uy (x - ax)`` (``ux, uy, ax, ay`` integers below ``2**53``, exact in
+    doubles) evaluated in doubles is within ``u (|ux| (4 |y| + 3 |ay|) + |uy| (4 |x| + 3 |ax|))
+    + O(u^2)`` of the exact value (each difference carries ``u (2 |x| + |ax|)``, each
+    product and the last subtraction ``u`` of their magnitude); it decides when its
+    magnitude exceeds ``8 u`` times ``|ux| (|yf| + |ay|) + |uy| (|xf| + |ax|)``. ``W > 0``, so
+    that is the sign of ``ux (Y - ay W) - uy (X - ax W)``; else the exact integers decide."""
     cdef Py_ssize_t n = len(poly), k
     cdef int side
+    cdef double fux, fuy, fax, fay, df, bound
     for k in range(n):
         a = poly[k]
         b = poly[k + 1 if k + 1 < n else 0]
         ux, uy = b[0] - a[0], b[1] - a[1]
-        d = ux * (Y - a[1] * W) - uy * (X - a[0] * W)
-        if d:
-            side = 1 if d > 0 else -1
-        else:  # on the line: the push (1, eps) decides, first along x, then along y
-            side = -1 if uy > 0 else (1 if uy < 0 else (1 if ux > 0 else -1))
+        fux, fuy, fax, fay = ux, uy, a[0], a[1]
+        df = fux * (yf - fay) - fuy * (xf - fax)
+        bound = 8.0 * 1.1102230246251565e-16 * (fabs(fux) * (fabs(yf) + fabs(fay))
+                                                + fabs(fuy) * (fabs(xf) + fabs(fax)))
+        if df > bound:
+            side = 1
+        elif df < -bound:
+            side = -1
+        else:
+            d = ux * (Y - a[1] * W) - uy * (X - a[0] * W)
+            if d:
+                side = 1 if d > 0 else -1
+            else:  # on the line: the push (1, eps) decides, first along x, then along y
+                side = -1 if uy > 0 else (1 if uy < 0 else (1 if ux > 0 else -1))
         if side != turn:
             return False
     return True
 
 
 def face_coverage(list H, list origin, list face_cycles, list others, list polys, list turn,
-                  list weights, list boxes):
+                  list weights, list boxes, list source_turn=None):
     """The per-face loop of ``cspace.minkowski.coverage.sampled_coverage`` (its reference;
     identical outputs): each bounded face, given by its half-edge cycles (``face_cycles[f]``,
     the outer one first) and its hole and isolated vertices ``others[f]``, is read at
     ``coverage.sample_point``'s point (the centroid of a triangle without holes, else
     :func:`ring_inner_point`) pushed by ``eps (1, eps)``: ``coverage[f]``, ``support[f]`` and
-    twice the integral of the coverage as ``{den: num}`` terms, and the points read.
-    ``boxes[i]``: polygon ``i``'s box, widened by 1 (floats within an ulp of the point's
-    coordinates stay conservative)."""
+    twice the integral of the coverage as ``{den: num}`` terms, the points read, and per face
+    the first polygon ``i`` whose inside, oriented by ``source_turn[i]`` (when given), holds
+    the pushed point (-1: none). ``boxes[i]``: polygon ``i``'s box, widened by 1 (floats
+    within an ulp of the point's coordinates stay conservative)."""
+    cdef Py_ssize_t nf = len(face_cycles), npoly = len(polys), i
+    cdef list coverage = [0] * nf, support = [0] * nf, points = [None] * nf
+    cdef list first = [-1] * nf
+    cdef dict terms = {}
+    cdef tuple b
+    cdef double* bx = <double*> malloc((4 * npoly + 1) * sizeof(double))
+    if not bx:
+        raise MemoryError()
+    for i in range(npoly):
+        b = boxes[i]
+        bx[4 * i], bx[4 * i + 1], bx[4 * i + 2], bx[4 * i + 3] = b[0], b[1], b[2], b[3]
+    try:
+        return _face_coverage_loop(H, origin, face_cycles, others, polys, turn, weights, bx,
+                                   source_turn, coverage, support, points, first, terms)
+    finally:
+        free(bx)
+
+
+cdef tuple _face_coverage_loop(list H, list origin, list face_cycles, list others, list polys,
+                               list turn, list weights, double* bx, list source_turn,
+                               list coverage, list support, list points, list first,
+                               dict terms):
     cdef Py_ssize_t nf = len(face_cycles), npoly = len(polys), f, i, k
     cdef double xf, yf
     cdef int tr
-    cdef list coverage = [0] * nf, support = [0] * nf, points = [None] * nf
-    cdef dict terms = {}
     cdef list outer, cyc
-    cdef tuple b
+    cdef Py_ssize_t got
+    cdef bint inside
     for f in range(nf):
         cyc = face_cycles[f]
         outer = cyc[0]
@@ -1017,22 +1058,28 @@ def face_coverage(list H, list origin, list face_cycles, list others, list polys
         points[f] = (X, Y, W)
         xf, yf = X / W, Y / W
         c = s = 0
+        got = -1
         for i in range(npoly):
-            b = boxes[i]
-            if not (<double> b[0] <= xf <= <double> b[1] and <double> b[2] <= yf <= <double> b[3]):
+            if not (bx[4 * i] <= xf <= bx[4 * i + 1] and bx[4 * i + 2] <= yf <= bx[4 * i + 3]):
                 continue
             tr = turn[i]
-            if _pushed_inside(polys[i], tr, X, Y, W):
+            inside = _pushed_inside(polys[i], tr, X, Y, W, xf, yf)
+            if inside:
                 c += weights[i] * tr
                 s += abs(weights[i])
-        coverage[f], support[f] = c, s
+            if got < 0 and source_turn is not None:
+                if <int> source_turn[i] != tr:
+                    inside = _pushed_inside(polys[i], source_turn[i], X, Y, W, xf, yf)
+                if inside:
+                    got = i
+        coverage[f], support[f], first[f] = c, s, got
         if c:  # integral += c * face area, as twice the areas
             num, den = 0, 1
             for k in range(len(cyc)):
                 n_, d_ = _harea(H, origin, cyc[k])
                 num, den = num * d_ + n_ * den, den * d_
             terms[den] = terms.get(den, 0) + c * num
-    return coverage, support, terms, points
+    return coverage, support, terms, points, first
 
 
 def _first(t):
