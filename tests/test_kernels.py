@@ -252,10 +252,11 @@ def _plane_jobs(v, f, b):
 
 def _count_one_facet_calls(monkeypatch) -> dict:
     """Make the arrangements stage call the one-facet kernel through a counter: ``calls``,
-    ``declined`` (returned None) and ``bridged`` (read a face holding a dangling cut)."""
+    ``declined`` (returned None), ``bridged`` (read a face holding a dangling cut) and
+    ``holes`` (read a face holding a closed loop of cuts)."""
     from cspace.minkowski import arrangements
 
-    count = {"calls": 0, "declined": 0, "bridged": 0}
+    count = {"calls": 0, "declined": 0, "bridged": 0, "holes": 0}
     real = compiled_planar.one_facet_plane
 
     def counted(*args):
@@ -263,6 +264,7 @@ def _count_one_facet_calls(monkeypatch) -> dict:
         count["calls"] += 1
         count["declined"] += out is None
         count["bridged"] += out is not None and any(f[4] is not None for f in out[1])
+        count["holes"] += out is not None and any(len(f[1]) > 1 for f in out[1])
         return out
 
     class Spy:
@@ -301,11 +303,11 @@ def test_plane_arrangements_are_identical_on_minkowski_sums(monkeypatch):
     assert count["calls"] > 300
 
 
-def test_plane_arrangements_are_identical_where_the_kernel_declines(monkeypatch, shared_data):
+def test_one_facet_planes_with_bridges_and_loops_are_identical(monkeypatch, shared_data):
     """The one-facet kernel reads planes whose cuts end inside the facet (a bridge in a face)
-    and declines those whose cuts close a loop in it; those take the Python path. The small
-    sums hold neither; Parasol's bug trap against a box holds bridges, against a 20-facet
-    hull loops: every plane still matches the reference."""
+    or close a loop in it (a hole: a component held by a face of another). The small sums
+    hold neither; Parasol's bug trap against a box holds bridges, against a 20-facet hull
+    loops: every plane matches the Python reference."""
     from zoo import scaled_robots
 
     from cspace.mesh.closed import ClosedMesh
@@ -315,14 +317,15 @@ def test_plane_arrangements_are_identical_where_the_kernel_declines(monkeypatch,
     robots = scaled_robots(float(np.ptp(trap.vertices, axis=0).max()))
     for robot in ("box", "hull20"):
         _same_planes(_plane_jobs(trap.vertices, trap.faces, robots[robot]))
-    assert count["calls"] > 2000 and count["declined"] >= 1 and count["bridged"] >= 1
+    assert count["calls"] > 2000 and count["bridged"] >= 1 and count["holes"] >= 1
 
 
-def test_one_facet_kernel_reads_dangling_cuts_and_declines_loops():
+def test_one_facet_kernel_reads_dangling_cuts_and_loops():
     """A triangle (its edges labelled as pinned facet edges) with a cut across it is read by
     the kernel; a cut ending inside it (a bridge: the face's cycle runs along both of its
-    sides) too, with the reference's strict inner point of that face; with a closed loop of
-    cuts inside it (two components) the kernel returns None and the Python path decides."""
+    sides) too, with the reference's strict inner point of that face; a closed loop of cuts
+    inside it (two components) makes a face with a hole and the loop's inside; with a lone
+    point (an isolated vertex) the kernel returns None and the Python path decides."""
     from cspace.geometry.homogeneous import _hom
     from cspace.minkowski.arrangements import _lift
     from cspace.minkowski.plane_arrangement import Arrangement2D, ring_sample
@@ -348,8 +351,16 @@ def test_one_facet_kernel_reads_dangling_cuts_and_declines_loops():
     assert Z == 0 and 0 < X < 12 * W and 0 < Y and X + Y < 12 * W and Y != 3 * W
     assert compiled_planar.ring_inner_point(arr._H, ring) == _hom(ring_sample(arr._H, ring))
     loop = [((2, 2, 1), (4, 2, 1)), ((4, 2, 1), (2, 4, 1)), ((2, 4, 1), (2, 2, 1))]
-    assert compiled_planar.one_facet_faces(tri + loop, labels + [(-1, k) for k in range(3)],
-                                           2, 7, {}, key, ax) is None
+    segs = tri + loop + [((2, 2, 1), (0, 0, 1))]  # the loop, and then a cut joining it to a corner
+    for n_cuts in (3, 4):
+        lifted, faces = compiled_planar.one_facet_faces(
+            segs[:3 + n_cuts], labels + [(-1, k) for k in range(n_cuts)], 2, 7, {}, key, ax)
+        arr = Arrangement2D(segs[:3 + n_cuts], canonical=True)
+        assert [len(rings) for _, rings, _, _, _ in faces] == [len(f.holes) + 1 for f in arr.faces]
+        assert sorted(len(rings) for _, rings, _, _, _ in faces) == ([1, 2] if n_cuts == 3 else [1, 1])
+    lone = [((5, 1, 1), (5, 1, 1))]
+    assert compiled_planar.one_facet_faces(tri + lone, labels + [(-1, 0)], 2, 7, {}, key,
+                                           ax) is None
 
 
 @pytest.mark.parametrize("big", [2**30, 2**52, 2**62, 2**200])

@@ -1106,21 +1106,82 @@ cdef tuple _lift(tuple h, tuple key, int ax):
     return (P[0] // g, P[1] // g, P[2] // g, W // g)
 
 
+cdef int _hsign_cmp_y(tuple a, tuple p):
+    """Sign of ``y(a) - y(p)`` for canonical homogeneous points (``W > 0``)."""
+    l = a[1] * p[2]
+    r = p[1] * a[2]
+    return (l > r) - (l < r)
+
+
+cdef int _horient3(tuple a, tuple b, tuple p):
+    """Orientation of three canonical homogeneous points (``W > 0``: the sign of the 3 x 3
+    determinant is the orientation)."""
+    d = (a[0] * (b[1] * p[2] - b[2] * p[1]) - a[1] * (b[0] * p[2] - b[2] * p[0])
+         + a[2] * (b[0] * p[1] - b[1] * p[0]))
+    return (d > 0) - (d < 0)
+
+
+cdef bint _winds_around(list H, list origin, list cycle, tuple p) except -1:
+    """Is the winding number of the half-edge ``cycle`` around ``p`` (not on it) non-zero?
+    (``cspace.geometry.homogeneous._hwinding``'s rule.)"""
+    cdef Py_ssize_t w = 0, n = len(cycle), i
+    cdef tuple a, b
+    for i in range(n):
+        a = H[origin[cycle[i]]]
+        b = H[origin[cycle[i + 1 if i + 1 < n else 0]]]
+        if _hsign_cmp_y(a, p) <= 0:
+            if _hsign_cmp_y(b, p) > 0 and _horient3(a, b, p) > 0:
+                w += 1
+        elif _hsign_cmp_y(b, p) <= 0 and _horient3(a, b, p) < 0:
+            w -= 1
+    return w != 0
+
+
+cdef list _hole_hosts(list H, list origin, list cycles, list signs, list comp):
+    """``host[k]``: for each non-positive cycle ``k`` (a component's outer boundary), the
+    positive cycle of another component that holds it innermost (the smallest by exact area
+    strictly around the component's lexicographically smallest vertex), -1 for none
+    (``Arrangement2D._host``'s answer: nested cycles have distinct areas, so the innermost
+    is one cycle however it is searched)."""
+    cdef Py_ssize_t ncyc = len(cycles), k, q, v, best
+    cdef list host = [-1] * ncyc, pos = [], comp_of = [0] * ncyc
+    cdef dict area = {}
+    for k in range(ncyc):
+        comp_of[k] = comp[origin[cycles[k][0]]]
+        if signs[k] > 0:
+            pos.append(k)
+    for k in range(ncyc):
+        if signs[k] > 0:
+            continue
+        v = min([origin[h] for h in cycles[k]])
+        p = H[v]
+        best = -1
+        for q in pos:
+            if comp_of[q] == comp[v] or not _winds_around(H, origin, cycles[q], p):
+                continue
+            if q not in area:
+                area[q] = _harea(H, origin, cycles[q])
+            if best < 0 or area[q][0] * area[best][1] < area[best][0] * area[q][1]:
+                best = q
+        host[k] = best
+    return host
+
+
 def one_facet_faces(list segs, list labels, c, int src, dict known, tuple key, int ax):
     """The sub-facets of a plane covered by one convex superset facet whose whole boundary is
     among ``segs`` (``cspace.minkowski.arrangements._PlaneJobs.arrange``'s one-facet case;
     that Python path is the reference and gives identical outputs): ``(lifted, faces)``, or
-    None where the arrangement is not one component free of isolated vertices (a closed loop
-    of cuts inside the facet): the Python path then runs.
+    None where the arrangement has an isolated vertex: the Python path then runs.
 
-    Every bounded face lies in the facet, so each is one sub-facet of coverage ``c`` whose
-    boundary is its one outer cycle (with one component every other cycle bounds the
-    unbounded face); ``lifted[v]`` is ``known[H[v]]`` or the point lifted to plane ``key``
-    (projected along axis ``ax``). A face holding a
-    bridge (a cut that ends inside the facet: its cycle runs along both sides of it) gets
-    the lifted :func:`ring_inner_point`, the point strictly inside it that the reference
-    makes; the others need none."""
-    cdef Py_ssize_t k, h, nh, ncyc, roots = 0
+    Every bounded face lies in the facet, so each is one sub-facet of coverage ``c``: a
+    positive cycle with, as holes, the outer boundaries of the components it holds
+    innermost (:func:`_hole_hosts`; closed loops of cuts inside the facet), in cycle order;
+    ``lifted[v]`` is ``known[H[v]]`` or the point lifted to plane ``key`` (projected along
+    axis ``ax``). A face holding a bridge (a cut that ends inside the facet: a half-edge and
+    its twin in the face's cycles) gets the lifted :func:`ring_inner_point` of its outer
+    ring and holes, the point strictly inside it that the reference makes; the others need
+    none."""
+    cdef Py_ssize_t k, h, nh, ncyc, roots = 0, f1, f2
     (H, _vl, _E, _el, origin, isolated, _nxt, cycles, cyc_of, signs,
      comp) = arrangement_core(segs, labels)
     if isolated:
@@ -1128,19 +1189,28 @@ def one_facet_faces(list segs, list labels, c, int src, dict known, tuple key, i
     for k in range(len(comp)):
         if <Py_ssize_t> comp[k] == k:
             roots += 1
-    if roots != 1:
-        return None
     ncyc = len(cycles)
-    # A bridge (dangling cut, tree) has one face on both sides. With one component the
-    # non-positive cycles all bound the unbounded face, and each positive cycle is its own
-    # bounded face: a bounded face holds a bridge exactly when a half-edge and its twin lie
-    # in the same positive cycle.
+    # The face of each cycle: a positive cycle is its own bounded face; a non-positive one
+    # (a component's outer boundary) is a hole of the face holding its component, or of
+    # the unbounded face (-1; with one component, all of them).
+    face_of = list(range(ncyc))
+    holes = {}
+    if roots > 1:
+        host = _hole_hosts(H, origin, cycles, signs, comp)
+    for k in range(ncyc):
+        if signs[k] <= 0:
+            face_of[k] = host[k] if roots > 1 else -1
+            if face_of[k] >= 0:
+                holes.setdefault(face_of[k], []).append(k)
+    # A bridge (dangling cut, tree, a cut joining a loop to the boundary) has one face on
+    # both sides.
     nh = len(cyc_of)
     bridged = set()
     for h in range(0, nh, 2):
-        k = cyc_of[h]
-        if k == <Py_ssize_t> cyc_of[h + 1] and signs[k] > 0:
-            bridged.add(k)
+        f1 = face_of[cyc_of[h]]
+        f2 = face_of[cyc_of[h + 1]]
+        if f1 == f2 and f1 >= 0:
+            bridged.add(f1)
     lifted = []
     for p in H:
         q = known.get(p)
@@ -1149,9 +1219,17 @@ def one_facet_faces(list segs, list labels, c, int src, dict known, tuple key, i
     if c:
         for k in range(ncyc):
             if signs[k] > 0:
-                ring = [origin[h] for h in cycles[k]]
-                point = _lift(ring_inner_point(H, ring), key, ax) if k in bridged else None
-                faces.append((c, [ring], [tuple(ring)] if len(ring) == 3 else None, src, point))
+                rings = [[origin[h] for h in cycles[k]]]
+                for j in holes.get(k, ()):
+                    rings.append([origin[h] for h in cycles[j]])
+                ring = rings[0]
+                if k in bridged:
+                    others = [v for r in rings[1:] for v in r]
+                    point = _lift(ring_inner_point(H, ring, others), key, ax)
+                else:
+                    point = None
+                tris = [tuple(ring)] if len(ring) == 3 and len(rings) == 1 else None
+                faces.append((c, rings, tris, src, point))
     return lifted, faces
 
 
