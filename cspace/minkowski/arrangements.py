@@ -317,17 +317,13 @@ def _run_arrangements(jobs: _PlaneJobs, todo: list, workers: int, report,
     return out, 1
 
 
-def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: int = 1,
-             check=None) -> tuple[_Complex, int]:
+def _assemble_reference(done: dict, n_planes: int, members: list, sign: list, sigma: list,
+                        corners: list, weight: list, facet: list) -> tuple:
+    """The sub-facets of every plane with global vertex ids (the reference of
+    ``_kernels.planar.assemble_complex``, the same outputs but the half-edges as lists)."""
     vid: dict = {}
     face_plane, face_cov, face_tris, face_rings, face_src, face_point = [], [], [], [], [], []
     ring_u, ring_v, ring_f = [], [], []  # every boundary half-edge: from, to, sub-facet
-    jobs = _PlaneJobs(ints, planes, cuts)
-    n_planes = len(planes.keys)
-    todo = [p for p in range(n_planes) if not jobs.trivial(p)]
-    done, used = _run_arrangements(jobs, todo, workers, report, check)
-    members, sign, sigma, corners = jobs.members, jobs.sign, jobs.sigma, jobs.corners
-    weight, facet = jobs.weight, jobs.facet
     for p in range(n_planes):
         if p not in done:  # uncut triangles: each its own sub-facet, counter-clockwise
             for t in members[p]:
@@ -367,9 +363,29 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: in
                 ring_v += ring[1:]
                 ring_v.append(ring[0])
                 ring_f += [fid] * len(ring)
+    return (vid, face_plane, face_cov, face_tris, face_rings, face_src, face_point,
+            ring_u, ring_v, ring_f)
+
+
+def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: int = 1,
+             check=None, compiled: bool = True) -> tuple[_Complex, int]:
+    jobs = _PlaneJobs(ints, planes, cuts)
+    n_planes = len(planes.keys)
+    todo = [p for p in range(n_planes) if not jobs.trivial(p)]
+    done, used = _run_arrangements(jobs, todo, workers, report, check)
+    args = (done, n_planes, jobs.members, jobs.sign, jobs.sigma, jobs.corners, jobs.weight,
+            jobs.facet)
+    if compiled:
+        (vid, face_plane, face_cov, face_tris, face_rings, face_src, face_point,
+         *half_edges) = _planar.assemble_complex(*args)
+        u, v, ring_f = (np.frombuffer(b, dtype=np.intp).astype(np.int64) for b in half_edges)
+    else:
+        (vid, face_plane, face_cov, face_tris, face_rings, face_src, face_point,
+         ring_u, ring_v, ring_f) = _assemble_reference(*args)
+        u = np.array(ring_u, dtype=np.int64)
+        v = np.array(ring_v, dtype=np.int64)
+        ring_f = np.array(ring_f, dtype=np.int64)
     # Edges are numbered in order of first appearance along the rings, as (u, v), u < v.
-    u = np.array(ring_u, dtype=np.int64)
-    v = np.array(ring_v, dtype=np.int64)
     lo, hi = np.minimum(u, v), np.maximum(u, v)
     _, first, inverse = np.unique(lo * max(len(vid), 1) + hi, return_index=True, return_inverse=True)
     order = np.argsort(first)  # first appearances are distinct
@@ -381,7 +397,7 @@ def _complex(ints: np.ndarray, planes: _Planes, cuts: _Cuts, report, workers: in
         edges=np.stack([lo[firsts], hi[firsts]], axis=1).reshape(-1, 2),
         face_plane=np.array(face_plane, dtype=np.int64),
         face_cov=np.array(face_cov, dtype=np.int64),
-        inc_face=np.array(ring_f, dtype=np.int64),
+        inc_face=ring_f,
         inc_edge=rank[inverse.reshape(-1)],
         inc_sign=np.where(u < v, 1, -1).astype(np.int8),
         face_tris=face_tris,

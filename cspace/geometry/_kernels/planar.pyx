@@ -27,6 +27,7 @@ overflows. Comparisons of one coordinate use the rounded values alone when they 
 
 from libc.math cimport INFINITY, fabs
 from libc.stdlib cimport calloc, free, malloc, qsort, realloc
+from cpython.bytes cimport PyBytes_FromStringAndSize
 
 from fractions import Fraction
 from math import gcd
@@ -1428,3 +1429,79 @@ def bridge_holes(list Ps, list ids, list pending):
         free(ea)
         free(eb)
         free(cands)
+
+
+cdef bytes _vec_bytes(_Vec* v):
+    return PyBytes_FromStringAndSize(<char*> v.a, v.n * sizeof(Py_ssize_t)) if v.n else b""
+
+
+def assemble_complex(dict done, Py_ssize_t n_planes, list members, list sign, list sigma,
+                     list corners, list weight, list facet):
+    """The sub-facets of every plane gathered with global vertex ids: the loop of
+    ``cspace.minkowski.arrangements._assemble_reference`` (identical outputs). ``done[p]``
+    is plane ``p``'s ``(lifted, faces)`` (consumed); a plane not in it holds uncut
+    triangles, each its own sub-facet, counter-clockwise. Returns the vertex table ``vid``
+    (canonical point -> id, in order of first use), the per-sub-facet lists (plane, coverage,
+    triangles or None, rings or None, source facet, point) and every boundary half-edge's
+    from / to / sub-facet as native ``Py_ssize_t`` bytes."""
+    cdef dict vid = {}
+    cdef list face_plane = [], face_cov = [], face_tris = [], face_rings = [], face_src = []
+    cdef list face_point = [], g, mapped, ring, cs, lifted, faces
+    cdef Py_ssize_t p, t, fid, g0, g1, g2, k, n, x
+    cdef int ccw
+    cdef _Vec ru, rv, rf
+    ru.a = rv.a = rf.a = NULL
+    ru.n = rv.n = rf.n = ru.cap = rv.cap = rf.cap = 0
+    try:
+        for p in range(n_planes):
+            res = done.pop(p, None)
+            if res is None:  # uncut triangles: each its own sub-facet, counter-clockwise
+                for t in members[p]:
+                    ccw = sign[t] * sigma[p]
+                    cs = corners[t]
+                    if ccw > 0:
+                        c0, c1, c2 = cs[0], cs[1], cs[2]
+                    else:
+                        c0, c1, c2 = cs[2], cs[1], cs[0]
+                    g0 = vid.setdefault((c0[0], c0[1], c0[2], 1), len(vid))
+                    g1 = vid.setdefault((c1[0], c1[1], c1[2], 1), len(vid))
+                    g2 = vid.setdefault((c2[0], c2[1], c2[2], 1), len(vid))
+                    fid = len(face_plane)
+                    face_plane.append(p)
+                    face_cov.append(ccw * weight[t])
+                    face_tris.append([(g0, g1, g2)])
+                    face_rings.append(None)
+                    face_src.append(facet[t])
+                    face_point.append(None)
+                    _push(&ru, g0); _push(&ru, g1); _push(&ru, g2)
+                    _push(&rv, g1); _push(&rv, g2); _push(&rv, g0)
+                    _push(&rf, fid); _push(&rf, fid); _push(&rf, fid)
+                continue
+            lifted, faces = res
+            g = [vid.setdefault(q, len(vid)) for q in lifted]
+            for cov, rings, tris, src, point in faces:
+                fid = len(face_plane)
+                face_plane.append(p)
+                face_cov.append(cov)
+                mapped = [[g[v] for v in r] for r in rings]
+                if tris is None:
+                    face_tris.append(None)
+                    face_rings.append(mapped)
+                else:
+                    face_tris.append([(g[a], g[b], g[c]) for a, b, c in tris])
+                    face_rings.append(None)
+                face_src.append(src)
+                face_point.append(point)
+                for ring in mapped:
+                    n = len(ring)
+                    for k in range(n):
+                        x = ring[k]
+                        _push(&ru, x)
+                        _push(&rv, <Py_ssize_t> ring[k + 1 if k + 1 < n else 0])
+                        _push(&rf, fid)
+        return (vid, face_plane, face_cov, face_tris, face_rings, face_src, face_point,
+                _vec_bytes(&ru), _vec_bytes(&rv), _vec_bytes(&rf))
+    finally:
+        free(ru.a)
+        free(rv.a)
+        free(rf.a)
