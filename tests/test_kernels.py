@@ -208,6 +208,27 @@ def test_arrangement_core_is_identical_on_minkowski_sums(monkeypatch):
     assert big > 10  # the filters and the exact fallback both ran
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_arrangement_core_is_identical_with_many_lone_points(seed):
+    """Many zero-length segments (lone points: on segments, at their ends, on nothing)
+    among long axis-parallel and slanted segments on a lattice: the compiled core finds the
+    segments through each point by sorted coordinates, the reference by pairs; the same
+    arrangement."""
+    rng = np.random.default_rng(seed)
+    segs = []
+    for _ in range(40):  # long horizontal, vertical and slanted segments
+        a, b = rng.integers(0, 12, 2).tolist()
+        kind = rng.integers(3)
+        segs.append(((0, a, 1), (11, a, 1)) if kind == 0 else ((a, 0, 1), (a, 11, 1)) if kind == 1
+                    else ((0, a, 1), (11, b, 1)))
+    for _ in range(60):
+        p = tuple(rng.integers(0, 12, 2).tolist()) + (1,)
+        segs.append((p, p))
+    _same_core(segs)
+    w = 2**61 + 1  # non-integer points: the float filter and the exact fallback
+    _same_core([((p[0] * 3, p[1] * 3, w), (q[0] * 3, q[1] * 3, w)) for p, q in segs])
+
+
 @pytest.mark.parametrize("seed", range(6))
 def test_arrangement_core_is_identical_on_degenerate_segments(seed):
     """Segments on a 5 x 5 integer lattice (collinear overlaps, shared endpoints, points on
