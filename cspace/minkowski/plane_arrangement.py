@@ -341,15 +341,14 @@ def _harea(H: list, origin: list, cycle: list) -> tuple[int, int]:
 def ring_sample(H: list, ring: list, others=()) -> tuple:
     """A point strictly inside the bounded face whose outer cycle visits the vertices ``ring``
     (ids into the canonical homogeneous points ``H``) and whose holes and isolated vertices are
-    ``others``: an exact Fraction pair. Shared by :meth:`Arrangement2D._sample` and the
-    compiled one-facet planes (``_kernels.planar.one_facet_faces``).
+    ``others``: an exact Fraction pair (:meth:`Arrangement2D._sample`'s; the reference of the
+    compiled ``_kernels.planar.ring_inner_point``).
 
     Let ``y0`` be the lowest y of the outer boundary and ``y1`` the next distinct y among the
     face's boundary vertices and isolated vertices (holes lie strictly above ``y0``). In the
-    open slab
-    ``y0 < y < y1`` only outer-boundary edges are present and none ends there, so on the line
-    ``y = (y0 + y1) / 2`` some gap between consecutive crossings lies in the face: the first
-    gap with non-zero winding of the outer cycle.
+    open slab ``y0 < y < y1`` only outer-boundary edges are present and none ends there, so
+    on the line ``y = (y0 + y1) / 2`` some gap between consecutive crossings lies in the face:
+    the first gap with non-zero winding of the outer cycle.
     """
     ids = set(ring)
     ids.update(others)

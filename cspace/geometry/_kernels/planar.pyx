@@ -510,9 +510,16 @@ def arrangement_core(list segs, list labels):
             raise MemoryError()
         point_label = {}
         npt = 0
+        # the distinct lone points, by x and by y (sorted below)
+        ptx = <_XKey*> malloc((len(points_only) + 1) * sizeof(_XKey))
+        pty = <_XKey*> malloc((len(points_only) + 1) * sizeof(_XKey))
+        if not (ptx and pty):
+            raise MemoryError()
         for k in points_only:
             x = sp[2 * k]
             if not mark[x]:
+                ptx[npt].x, ptx[npt].i = P.x[x], x
+                pty[npt].x, pty[npt].i = P.y[x], x
                 npt += 1
             mark[x] = 1
             point_label.setdefault(x, set()).add(labels[k])
@@ -521,20 +528,6 @@ def arrangement_core(list segs, list labels):
             # the segment box's narrower side lies in it, by binary search in the points
             # sorted by x and by y (12k points against 15k segments on one plane: the
             # plain double loop took 0.4 s), then the box and the exact test.
-            ptx = <_XKey*> malloc((npt + 1) * sizeof(_XKey))
-            pty = <_XKey*> malloc((npt + 1) * sizeof(_XKey))
-            if not (ptx and pty):
-                raise MemoryError()
-            r = 0
-            for k in points_only:
-                x = sp[2 * k]
-                if mark[x] == 1:
-                    mark[x] = 2  # listed once
-                    ptx[r].x, ptx[r].i = P.x[x], x
-                    pty[r].x, pty[r].i = P.y[x], x
-                    r += 1
-            for r in range(npt):
-                mark[ptx[r].i] = 1  # (marks count the points below)
             qsort(ptx, npt, sizeof(_XKey), _xkey_cmp)
             qsort(pty, npt, sizeof(_XKey), _xkey_cmp)
             for a in range(m):
@@ -986,9 +979,10 @@ def ring_inner_point(list H, list ring, others=()):
     ``cspace.minkowski.plane_arrangement.ring_sample(H, ring, others)`` gives (its reference:
     identical outputs, ``tests/test_kernels.py``; ``others``: the face's hole and isolated
     vertices): on the line midway between the lowest and the next y of the ring's and the
-    others' vertices, the midpoint of the first gap between crossings of non-zero winding. Floats (each ``Y / W`` correctly rounded, so a smaller float means
-    a smaller y) order the y's and crossings; ties go to the exact ratios."""
-    cdef Py_ssize_t n = len(ring), k, u, v, m
+    others' vertices, the midpoint of the first gap between crossings of non-zero winding.
+    Floats (each ``Y / W`` correctly rounded, so a smaller float means a smaller y) order
+    the y's and crossings; ties go to the exact ratios."""
+    cdef Py_ssize_t n = len(ring), k, m
     cdef double low = INFINITY, nxt = INFINITY, f, fm
     cdef list fy = [], xs = []
     cdef list every = ring + list(others) if others else ring
@@ -1079,8 +1073,7 @@ cdef bint _pushed_inside(list poly, int turn, X, Y, W, double xf, double yf) exc
         ux, uy = b[0] - a[0], b[1] - a[1]
         fux, fuy, fax, fay = ux, uy, a[0], a[1]
         df = fux * (yf - fay) - fuy * (xf - fax)
-        bound = 8.0 * 1.1102230246251565e-16 * (fabs(fux) * (fabs(yf) + fabs(fay))
-                                                + fabs(fuy) * (fabs(xf) + fabs(fax)))
+        bound = _FILTER * (fabs(fux) * (fabs(yf) + fabs(fay)) + fabs(fuy) * (fabs(xf) + fabs(fax)))
         if df > bound:
             side = 1
         elif df < -bound:
@@ -1107,70 +1100,59 @@ def face_coverage(list H, list origin, list face_cycles, list others, list polys
     the first polygon ``i`` whose inside, oriented by ``source_turn[i]`` (when given), holds
     the pushed point (-1: none). ``boxes[i]``: polygon ``i``'s box, widened by 1 (floats
     within an ulp of the point's coordinates stay conservative)."""
-    cdef Py_ssize_t nf = len(face_cycles), npoly = len(polys), i
+    cdef Py_ssize_t nf = len(face_cycles), npoly = len(polys), f, i, k, got
     cdef list coverage = [0] * nf, support = [0] * nf, points = [None] * nf
-    cdef list first = [-1] * nf
+    cdef list first = [-1] * nf, outer, cyc
     cdef dict terms = {}
     cdef tuple b
+    cdef double xf, yf
+    cdef int tr
+    cdef bint inside
     cdef double* bx = <double*> malloc((4 * npoly + 1) * sizeof(double))
     if not bx:
         raise MemoryError()
-    for i in range(npoly):
-        b = boxes[i]
-        bx[4 * i], bx[4 * i + 1], bx[4 * i + 2], bx[4 * i + 3] = b[0], b[1], b[2], b[3]
     try:
-        return _face_coverage_loop(H, origin, face_cycles, others, polys, turn, weights, bx,
-                                   source_turn, coverage, support, points, first, terms)
+        for i in range(npoly):
+            b = boxes[i]
+            bx[4 * i], bx[4 * i + 1], bx[4 * i + 2], bx[4 * i + 3] = b[0], b[1], b[2], b[3]
+        for f in range(nf):
+            cyc = face_cycles[f]
+            outer = cyc[0]
+            if len(cyc) == 1 and len(outer) == 3 and not others[f]:
+                (xa, ya, wa) = H[origin[outer[0]]]
+                (xb, yb, wb) = H[origin[outer[1]]]
+                (xc, yc, wc) = H[origin[outer[2]]]
+                X, Y, W = _hnorm((xa * wb * wc + xb * wa * wc + xc * wa * wb,
+                                  ya * wb * wc + yb * wa * wc + yc * wa * wb, 3 * wa * wb * wc))
+            else:
+                X, Y, W = ring_inner_point(H, [origin[h] for h in outer], others[f])
+            points[f] = (X, Y, W)
+            xf, yf = X / W, Y / W
+            c = s = 0
+            got = -1
+            for i in range(npoly):
+                if not (bx[4 * i] <= xf <= bx[4 * i + 1] and bx[4 * i + 2] <= yf <= bx[4 * i + 3]):
+                    continue
+                tr = turn[i]
+                inside = _pushed_inside(polys[i], tr, X, Y, W, xf, yf)
+                if inside:
+                    c += weights[i] * tr
+                    s += abs(weights[i])
+                if got < 0 and source_turn is not None:
+                    if <int> source_turn[i] != tr:
+                        inside = _pushed_inside(polys[i], source_turn[i], X, Y, W, xf, yf)
+                    if inside:
+                        got = i
+            coverage[f], support[f], first[f] = c, s, got
+            if c:  # integral += c * face area, as twice the areas
+                num, den = 0, 1
+                for k in range(len(cyc)):
+                    n_, d_ = _harea(H, origin, cyc[k])
+                    num, den = num * d_ + n_ * den, den * d_
+                terms[den] = terms.get(den, 0) + c * num
+        return coverage, support, terms, points, first
     finally:
         free(bx)
-
-
-cdef tuple _face_coverage_loop(list H, list origin, list face_cycles, list others, list polys,
-                               list turn, list weights, double* bx, list source_turn,
-                               list coverage, list support, list points, list first,
-                               dict terms):
-    cdef Py_ssize_t nf = len(face_cycles), npoly = len(polys), f, i, k
-    cdef double xf, yf
-    cdef int tr
-    cdef list outer, cyc
-    cdef Py_ssize_t got
-    cdef bint inside
-    for f in range(nf):
-        cyc = face_cycles[f]
-        outer = cyc[0]
-        if len(cyc) == 1 and len(outer) == 3 and not others[f]:
-            (xa, ya, wa) = H[origin[outer[0]]]
-            (xb, yb, wb) = H[origin[outer[1]]]
-            (xc, yc, wc) = H[origin[outer[2]]]
-            X, Y, W = _hnorm((xa * wb * wc + xb * wa * wc + xc * wa * wb,
-                              ya * wb * wc + yb * wa * wc + yc * wa * wb, 3 * wa * wb * wc))
-        else:
-            X, Y, W = ring_inner_point(H, [origin[h] for h in outer], others[f])
-        points[f] = (X, Y, W)
-        xf, yf = X / W, Y / W
-        c = s = 0
-        got = -1
-        for i in range(npoly):
-            if not (bx[4 * i] <= xf <= bx[4 * i + 1] and bx[4 * i + 2] <= yf <= bx[4 * i + 3]):
-                continue
-            tr = turn[i]
-            inside = _pushed_inside(polys[i], tr, X, Y, W, xf, yf)
-            if inside:
-                c += weights[i] * tr
-                s += abs(weights[i])
-            if got < 0 and source_turn is not None:
-                if <int> source_turn[i] != tr:
-                    inside = _pushed_inside(polys[i], source_turn[i], X, Y, W, xf, yf)
-                if inside:
-                    got = i
-        coverage[f], support[f], first[f] = c, s, got
-        if c:  # integral += c * face area, as twice the areas
-            num, den = 0, 1
-            for k in range(len(cyc)):
-                n_, d_ = _harea(H, origin, cyc[k])
-                num, den = num * d_ + n_ * den, den * d_
-            terms[den] = terms.get(den, 0) + c * num
-    return coverage, support, terms, points, first
 
 
 def _first(t):
@@ -1327,8 +1309,9 @@ def one_facet_faces(list segs, list labels, c, int src, dict known, tuple key, i
 def one_facet_plane(list corners, list tl, list pinned, list cut3, int ax, c, int src, tuple key):
     """A one-facet plane from its inputs (``_PlaneJobs.arrange``'s data: the corners of
     triangles ``tl``, the pinned flags by ``3 t + j``, the cuts ``cut3`` as homogeneous 3D
-    points, the projection axis ``ax``, the plane's ``key``): the pinned facet edges and the projected cuts are
-    arranged and read by :func:`one_facet_faces` (None where it declines). The Python
+    points, the projection axis ``ax``, the plane's ``key``): the pinned facet edges and the
+    projected cuts are arranged and read by :func:`one_facet_faces` (None where it declines).
+    The Python
     reference is the same path in ``arrange(p, compiled=False)``; with one facet no edge is
     of the minority orientation, so exactly the pinned edges join the cuts."""
     cdef int a = (ax + 1) % 3, b = (ax + 2) % 3
